@@ -1,0 +1,49 @@
+# `make run` and `make test` set up everything they need (venv, Python packages, npm packages,
+# UI build) and redo only what changed since the last time.
+
+SHELL := /bin/bash
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+UI := webui/frontend
+PY_STAMP := $(VENV)/.installed
+NPM_STAMP := $(UI)/node_modules/.installed
+UI_BUILT := $(UI)/dist/index.html
+UI_SOURCES := $(shell find $(UI)/src $(UI)/public -type f 2>/dev/null) \
+	$(UI)/index.html $(UI)/vite.config.ts $(UI)/tsconfig.json
+ARGS ?=
+
+.PHONY: setup run test lint bench ui clean
+
+setup: $(PY_STAMP) $(UI_BUILT)
+
+$(PY_STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	touch $@
+
+$(NPM_STAMP): $(UI)/package.json $(UI)/package-lock.json
+	cd $(UI) && npm ci --no-audit --no-fund
+	touch $@
+
+$(UI_BUILT): $(NPM_STAMP) $(UI_SOURCES)
+	cd $(UI) && npm run build
+
+ui: $(UI_BUILT)
+
+run: setup
+	$(BIN)/openpendant run $(ARGS)
+
+lint: $(PY_STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
+	$(BIN)/mypy
+
+test: setup lint
+	$(BIN)/pytest $(ARGS)
+
+bench: setup
+	$(BIN)/openpendant bench --json bench-results/latest.json $(ARGS)
+
+clean:
+	rm -rf $(VENV) $(UI)/node_modules $(UI)/dist .mypy_cache .ruff_cache .pytest_cache
