@@ -1,0 +1,99 @@
+"""The app factory every service and driver uses: errors as JSON, /health, logging."""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections.abc import AsyncIterator, Awaitable, Callable
+from contextlib import AbstractAsyncContextManager, asynccontextmanager
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from runtime import __version__
+from runtime.kit.errors import OpenPendantError
+
+log = logging.getLogger(__name__)
+
+Lifespan = Callable[[FastAPI], AbstractAsyncContextManager[None]]
+HealthProbe = Callable[[], Awaitable[dict[str, Any]]]
+
+
+def error_response(status: int, code: str, message: str, **details: Any) -> JSONResponse:
+    error: dict[str, Any] = {"code": code, "message": message}
+    if details:
+        error["details"] = details
+    return JSONResponse({"error": error}, status_code=status)
+
+
+def describe_validation_errors(errors: Any) -> tuple[str, list[dict[str, Any]]]:
+    """A readable message plus JSON-safe details (inputs may hold NaN, so they are dropped)."""
+    clean: list[dict[str, Any]] = []
+    parts: list[str] = []
+    for err in errors:
+        loc = [str(p) for p in err.get("loc", ()) if p != "body"]
+        where = ".".join(loc) or "body"
+        msg = str(err.get("msg", "invalid"))
+        clean.append({"loc": loc, "msg": msg, "type": str(err.get("type", ""))})
+        parts.append(f"{where}: {msg}")
+    return "; ".join(parts) or "invalid request", clean
+
+
+def install_error_handlers(app: FastAPI) -> None:
+    @app.exception_handler(OpenPendantError)
+    async def _domain(_: Request, exc: OpenPendantError) -> JSONResponse:
+        return JSONResponse(exc.body(), status_code=exc.status)
+
+    @app.exception_handler(RequestValidationError)
+    async def _validation(_: Request, exc: RequestValidationError) -> JSONResponse:
+        message, details = describe_validation_errors(exc.errors())
+        return error_response(422, "invalid_request", message, errors=details)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(_: Request, exc: StarletteHTTPException) -> JSONResponse:
+        code = {404: "not_found", 405: "method_not_allowed"}.get(exc.status_code, "http_error")
+        return error_response(exc.status_code, code, str(exc.detail))
+
+    @app.exception_handler(Exception)
+    async def _unexpected(request: Request, exc: Exception) -> JSONResponse:
+        log.exception("unhandled error on %s %s", request.method, request.url.path)
+        return error_response(500, "internal_error", f"{type(exc).__name__}: {exc}")
+
+
+def create_app(
+    service: str,
+    *,
+    lifespan: Lifespan | None = None,
+    health: HealthProbe | None = None,
+) -> FastAPI:
+    started = time.time()
+
+    @asynccontextmanager
+    async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
+        if lifespan is None:
+            yield
+            return
+        async with lifespan(app):
+            yield
+
+    app = FastAPI(title=f"OpenPendant {service}", version=__version__, lifespan=_lifespan)
+    install_error_handlers(app)
+
+    @app.get("/health")
+    async def _health() -> dict[str, Any]:
+        body: dict[str, Any] = {
+            "status": "ok",
+            "service": service,
+            "version": __version__,
+            "pid": os.getpid(),
+            "uptime_s": round(time.time() - started, 3),
+        }
+        if health is not None:
+            body.update(await health())
+        return body
+
+    return app

@@ -1,0 +1,96 @@
+"""Typed async client for calling another service or a device driver over HTTP."""
+
+from __future__ import annotations
+
+from typing import Any, TypeVar, overload
+
+import httpx
+from pydantic import BaseModel
+
+from runtime.kit.errors import OpenPendantError, Unavailable
+
+M = TypeVar("M", bound=BaseModel)
+
+
+class ServiceClient:
+    """Errors come back as OpenPendantError with the remote code and status."""
+
+    def __init__(self, base_url: str, *, timeout: float = 5.0, name: str | None = None) -> None:
+        self.base_url = base_url.rstrip("/")
+        self.name = name or self.base_url
+        self._http = httpx.AsyncClient(base_url=self.base_url, timeout=timeout)
+
+    async def aclose(self) -> None:
+        await self._http.aclose()
+
+    async def __aenter__(self) -> ServiceClient:
+        return self
+
+    async def __aexit__(self, *_: object) -> None:
+        await self.aclose()
+
+    @overload
+    async def request(
+        self,
+        method: str,
+        path: str,
+        *,
+        json: Any = ...,
+        params: dict[str, Any] | None = ...,
+        model: type[M],
+        timeout: float | None = ...,
+    ) -> M: ...
+
+    @overload
+    async def request(
+        self,
+        method: str,
+        path: str,
+        *,
+        json: Any = ...,
+        params: dict[str, Any] | None = ...,
+        model: None = ...,
+        timeout: float | None = ...,
+    ) -> Any: ...
+
+    async def request(
+        self,
+        method: str,
+        path: str,
+        *,
+        json: Any = None,
+        params: dict[str, Any] | None = None,
+        model: type[M] | None = None,
+        timeout: float | None = None,
+    ) -> Any:
+        kwargs: dict[str, Any] = {"json": json, "params": params}
+        if timeout is not None:
+            kwargs["timeout"] = timeout
+        try:
+            response = await self._http.request(method, path, **kwargs)
+        except httpx.TransportError as exc:
+            raise Unavailable(
+                f"{self.name} is unreachable ({type(exc).__name__})", code="unreachable"
+            ) from exc
+        if response.status_code >= 400:
+            try:
+                body = response.json()
+            except ValueError:
+                body = None
+            raise OpenPendantError.from_body(response.status_code, body)
+        if not response.content:
+            return None
+        data = response.json()
+        return model.model_validate(data) if model is not None else data
+
+    async def get(self, path: str, **kwargs: Any) -> Any:
+        return await self.request("GET", path, **kwargs)
+
+    async def post(self, path: str, **kwargs: Any) -> Any:
+        return await self.request("POST", path, **kwargs)
+
+    async def put(self, path: str, **kwargs: Any) -> Any:
+        return await self.request("PUT", path, **kwargs)
+
+    async def delete(self, path: str, **kwargs: Any) -> Any:
+        return await self.request("DELETE", path, **kwargs)

@@ -1,0 +1,119 @@
+"""Runtime settings: defaults < YAML file < environment (OPENPENDANT_*) < command-line flags."""
+
+from __future__ import annotations
+
+import ipaddress
+import json
+import os
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+from pydantic_settings import (
+    BaseSettings,
+    PydanticBaseSettingsSource,
+    SettingsConfigDict,
+    YamlConfigSettingsSource,
+)
+
+SETTINGS_ENV = "OPENPENDANT_SETTINGS_JSON"
+
+
+def default_data_dir() -> Path:
+    base = os.environ.get("XDG_DATA_HOME") or str(Path.home() / ".local" / "share")
+    return Path(base) / "openpendant"
+
+
+class DiscoverySettings(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    # "auto": loopback only when the UI is bound to loopback, else every interface.
+    interfaces: Literal["auto", "all"] | list[str] = "auto"
+
+
+class SimRobotSpec(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    model: str = "ur5"
+    name: str = "sim-ur5"
+
+
+class RuntimeSettings(BaseSettings):
+    model_config = SettingsConfigDict(
+        env_prefix="OPENPENDANT_", env_nested_delimiter="__", extra="forbid"
+    )
+
+    host: str = "127.0.0.1"
+    port: int = Field(default=8080, ge=0, le=65535)
+    data_dir: Path = Field(default_factory=default_data_dir)
+    log_dir: Path | None = None
+    log_level: Literal["debug", "info", "warning", "error"] = "info"
+    sim: bool = True
+    sim_robots: list[SimRobotSpec] = Field(default_factory=lambda: [SimRobotSpec()])
+    discovery: DiscoverySettings = Field(default_factory=DiscoverySettings)
+    state_rate_hz: float = Field(default=100.0, gt=0, le=500)
+    variable_history: int = Field(default=20, ge=1, le=1000)
+
+    @classmethod
+    def settings_customise_sources(
+        cls,
+        settings_cls: type[BaseSettings],
+        init_settings: PydanticBaseSettingsSource,
+        env_settings: PydanticBaseSettingsSource,
+        dotenv_settings: PydanticBaseSettingsSource,
+        file_secret_settings: PydanticBaseSettingsSource,
+    ) -> tuple[PydanticBaseSettingsSource, ...]:
+        sources: list[PydanticBaseSettingsSource] = [init_settings, env_settings]
+        if settings_cls.model_config.get("yaml_file"):
+            sources.append(YamlConfigSettingsSource(settings_cls))
+        return tuple(sources)
+
+    @property
+    def logs(self) -> Path:
+        return self.log_dir or self.data_dir / "logs"
+
+    def zeroconf_interfaces(self) -> list[str] | Literal["all"]:
+        return resolve_interfaces(self.discovery.interfaces, self.host)
+
+
+def resolve_interfaces(
+    choice: Literal["auto", "all"] | list[str], host: str
+) -> list[str] | Literal["all"]:
+    if choice == "auto":
+        return ["127.0.0.1"] if is_loopback(host) else "all"
+    return choice
+
+
+def is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+def load_settings(config_file: Path | None = None, **overrides: Any) -> RuntimeSettings:
+    """Settings for a launcher or a standalone driver."""
+    overrides = {k: v for k, v in overrides.items() if v is not None}
+    if config_file is None:
+        return RuntimeSettings(**overrides)
+    if not config_file.is_file():
+        raise FileNotFoundError(f"config file not found: {config_file}")
+
+    class _FromFile(RuntimeSettings):
+        model_config = SettingsConfigDict(yaml_file=config_file)
+
+    return RuntimeSettings.model_validate(_FromFile(**overrides).model_dump())
+
+
+def settings_for_child(settings: RuntimeSettings) -> dict[str, str]:
+    """Environment that hands a child process exactly the launcher's resolved settings."""
+    return {SETTINGS_ENV: settings.model_dump_json()}
+
+
+def settings_from_env() -> RuntimeSettings:
+    raw = os.environ.get(SETTINGS_ENV)
+    if raw:
+        return RuntimeSettings.model_validate(json.loads(raw))
+    return RuntimeSettings()

@@ -1,0 +1,134 @@
+"""WebSocket fan-out with per-subscriber conflation, so a slow client never holds up a fast one."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import time
+from collections import deque
+from collections.abc import Awaitable, Callable, Iterable
+from typing import Any
+
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from runtime.kit.errors import OpenPendantError
+
+
+class OutboxOverflow(Exception):
+    """A subscriber fell too far behind on messages that must not be dropped."""
+
+
+class Subscriber:
+    """Outbox of one socket. Keyed messages replace older ones with the same key (the newest
+    state is all a client needs); unkeyed messages are events and queue in order."""
+
+    def __init__(self, max_events: int = 1000, max_rate_hz: float | None = None) -> None:
+        self._keyed: dict[str, str] = {}
+        self._events: deque[str] = deque()
+        self._max_events = max_events
+        self._ready = asyncio.Event()
+        self.min_interval = 1.0 / max_rate_hz if max_rate_hz else 0.0
+        self.overflowed = False
+
+    def push(self, text: str, key: str | None = None) -> None:
+        if key is None:
+            if len(self._events) >= self._max_events:
+                self.overflowed = True
+            else:
+                self._events.append(text)
+        else:
+            self._keyed.pop(key, None)
+            self._keyed[key] = text
+        self._ready.set()
+
+    async def next_batch(self) -> list[str]:
+        await self._ready.wait()
+        self._ready.clear()
+        if self.overflowed:
+            raise OutboxOverflow("subscriber too slow")
+        batch = list(self._events)
+        self._events.clear()
+        batch.extend(self._keyed.values())
+        self._keyed.clear()
+        return batch
+
+
+class Fanout:
+    """Publish text messages to every subscribed WebSocket."""
+
+    def __init__(self) -> None:
+        self.subscribers: set[Subscriber] = set()
+
+    def publish(self, text: str, key: str | None = None) -> None:
+        for sub in self.subscribers:
+            sub.push(text, key)
+
+    def publish_json(self, message: dict[str, Any], key: str | None = None) -> None:
+        if self.subscribers:
+            self.publish(json.dumps(message), key)
+
+    async def serve(
+        self,
+        ws: WebSocket,
+        initial: Iterable[str] = (),
+        *,
+        max_rate_hz: float | None = None,
+        on_message: Callable[[Any], Awaitable[None]] | None = None,
+    ) -> None:
+        """Accept the socket and pump messages until either side closes."""
+        await ws.accept()
+        sub = Subscriber(max_rate_hz=max_rate_hz)
+        for text in initial:
+            sub.push(text)
+        self.subscribers.add(sub)
+        try:
+            await _pump(ws, sub, on_message)
+        finally:
+            self.subscribers.discard(sub)
+
+
+async def _pump(
+    ws: WebSocket, sub: Subscriber, on_message: Callable[[Any], Awaitable[None]] | None
+) -> None:
+    async def send_loop() -> None:
+        while True:
+            batch = await sub.next_batch()
+            started = time.monotonic()
+            for text in batch:
+                await ws.send_text(text)
+            if sub.min_interval:
+                await asyncio.sleep(max(0.0, sub.min_interval - (time.monotonic() - started)))
+
+    async def receive_loop() -> None:
+        while True:
+            text = await ws.receive_text()
+            if on_message is None:
+                continue
+            try:
+                message = json.loads(text)
+            except ValueError:
+                await send_error(ws, OpenPendantError("message is not JSON", code="bad_message"))
+                continue
+            try:
+                await on_message(message)
+            except OpenPendantError as err:
+                await send_error(ws, err)
+
+    tasks = [asyncio.create_task(send_loop()), asyncio.create_task(receive_loop())]
+    try:
+        await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        for task in tasks:
+            task.cancel()
+        for task in tasks:
+            with contextlib.suppress(
+                asyncio.CancelledError, WebSocketDisconnect, OutboxOverflow, RuntimeError, OSError
+            ):
+                await task
+        with contextlib.suppress(RuntimeError, OSError):
+            await ws.close()
+
+
+async def send_error(ws: WebSocket, err: OpenPendantError) -> None:
+    await ws.send_text(json.dumps({"type": "error", **err.body()}))

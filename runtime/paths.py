@@ -1,0 +1,45 @@
+"""Where the project's data lives: robot-info YAMLs, URDF packages, the built UI."""
+
+from __future__ import annotations
+
+import site
+import sysconfig
+from functools import cache
+from pathlib import Path
+
+from runtime.kit.errors import NotFound
+
+REPO_ROOT = Path(__file__).resolve().parent.parent
+ROBOTS_DIR = REPO_ROOT / "deploy" / "robots"
+
+
+@cache
+def package_roots() -> dict[str, Path]:
+    """URDF `package://` names and the folders they stand for."""
+    roots: dict[str, Path] = {}
+    candidates = [sysconfig.get_paths()["purelib"], *site.getsitepackages()]
+    for base in candidates:
+        share = Path(base) / "cmeel.prefix" / "share" / "example-robot-data"
+        if share.is_dir():
+            roots["example-robot-data"] = share
+            break
+    return roots
+
+
+def resolve_package_uri(uri: str, relative_to: Path | None = None) -> Path:
+    """Turn `package://pkg/sub/path`, `file:///abs` or a plain path into a file on disk."""
+    if uri.startswith("package://"):
+        package, _, rest = uri[len("package://") :].partition("/")
+        roots = package_roots()
+        if package not in roots:
+            raise NotFound(f"URDF package {package!r} is not installed", code="unknown_package")
+        path = roots[package] / rest
+    elif uri.startswith("file://"):
+        path = Path(uri[len("file://") :])
+    else:
+        path = Path(uri)
+        if not path.is_absolute() and relative_to is not None:
+            path = relative_to / path
+    if not path.is_file():
+        raise NotFound(f"file not found: {uri}", code="file_not_found")
+    return path
