@@ -1,0 +1,1 @@
+"""Serving a device driver: standard routes, state streaming, DNS-SD advertisement."""

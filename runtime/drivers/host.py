@@ -1,0 +1,111 @@
+"""Serve one device driver: its routes, its state stream and its DNS-SD advertisement."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import socket
+import sys
+from collections.abc import AsyncIterator, Sequence
+
+from fastapi import APIRouter, FastAPI
+
+from runtime.drivers.robot_routes import robot_router
+from runtime.drivers.state_stream import StateStream
+from runtime.interfaces.robot_driver import RobotDriver
+from runtime.kit.app import create_app
+from runtime.kit.discovery import Advertisement, Advertiser, Interfaces
+from runtime.kit.serve import listening_socket, run_app
+
+log = logging.getLogger(__name__)
+
+
+def advertised_host(host: str) -> str:
+    if host in ("0.0.0.0", ""):
+        # Bound everywhere: advertise the address the OS would use to reach the LAN.
+        with contextlib.closing(socket.socket(socket.AF_INET, socket.SOCK_DGRAM)) as probe:
+            try:
+                probe.connect(("192.0.2.1", 9))  # no packet is sent for a UDP connect
+                return str(probe.getsockname()[0])
+            except OSError:
+                return "127.0.0.1"
+    return host
+
+
+def build_driver_app(
+    driver: RobotDriver,
+    *,
+    advertisement: Advertisement | None,
+    interfaces: Interfaces,
+    state_rate_hz: float,
+    extra_routers: Sequence[APIRouter] = (),
+) -> FastAPI:
+    stream = StateStream(driver.state, state_rate_hz)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        await driver.start()
+        pusher = asyncio.create_task(stream.run())
+        advertiser = Advertiser(interfaces)
+        if advertisement is not None:
+            await advertiser.start(advertisement)
+            # One machine-readable line so a parent process or a test knows where we are.
+            print(
+                json.dumps(
+                    {
+                        "event": "ready",
+                        "url": f"http://{advertisement.host}:{advertisement.port}",
+                        "uuid": advertisement.uuid,
+                    }
+                ),
+                flush=True,
+            )
+        try:
+            yield
+        finally:
+            await advertiser.stop()
+            pusher.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await pusher
+            await driver.close()
+
+    name = f"{driver.kind}-driver:{driver.identity.name}"
+    app = create_app(name, lifespan=lifespan)
+    app.include_router(robot_router(driver, stream))
+    for router in extra_routers:
+        app.include_router(router)
+    return app
+
+
+def serve_driver(
+    driver: RobotDriver,
+    *,
+    host: str,
+    port: int,
+    interfaces: Interfaces,
+    state_rate_hz: float,
+    extra_routers: Sequence[APIRouter] = (),
+) -> None:
+    sock = listening_socket(host, port)
+    actual_port = int(sock.getsockname()[1])
+    ident = driver.identity
+    advertisement = Advertisement(
+        uuid=ident.uuid,
+        kind=ident.kind,
+        model=ident.model,
+        name=ident.name,
+        host=advertised_host(host),
+        port=actual_port,
+    )
+    app = build_driver_app(
+        driver,
+        advertisement=advertisement,
+        interfaces=interfaces,
+        state_rate_hz=state_rate_hz,
+        extra_routers=extra_routers,
+    )
+    log.info("serving %s on port %d", ident.name, actual_port)
+    sys.stdout.flush()
+    run_app(app, sock)

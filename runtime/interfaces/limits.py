@@ -1,0 +1,121 @@
+"""Checks every robot command passes before anything moves. They live here once; drivers
+never see an unchecked vector."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+from runtime.interfaces.robot import JointTrajectory, RobotInfo
+from runtime.kit.errors import RobotError
+
+FloatArray = npt.NDArray[np.float64]
+
+# A trajectory's first waypoint may sit at t=0 only if it is where the robot already is.
+START_TOLERANCE = 1e-3
+# Float noise allowance on limit comparisons; a real excess is far larger.
+LIMIT_EPSILON = 1e-9
+
+
+@dataclass(frozen=True)
+class CheckedTrajectory:
+    """Times from 0 (the current position) and positions (and velocities) at each time."""
+
+    times: FloatArray
+    positions: FloatArray
+    velocities: FloatArray | None
+
+    @property
+    def duration(self) -> float:
+        return float(self.times[-1])
+
+
+class JointLimitChecker:
+    def __init__(self, info: RobotInfo) -> None:
+        self.names = info.joint_names
+        self.lower = np.array([j.lower for j in info.joints])
+        self.upper = np.array([j.upper for j in info.joints])
+        self.max_velocity = np.array([j.max_velocity for j in info.joints])
+
+    def vector(self, values: Sequence[float], what: str) -> FloatArray:
+        if len(values) != len(self.names):
+            raise RobotError(
+                f"{what} has {len(values)} values; the robot has {len(self.names)} joints",
+                code="wrong_length",
+            )
+        array = np.asarray(values, dtype=float)
+        bad = np.flatnonzero(~np.isfinite(array))
+        if bad.size:
+            raise RobotError(
+                f"{what} of joint {self._joint(int(bad[0]))} is not a finite number",
+                code="not_finite",
+            )
+        return array
+
+    def positions(self, values: Sequence[float], what: str = "position") -> FloatArray:
+        q = self.vector(values, what)
+        outside = np.flatnonzero(
+            (q < self.lower - LIMIT_EPSILON) | (q > self.upper + LIMIT_EPSILON)
+        )
+        if outside.size:
+            i = int(outside[0])
+            raise RobotError(
+                f"{what} {q[i]:.4f} rad of joint {self._joint(i)} is outside its limits "
+                f"[{self.lower[i]:.4f}, {self.upper[i]:.4f}]",
+                code="position_limit",
+            )
+        return q
+
+    def velocities(self, values: Sequence[float], what: str = "velocity") -> FloatArray:
+        v = self.vector(values, what)
+        self._check_speed(v, what)
+        return v
+
+    def _check_speed(self, v: FloatArray, what: str) -> None:
+        over = np.flatnonzero(np.abs(v) > self.max_velocity * (1 + 1e-6) + LIMIT_EPSILON)
+        if over.size:
+            i = int(over[0])
+            raise RobotError(
+                f"{what} {v[i]:.4f} rad/s of joint {self._joint(i)} exceeds its limit "
+                f"{self.max_velocity[i]:.4f} rad/s",
+                code="velocity_limit",
+            )
+
+    def trajectory(self, trajectory: JointTrajectory, start: FloatArray) -> CheckedTrajectory:
+        points = trajectory.waypoints
+        times = np.array([0.0] + [w.time_from_start for w in points])
+        positions = np.vstack(
+            [start]
+            + [self.positions(w.position, f"waypoint {k} position") for k, w in enumerate(points)]
+        )
+        if points[0].time_from_start == 0.0:
+            if np.max(np.abs(positions[1] - start)) > START_TOLERANCE:
+                raise RobotError(
+                    "the first waypoint is at t=0 but not at the robot's current position",
+                    code="bad_trajectory",
+                )
+            times, positions = times[1:], positions[1:]
+            times[0] = 0.0
+        if np.any(np.diff(times) <= 0):
+            raise RobotError("waypoint times must strictly increase", code="bad_trajectory")
+        segment_speed = np.diff(positions, axis=0) / np.diff(times)[:, None]
+        for k, v in enumerate(segment_speed):
+            self._check_speed(v, f"segment {k} speed")
+        velocities = None
+        if any(w.velocity is not None for w in points):
+            if not all(w.velocity is not None for w in points):
+                raise RobotError(
+                    "give a velocity for every waypoint or for none", code="bad_trajectory"
+                )
+            given = [
+                self.velocities(w.velocity or [], f"waypoint {k} velocity")
+                for k, w in enumerate(points)
+            ]
+            velocities = np.vstack([np.zeros_like(start)] * (len(times) - len(given)) + given)
+        return CheckedTrajectory(times, positions, velocities)
+
+    def _joint(self, index: int) -> str:
+        return f"{index + 1} ({self.names[index]})"

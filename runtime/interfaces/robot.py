@@ -1,0 +1,169 @@
+"""The standard robot interface, after Robot Raconteur's com.robotraconteur.robotics.robot."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Annotated
+
+from pydantic import BaseModel, Field, model_validator
+
+from runtime.interfaces.common import JointVector, Pose, Strict
+from runtime.interfaces.device import DeviceIdentity
+
+MAX_COMMAND_TIMEOUT = 1.0
+
+
+class CommandMode(StrEnum):
+    halt = "halt"
+    jog = "jog"
+    trajectory = "trajectory"
+    position_command = "position_command"
+    velocity_command = "velocity_command"
+
+
+class OperationalMode(StrEnum):
+    manual_reduced_speed = "manual_reduced_speed"
+    manual_full_speed = "manual_full_speed"
+    auto = "auto"
+    undefined = "undefined"
+
+
+class JointLimits(Strict):
+    name: str = Field(min_length=1, max_length=64)
+    lower: float
+    upper: float
+    max_velocity: float = Field(gt=0)
+    max_acceleration: float = Field(gt=0)
+    max_jerk: float | None = Field(default=None, gt=0)
+
+    @model_validator(mode="after")
+    def _ordered(self) -> JointLimits:
+        if not self.lower < self.upper:
+            raise ValueError(f"joint {self.name}: lower limit must be below upper limit")
+        return self
+
+
+class RobotInfo(Strict):
+    """Loaded from a robot-info YAML; the URDF gives kinematics and collision geometry."""
+
+    model: str = Field(min_length=1, max_length=64)
+    manufacturer: str = ""
+    description: str = ""
+    urdf: str = Field(min_length=1)
+    base_link: str
+    flange_link: str
+    tcp: Pose = Field(default_factory=Pose)
+    joints: list[JointLimits] = Field(min_length=1, max_length=64)
+    home: JointVector
+    capabilities: list[str] = Field(default_factory=list)
+
+    @property
+    def joint_names(self) -> list[str]:
+        return [j.name for j in self.joints]
+
+    @property
+    def dof(self) -> int:
+        return len(self.joints)
+
+    @model_validator(mode="after")
+    def _home_within_limits(self) -> RobotInfo:
+        if len(self.home) != len(self.joints):
+            raise ValueError(f"home has {len(self.home)} values for {len(self.joints)} joints")
+        for value, joint in zip(self.home, self.joints, strict=True):
+            if not joint.lower <= value <= joint.upper:
+                raise ValueError(f"home of joint {joint.name} is outside its limits")
+        return self
+
+
+class RobotFlags(BaseModel):
+    enabled: bool = False
+    ready: bool = False
+    error: bool = False
+    estop: bool = False
+    homed: bool = False
+    communication_failure: bool = False
+    trajectory_running: bool = False
+
+
+class TrajectoryState(StrEnum):
+    running = "running"
+    finished = "finished"
+    aborted = "aborted"
+    failed = "failed"
+
+
+class TrajectoryStatus(BaseModel):
+    id: str
+    state: TrajectoryState
+    progress: float = 0.0
+    message: str = ""
+
+
+class RobotState(BaseModel):
+    seqno: int
+    ts: float
+    command_mode: CommandMode
+    operational_mode: OperationalMode
+    flags: RobotFlags
+    joint_position: list[float]
+    joint_velocity: list[float]
+    joint_position_command: list[float]
+    tcp_pose: Pose
+    speed_ratio: float
+    error_message: str = ""
+    trajectory: TrajectoryStatus | None = None
+
+
+class RobotDescription(BaseModel):
+    identity: DeviceIdentity
+    info: RobotInfo
+
+
+# Commands ---------------------------------------------------------------------------------
+
+CommandTimeout = Annotated[float, Field(gt=0, le=MAX_COMMAND_TIMEOUT)]
+
+
+class CommandModeRequest(Strict):
+    mode: CommandMode
+
+
+class JogJointCommand(Strict):
+    """Move at these joint velocities (rad/s) until `timeout` s pass without a new command."""
+
+    velocity: JointVector
+    timeout: CommandTimeout = 0.2
+
+
+class VelocityCommand(Strict):
+    velocity: JointVector
+    timeout: CommandTimeout = 0.1
+
+
+class PositionCommand(Strict):
+    """One sample of a streamed joint position setpoint."""
+
+    position: JointVector
+    velocity: JointVector | None = None
+    timeout: CommandTimeout = 0.1
+
+
+class TrajectoryWaypoint(Strict):
+    time_from_start: float = Field(ge=0)
+    position: JointVector
+    velocity: JointVector | None = None
+
+
+class JointTrajectory(Strict):
+    """Starts from the current position at t=0; waypoints follow in increasing time."""
+
+    waypoints: list[TrajectoryWaypoint] = Field(min_length=1, max_length=200_000)
+
+
+class SpeedRatioRequest(Strict):
+    ratio: float = Field(gt=0, le=1)
+
+
+class TrajectoryAccepted(BaseModel):
+    id: str
+    duration: float

@@ -1,0 +1,170 @@
+"""The abstract robot driver. Public methods check limits, mode and state, then call the
+driver's protected hooks, so a driver can only ever receive a command that passed the checks."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+from runtime.interfaces.device import DeviceIdentity
+from runtime.interfaces.limits import CheckedTrajectory, FloatArray, JointLimitChecker
+from runtime.interfaces.robot import (
+    CommandMode,
+    JogJointCommand,
+    JointTrajectory,
+    PositionCommand,
+    RobotDescription,
+    RobotInfo,
+    RobotState,
+    TrajectoryAccepted,
+    TrajectoryStatus,
+    VelocityCommand,
+)
+from runtime.kit.errors import RobotError
+
+
+class RobotDriver(ABC):
+    kind = "robot"
+
+    def __init__(self, identity: DeviceIdentity, info: RobotInfo) -> None:
+        if identity.kind != "robot":
+            raise ValueError("a robot driver needs a robot identity")
+        self.identity = identity
+        self.info = info
+        self.limits = JointLimitChecker(info)
+
+    def describe(self) -> RobotDescription:
+        return RobotDescription(identity=self.identity, info=self.info)
+
+    async def start(self) -> None:
+        """Connect to the robot (or start the simulation)."""
+
+    async def close(self) -> None:
+        """Halt and release the robot."""
+        await self.halt()
+
+    @abstractmethod
+    def state(self) -> RobotState:
+        """The latest state; cheap enough to call at the streaming rate."""
+
+    # Commands that are always allowed ------------------------------------------------------
+
+    async def halt(self) -> None:
+        await self._halt()
+
+    async def stop(self) -> None:
+        await self.halt()
+
+    async def disable(self) -> None:
+        await self._disable()
+
+    async def reset_errors(self) -> None:
+        await self._reset_errors()
+
+    async def enable(self) -> None:
+        flags = self.state().flags
+        if flags.estop:
+            raise RobotError("the E-stop is engaged; release it first", code="estop")
+        if flags.error:
+            raise RobotError("the robot has an error; reset errors first", code="robot_fault")
+        await self._enable()
+
+    async def set_speed_ratio(self, ratio: float) -> None:
+        if not 0.0 < ratio <= 1.0:
+            raise RobotError("speed ratio must be in (0, 1]", code="invalid_value")
+        await self._set_speed_ratio(ratio)
+
+    async def set_command_mode(self, mode: CommandMode) -> None:
+        if mode is not CommandMode.halt:
+            self._require_ready()
+        await self._set_command_mode(mode)
+
+    # Motion commands: checked, then handed to the driver -----------------------------------
+
+    async def jog_joint(self, command: JogJointCommand) -> None:
+        self._require_mode(CommandMode.jog)
+        velocity = self.limits.velocities(command.velocity, "jog velocity")
+        await self._jog_joint(velocity, command.timeout)
+
+    async def velocity_command(self, command: VelocityCommand) -> None:
+        self._require_mode(CommandMode.velocity_command)
+        velocity = self.limits.velocities(command.velocity, "velocity command")
+        await self._velocity_command(velocity, command.timeout)
+
+    async def position_command(self, command: PositionCommand) -> None:
+        self._require_mode(CommandMode.position_command)
+        position = self.limits.positions(command.position, "position command")
+        velocity = (
+            None
+            if command.velocity is None
+            else self.limits.velocities(command.velocity, "position command velocity")
+        )
+        await self._position_command(position, velocity, command.timeout)
+
+    async def execute_trajectory(self, trajectory: JointTrajectory) -> TrajectoryAccepted:
+        state = self._require_mode(CommandMode.trajectory)
+        if state.flags.trajectory_running:
+            raise RobotError("a trajectory is already running; halt it first", code="busy")
+        start = self.limits.positions(state.joint_position_command, "current position")
+        checked = self.limits.trajectory(trajectory, start)
+        trajectory_id = await self._execute_trajectory(checked)
+        return TrajectoryAccepted(id=trajectory_id, duration=checked.duration)
+
+    @abstractmethod
+    async def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus: ...
+
+    # Checks ---------------------------------------------------------------------------------
+
+    def _require_ready(self) -> RobotState:
+        state = self.state()
+        flags = state.flags
+        if flags.estop:
+            raise RobotError("the E-stop is engaged", code="estop")
+        if flags.error:
+            raise RobotError(f"the robot has an error: {state.error_message}", code="robot_fault")
+        if not flags.enabled:
+            raise RobotError("the robot is not enabled", code="not_enabled")
+        return state
+
+    def _require_mode(self, mode: CommandMode) -> RobotState:
+        state = self._require_ready()
+        if state.command_mode is not mode:
+            raise RobotError(
+                f"command needs mode {mode.value}; the robot is in {state.command_mode.value}",
+                code="wrong_mode",
+            )
+        return state
+
+    # Driver hooks ---------------------------------------------------------------------------
+
+    @abstractmethod
+    async def _enable(self) -> None: ...
+
+    @abstractmethod
+    async def _disable(self) -> None: ...
+
+    @abstractmethod
+    async def _reset_errors(self) -> None: ...
+
+    @abstractmethod
+    async def _halt(self) -> None: ...
+
+    @abstractmethod
+    async def _set_command_mode(self, mode: CommandMode) -> None:
+        """Change mode; a change between two motion modes passes through halt."""
+
+    @abstractmethod
+    async def _set_speed_ratio(self, ratio: float) -> None: ...
+
+    @abstractmethod
+    async def _jog_joint(self, velocity: FloatArray, timeout: float) -> None: ...
+
+    @abstractmethod
+    async def _velocity_command(self, velocity: FloatArray, timeout: float) -> None: ...
+
+    @abstractmethod
+    async def _position_command(
+        self, position: FloatArray, velocity: FloatArray | None, timeout: float
+    ) -> None: ...
+
+    @abstractmethod
+    async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str: ...

@@ -1,0 +1,61 @@
+"""Robot-info YAML files: metadata, limits, URDF, flange and TCP of one robot model."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from runtime.interfaces.robot import RobotInfo
+from runtime.kinematics import load_urdf_model, urdf_joint_limits
+from runtime.kit.errors import InvalidValue, NotFound
+from runtime.paths import ROBOTS_DIR, resolve_package_uri
+
+
+def available_models(directory: Path = ROBOTS_DIR) -> list[str]:
+    return sorted(p.stem for p in directory.glob("*.yaml"))
+
+
+def find_robot_info(model_or_path: str, directory: Path = ROBOTS_DIR) -> Path:
+    path = Path(model_or_path)
+    if path.suffix in (".yaml", ".yml"):
+        if not path.is_file():
+            raise NotFound(f"robot info file not found: {path}")
+        return path
+    candidate = directory / f"{model_or_path}.yaml"
+    if not candidate.is_file():
+        known = ", ".join(available_models(directory)) or "none"
+        raise NotFound(f"unknown robot model {model_or_path!r} (known: {known})")
+    return candidate
+
+
+def load_robot_info(model_or_path: str, directory: Path = ROBOTS_DIR) -> RobotInfo:
+    """Load and validate a robot-info YAML. Joint position and velocity limits that the
+    file leaves out are taken from the URDF; acceleration limits must be given."""
+    path = find_robot_info(model_or_path, directory)
+    try:
+        raw: Any = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise InvalidValue(f"{path.name}: not valid YAML: {exc}") from exc
+    if not isinstance(raw, dict):
+        raise InvalidValue(f"{path.name}: expected a mapping at the top level")
+    joints = raw.get("joints")
+    if not isinstance(joints, list) or not all(isinstance(j, dict) for j in joints):
+        raise InvalidValue(f"{path.name}: 'joints' must be a list of mappings")
+    uri = str(raw.get("urdf", ""))
+    urdf = resolve_package_uri(uri, relative_to=path.parent)
+    if not uri.startswith("package://"):
+        raw["urdf"] = str(urdf)
+    names = [str(j.get("name", "")) for j in joints]
+    model, order = load_urdf_model(urdf, names)
+    for joint, (lower, upper, velocity) in zip(
+        joints, urdf_joint_limits(model, order), strict=True
+    ):
+        joint.setdefault("lower", lower)
+        joint.setdefault("upper", upper)
+        joint.setdefault("max_velocity", velocity)
+    try:
+        return RobotInfo.model_validate(raw)
+    except ValueError as exc:
+        raise InvalidValue(f"{path.name}: {exc}") from exc
