@@ -1,0 +1,1 @@
+"""Device drivers, one package each, every one runnable as its own process."""

@@ -1,0 +1,288 @@
+"""The simulated controller: command handling and one control cycle, with no threads and no
+I/O, so tests can step it deterministically. The driver runs it at 500 Hz."""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections import deque
+from dataclasses import dataclass
+
+import numpy as np
+
+from device_drivers.sim_robot.reference import TrajectoryReference
+from device_drivers.sim_robot.tracker import JointTracker, TrackerError
+from runtime.interfaces.limits import CheckedTrajectory, FloatArray
+from runtime.interfaces.robot import (
+    CommandMode,
+    OperationalMode,
+    RobotFlags,
+    RobotInfo,
+    RobotState,
+    TrajectoryState,
+    TrajectoryStatus,
+)
+from runtime.kinematics import Kinematics
+from runtime.kit.errors import NotFound, RobotError
+
+CYCLE = 0.002
+STREAM_MODES = (CommandMode.jog, CommandMode.velocity_command, CommandMode.position_command)
+LIMIT_SLACK = 1e-6
+
+
+@dataclass
+class StreamCommand:
+    mode: CommandMode
+    velocity: FloatArray
+    position: FloatArray | None
+    received: float
+    deadline: float
+    acceleration: FloatArray | None = None
+
+    def reference(self, now: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Where a position stream will be at the end of this cycle, extrapolated from its
+        latest sample (which is already a little old)."""
+        assert self.position is not None
+        a = np.zeros_like(self.velocity) if self.acceleration is None else self.acceleration
+        h = now - self.received + CYCLE
+        return self.position + self.velocity * h + 0.5 * a * h * h, self.velocity + a * h, a
+
+
+@dataclass
+class RunningTrajectory:
+    id: str
+    reference: TrajectoryReference
+    t: float = 0.0
+    state: TrajectoryState = TrajectoryState.running
+    message: str = ""
+
+    def status(self) -> TrajectoryStatus:
+        progress = 1.0 if self.reference.duration == 0 else min(self.t / self.reference.duration, 1)
+        return TrajectoryStatus(
+            id=self.id, state=self.state, progress=progress, message=self.message
+        )
+
+
+@dataclass(frozen=True)
+class Setpoint:
+    seqno: int
+    t: float
+    position: FloatArray
+    velocity: FloatArray
+    acceleration: FloatArray
+
+
+class SimCore:
+    def __init__(self, info: RobotInfo, kinematics: Kinematics, history: int = 5000) -> None:
+        self.info = info
+        self.kinematics = kinematics
+        self.tracker = JointTracker(info.joints, CYCLE, np.array(info.home))
+        self.mode = CommandMode.halt
+        self.operational_mode = OperationalMode.manual_reduced_speed
+        self.enabled = False
+        self.estop = False
+        self.error = False
+        self.error_message = ""
+        self.speed_ratio = 1.0
+        self.seqno = 0
+        self.sim_time = 0.0
+        self.command: StreamCommand | None = None
+        self.trajectory: RunningTrajectory | None = None
+        self._finished: dict[str, TrajectoryStatus] = {}
+        self._ids = itertools.count(1)
+        self.command_timeouts = 0
+        self.setpoints: deque[Setpoint] = deque(maxlen=history)
+
+    # Commands -------------------------------------------------------------------------------
+
+    @property
+    def ready(self) -> bool:
+        return self.enabled and not self.estop and not self.error
+
+    def enable(self) -> None:
+        if self.estop:
+            raise RobotError("the E-stop is engaged; release it first", code="estop")
+        if self.error:
+            raise RobotError("the robot has an error; reset errors first", code="robot_fault")
+        self.enabled = True
+
+    def disable(self) -> None:
+        self.enabled = False
+        self.halt("disabled")
+
+    def reset_errors(self) -> None:
+        if self.estop:
+            raise RobotError("release the E-stop before resetting errors", code="estop")
+        self.error = False
+        self.error_message = ""
+
+    def halt(self, reason: str = "halted") -> None:
+        self.command = None
+        self._end_trajectory(TrajectoryState.aborted, reason)
+        self.mode = CommandMode.halt
+
+    def set_mode(self, mode: CommandMode) -> None:
+        if mode is not CommandMode.halt and not self.ready:
+            raise RobotError("the robot is not ready for motion", code="not_enabled")
+        if mode is not self.mode:
+            # Passing through halt: whatever the old mode was doing stops here.
+            self.halt(f"mode changed to {mode.value}")
+            self.mode = mode
+
+    def set_speed_ratio(self, ratio: float) -> None:
+        self.speed_ratio = ratio
+
+    def set_operational_mode(self, mode: OperationalMode) -> None:
+        if mode is not self.operational_mode:
+            self.halt("operational mode changed")
+            self.operational_mode = mode
+
+    def set_estop(self, engaged: bool) -> None:
+        if engaged:
+            self.estop = True
+            self.enabled = False
+            self.halt("E-stop")
+        else:
+            self.estop = False
+
+    def fault(self, message: str) -> None:
+        self.error = True
+        self.error_message = message
+        self.command = None
+        self._end_trajectory(TrajectoryState.failed, message)
+        self.mode = CommandMode.halt
+
+    def stream(
+        self,
+        mode: CommandMode,
+        velocity: FloatArray | None,
+        position: FloatArray | None,
+        timeout: float,
+        now: float,
+    ) -> None:
+        """Latest sample of a jog, velocity or position stream; it lapses after `timeout`."""
+        self._require(mode)
+        previous = self.command
+        acceleration = None
+        if position is not None and previous is not None and previous.position is not None:
+            dt = now - previous.received
+            if 0 < dt <= 2 * timeout:
+                if velocity is None:
+                    velocity = (position - previous.position) / dt
+                acceleration = (velocity - previous.velocity) / dt
+        if velocity is None:
+            if position is None:
+                raise RobotError("a stream command needs a velocity or a position")
+            velocity = np.zeros_like(position)
+        self.command = StreamCommand(mode, velocity, position, now, now + timeout, acceleration)
+
+    def start_trajectory(self, trajectory: CheckedTrajectory) -> str:
+        self._require(CommandMode.trajectory)
+        if self.trajectory is not None:
+            raise RobotError("a trajectory is already running", code="busy")
+        trajectory_id = f"traj-{next(self._ids)}"
+        self.trajectory = RunningTrajectory(trajectory_id, TrajectoryReference(trajectory))
+        return trajectory_id
+
+    def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus:
+        if self.trajectory is not None and self.trajectory.id == trajectory_id:
+            return self.trajectory.status()
+        if trajectory_id in self._finished:
+            return self._finished[trajectory_id]
+        raise NotFound(f"no trajectory {trajectory_id!r}")
+
+    def _require(self, mode: CommandMode) -> None:
+        if not self.ready:
+            raise RobotError("the robot is not ready for motion", code="not_enabled")
+        if self.mode is not mode:
+            raise RobotError(f"the robot is in {self.mode.value} mode", code="wrong_mode")
+
+    def _end_trajectory(self, state: TrajectoryState, message: str = "") -> None:
+        if self.trajectory is None:
+            return
+        self.trajectory.state = state
+        self.trajectory.message = message
+        self._finished[self.trajectory.id] = self.trajectory.status()
+        while len(self._finished) > 32:
+            self._finished.pop(next(iter(self._finished)))
+        self.trajectory = None
+
+    # One control cycle ----------------------------------------------------------------------
+
+    def step(self, now: float) -> None:
+        self.seqno += 1
+        self.sim_time += CYCLE
+        command = self.command
+        if command is not None and now > command.deadline:
+            self.command = None
+            self.command_timeouts += 1
+            command = None
+        try:
+            self._advance(command, now)
+        except TrackerError as exc:
+            self.fault(str(exc))
+            self.tracker.hold()
+        self._check_limits()
+        t = self.tracker
+        self.setpoints.append(
+            Setpoint(self.seqno, self.sim_time, t.position, t.velocity, t.acceleration)
+        )
+
+    def _advance(self, command: StreamCommand | None, now: float) -> None:
+        tracker = self.tracker
+        if not self.ready or self.mode is CommandMode.halt:
+            tracker.hold()
+        elif self.mode is CommandMode.trajectory:
+            self._advance_trajectory()
+        elif command is None or command.mode is not self.mode:
+            tracker.hold()
+        elif command.position is not None:
+            tracker.step_position(*command.reference(now))
+        else:
+            scale = self.speed_ratio if self.mode is CommandMode.jog else 1.0
+            tracker.step_velocity(command.velocity * scale)
+
+    def _advance_trajectory(self) -> None:
+        running = self.trajectory
+        if running is None:
+            self.tracker.hold()
+            return
+        running.t += CYCLE * self.speed_ratio
+        position, velocity = running.reference.sample(running.t)
+        self.tracker.step_position(position, velocity * self.speed_ratio)
+        if running.t >= running.reference.duration and not self.tracker.moving:
+            self._end_trajectory(TrajectoryState.finished)
+
+    def _check_limits(self) -> None:
+        q = self.tracker.position
+        t = self.tracker
+        outside = np.flatnonzero((q < t.lower - LIMIT_SLACK) | (q > t.upper + LIMIT_SLACK))
+        if outside.size and not self.error:
+            name = self.info.joints[int(outside[0])].name
+            self.fault(f"protective stop: joint {name} passed its position limit")
+
+    # State ----------------------------------------------------------------------------------
+
+    def state(self) -> RobotState:
+        t = self.tracker
+        return RobotState(
+            seqno=self.seqno,
+            ts=time.time(),
+            command_mode=self.mode,
+            operational_mode=self.operational_mode,
+            flags=RobotFlags(
+                enabled=self.enabled,
+                ready=self.ready,
+                error=self.error,
+                estop=self.estop,
+                homed=True,
+                trajectory_running=self.trajectory is not None,
+            ),
+            joint_position=t.position.tolist(),
+            joint_velocity=t.velocity.tolist(),
+            joint_position_command=t.position.tolist(),
+            tcp_pose=self.kinematics.tcp_pose(t.position),
+            speed_ratio=self.speed_ratio,
+            error_message=self.error_message,
+            trajectory=self.trajectory.status() if self.trajectory is not None else None,
+        )

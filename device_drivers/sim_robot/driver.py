@@ -1,0 +1,154 @@
+"""The simulated robot driver: SimCore behind a lock, stepped by a 500 Hz thread."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections import deque
+
+import numpy as np
+
+from device_drivers.sim_robot.core import CYCLE, SimCore
+from runtime.interfaces.device import DeviceIdentity
+from runtime.interfaces.limits import CheckedTrajectory, FloatArray
+from runtime.interfaces.robot import (
+    CommandMode,
+    OperationalMode,
+    RobotInfo,
+    RobotState,
+    TrajectoryStatus,
+)
+from runtime.interfaces.robot_driver import RobotDriver
+from runtime.kinematics import Kinematics
+
+
+class LoopTimer:
+    """Start-to-start periods of the control loop, for the period-error figure."""
+
+    def __init__(self, size: int = 20_000) -> None:
+        self.periods: deque[float] = deque(maxlen=size)
+        self.overruns = 0
+        self._last: float | None = None
+
+    def tick(self, now: float) -> None:
+        if self._last is not None:
+            self.periods.append(now - self._last)
+        self._last = now
+
+    def stats(self) -> dict[str, float]:
+        if not self.periods:
+            return {"cycles": 0}
+        error_ms = np.abs(np.array(self.periods) - CYCLE) * 1000.0
+        return {
+            "cycles": len(error_ms),
+            "period_ms": CYCLE * 1000.0,
+            "error_p50_ms": float(np.percentile(error_ms, 50)),
+            "error_p99_ms": float(np.percentile(error_ms, 99)),
+            "error_max_ms": float(error_ms.max()),
+            "overruns": self.overruns,
+        }
+
+
+class SimRobot(RobotDriver):
+    def __init__(self, identity: DeviceIdentity, info: RobotInfo) -> None:
+        super().__init__(identity, info)
+        self.core = SimCore(info, Kinematics(info))
+        self.lock = threading.Lock()
+        self.timer = LoopTimer()
+        self._running = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    async def start(self) -> None:
+        self._running.set()
+        self._thread = threading.Thread(target=self._loop, name="sim-control", daemon=True)
+        self._thread.start()
+
+    async def close(self) -> None:
+        await self.halt()
+        self._running.clear()
+        if self._thread is not None:
+            self._thread.join(timeout=1.0)
+
+    def _loop(self) -> None:
+        deadline = time.perf_counter()
+        while self._running.is_set():
+            start = time.perf_counter()
+            self.timer.tick(start)
+            with self.lock:
+                self.core.step(time.monotonic())
+            deadline += CYCLE
+            delay = deadline - time.perf_counter()
+            if delay > 0:
+                time.sleep(delay)
+            elif delay < -CYCLE:
+                # Late by more than a cycle: start afresh instead of bursting to catch up.
+                self.timer.overruns += 1
+                deadline = time.perf_counter()
+
+    def state(self) -> RobotState:
+        with self.lock:
+            return self.core.state()
+
+    async def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus:
+        with self.lock:
+            return self.core.trajectory_status(trajectory_id)
+
+    async def _enable(self) -> None:
+        with self.lock:
+            self.core.enable()
+
+    async def _disable(self) -> None:
+        with self.lock:
+            self.core.disable()
+
+    async def _reset_errors(self) -> None:
+        with self.lock:
+            self.core.reset_errors()
+
+    async def _halt(self) -> None:
+        with self.lock:
+            self.core.halt()
+
+    async def _set_command_mode(self, mode: CommandMode) -> None:
+        with self.lock:
+            self.core.set_mode(mode)
+
+    async def _set_speed_ratio(self, ratio: float) -> None:
+        with self.lock:
+            self.core.set_speed_ratio(ratio)
+
+    async def _jog_joint(self, velocity: FloatArray, timeout: float) -> None:
+        with self.lock:
+            self.core.stream(CommandMode.jog, velocity, None, timeout, time.monotonic())
+
+    async def _velocity_command(self, velocity: FloatArray, timeout: float) -> None:
+        with self.lock:
+            self.core.stream(
+                CommandMode.velocity_command, velocity, None, timeout, time.monotonic()
+            )
+
+    async def _position_command(
+        self, position: FloatArray, velocity: FloatArray | None, timeout: float
+    ) -> None:
+        with self.lock:
+            self.core.stream(
+                CommandMode.position_command, velocity, position, timeout, time.monotonic()
+            )
+
+    async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str:
+        with self.lock:
+            return self.core.start_trajectory(trajectory)
+
+    # Simulation controls (the physical E-stop button, key switch and faults) ------------------
+
+    def set_estop(self, engaged: bool) -> None:
+        with self.lock:
+            self.core.set_estop(engaged)
+
+    def inject_fault(self, message: str) -> None:
+        with self.lock:
+            self.core.fault(message)
+
+    def set_operational_mode(self, mode: OperationalMode) -> None:
+        with self.lock:
+            self.core.set_operational_mode(mode)

@@ -1,0 +1,68 @@
+"""What a simulator has and a robot does not: the E-stop button, the key switch, faults on
+demand, and a look inside the control loop."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Query
+from pydantic import Field
+
+from device_drivers.sim_robot.driver import SimRobot
+from runtime.interfaces.common import Strict
+from runtime.interfaces.robot import OperationalMode, RobotState
+
+
+class EstopRequest(Strict):
+    engaged: bool
+
+
+class FaultRequest(Strict):
+    message: str = Field(default="simulated fault", max_length=200)
+
+
+class OperationalModeRequest(Strict):
+    mode: OperationalMode
+
+
+def sim_router(robot: SimRobot) -> APIRouter:
+    router = APIRouter(prefix="/sim")
+
+    @router.post("/estop")
+    async def estop(body: EstopRequest) -> RobotState:
+        robot.set_estop(body.engaged)
+        return robot.state()
+
+    @router.post("/fault")
+    async def fault(body: FaultRequest) -> RobotState:
+        robot.inject_fault(body.message)
+        return robot.state()
+
+    @router.put("/operational_mode")
+    async def operational_mode(body: OperationalModeRequest) -> RobotState:
+        robot.set_operational_mode(body.mode)
+        return robot.state()
+
+    @router.get("/loop_stats")
+    async def loop_stats() -> dict[str, Any]:
+        with robot.lock:
+            timeouts = robot.core.command_timeouts
+        return {**robot.timer.stats(), "command_timeouts": timeouts}
+
+    @router.get("/setpoints")
+    async def setpoints(
+        after: int = 0, limit: Annotated[int, Query(ge=1, le=20000)] = 5000
+    ) -> dict[str, Any]:
+        """Every control-cycle setpoint after `after` still in the history buffer."""
+        with robot.lock:
+            samples = [s for s in robot.core.setpoints if s.seqno > after][:limit]
+        return {
+            "cycle": 0.002,
+            "seqno": [s.seqno for s in samples],
+            "t": [s.t for s in samples],
+            "position": [s.position.tolist() for s in samples],
+            "velocity": [s.velocity.tolist() for s in samples],
+            "acceleration": [s.acceleration.tolist() for s in samples],
+        }
+
+    return router
