@@ -1,0 +1,1 @@
+"""Variable storage: typed, versioned variables in one SQLite file (WAL, synchronous=FULL)."""

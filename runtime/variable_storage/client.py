@@ -1,0 +1,48 @@
+"""Typed client of the variable storage for other services."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from runtime.kit.client import ServiceClient
+from runtime.variable_storage.store import Variable
+
+
+class StorageClient:
+    def __init__(self, base_url: str, timeout: float = 5.0) -> None:
+        self.http = ServiceClient(base_url, timeout=timeout, name="variable storage")
+
+    async def aclose(self) -> None:
+        await self.http.aclose()
+
+    async def get(self, name: str) -> Variable:
+        return await self.http.request("GET", f"/variables/{name}", model=Variable)
+
+    async def query(
+        self, *, tag: str | None = None, type_name: str | None = None
+    ) -> list[Variable]:
+        params = {k: v for k, v in (("tag", tag), ("type", type_name)) if v is not None}
+        data = await self.http.get("/variables", params=params)
+        return [Variable.model_validate(item) for item in data]
+
+    async def put(
+        self,
+        name: str,
+        type_name: str,
+        value: Any,
+        *,
+        tags: list[str] | None = None,
+        doc: str | None = None,
+        expected_version: int | None = None,
+    ) -> Variable:
+        body: dict[str, Any] = {"type": type_name, "value": value}
+        if tags is not None:
+            body["tags"] = tags
+        if doc is not None:
+            body["doc"] = doc
+        if expected_version is not None:
+            body["expected_version"] = expected_version
+        return await self.http.request("PUT", f"/variables/{name}", json=body, model=Variable)
+
+    async def delete(self, name: str) -> Variable:
+        return await self.http.request("DELETE", f"/variables/{name}", model=Variable)

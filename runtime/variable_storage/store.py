@@ -1,0 +1,343 @@
+"""SQLite persistence of variables and their history. A write returns only after its
+transaction is durably committed (WAL + synchronous=FULL), so an acknowledged write survives
+a crash or a kill -9 of the process."""
+
+from __future__ import annotations
+
+import json
+import re
+import sqlite3
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel, Field
+
+from runtime.kit.errors import Conflict, InvalidValue, NotFound
+from runtime.variable_storage.types import validate_value
+
+NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_.\-]{0,127}$")
+TAG_PATTERN = re.compile(r"^[A-Za-z0-9_.:\-]{1,64}$")
+SCHEMA_VERSION = 1
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS variables (
+    name TEXT PRIMARY KEY,
+    type TEXT NOT NULL,
+    value TEXT NOT NULL,
+    tags TEXT NOT NULL,
+    doc TEXT NOT NULL,
+    created REAL NOT NULL,
+    updated REAL NOT NULL,
+    version INTEGER NOT NULL
+);
+CREATE TABLE IF NOT EXISTS history (
+    name TEXT NOT NULL,
+    version INTEGER NOT NULL,
+    type TEXT NOT NULL,
+    value TEXT,
+    tags TEXT NOT NULL,
+    doc TEXT NOT NULL,
+    updated REAL NOT NULL,
+    deleted INTEGER NOT NULL DEFAULT 0,
+    PRIMARY KEY (name, version)
+);
+"""
+
+
+class Variable(BaseModel):
+    name: str
+    type: str
+    value: Any
+    tags: list[str] = Field(default_factory=list)
+    doc: str = ""
+    created: float
+    updated: float
+    version: int
+
+
+class HistoryEntry(BaseModel):
+    version: int
+    type: str
+    value: Any
+    tags: list[str]
+    doc: str
+    updated: float
+    deleted: bool
+
+
+def check_name(name: str) -> None:
+    if not NAME_PATTERN.match(name):
+        raise InvalidValue(
+            f"invalid variable name {name!r}: start with a letter; letters, digits, "
+            "'_', '.', '-' only; at most 128 characters",
+            code="invalid_name",
+        )
+
+
+def check_tags(tags: list[str]) -> list[str]:
+    for tag in tags:
+        if not TAG_PATTERN.match(tag):
+            raise InvalidValue(f"invalid tag {tag!r}", code="invalid_tag")
+    return sorted(set(tags))
+
+
+class VariableStore:
+    def __init__(self, path: Path, history_depth: int = 20) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self.history_depth = history_depth
+        self._lock = threading.Lock()
+        self._db = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+        self._db.execute("PRAGMA journal_mode=WAL")
+        self._db.execute("PRAGMA synchronous=FULL")
+        self._db.execute("PRAGMA foreign_keys=ON")
+        with self._write():
+            for statement in SCHEMA.strip().split(";"):
+                if statement.strip():
+                    self._db.execute(statement)
+            self._db.execute(
+                "INSERT OR IGNORE INTO meta (key, value) VALUES ('schema_version', ?)",
+                (str(SCHEMA_VERSION),),
+            )
+
+    def close(self) -> None:
+        with self._lock:
+            self._db.close()
+
+    @contextmanager
+    def _write(self) -> Iterator[None]:
+        with self._lock:
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                yield
+            except BaseException:
+                self._db.execute("ROLLBACK")
+                raise
+            self._db.execute("COMMIT")
+
+    # Reads ----------------------------------------------------------------------------------
+
+    def get(self, name: str) -> Variable:
+        with self._lock:
+            row = self._db.execute(
+                "SELECT name, type, value, tags, doc, created, updated, version "
+                "FROM variables WHERE name = ?",
+                (name,),
+            ).fetchone()
+        if row is None:
+            raise NotFound(f"no variable named {name!r}", code="variable_not_found")
+        return _variable(row)
+
+    def query(self, tag: str | None = None, type_name: str | None = None) -> list[Variable]:
+        query = (
+            "SELECT name, type, value, tags, doc, created, updated, version "
+            "FROM variables WHERE 1=1"
+        )
+        params: list[Any] = []
+        if tag is not None:
+            query += " AND EXISTS (SELECT 1 FROM json_each(variables.tags) WHERE value = ?)"
+            params.append(tag)
+        if type_name is not None:
+            query += " AND type = ?"
+            params.append(type_name)
+        with self._lock:
+            rows = self._db.execute(query + " ORDER BY name", params).fetchall()
+        return [_variable(r) for r in rows]
+
+    def history(self, name: str) -> list[HistoryEntry]:
+        with self._lock:
+            rows = self._db.execute(
+                "SELECT version, type, value, tags, doc, updated, deleted FROM history "
+                "WHERE name = ? ORDER BY version DESC",
+                (name,),
+            ).fetchall()
+        if not rows:
+            raise NotFound(f"no history for {name!r}", code="variable_not_found")
+        return [
+            HistoryEntry(
+                version=r[0],
+                type=r[1],
+                value=None if r[2] is None else json.loads(r[2]),
+                tags=json.loads(r[3]),
+                doc=r[4],
+                updated=r[5],
+                deleted=bool(r[6]),
+            )
+            for r in rows
+        ]
+
+    # Writes ---------------------------------------------------------------------------------
+
+    def put(
+        self,
+        name: str,
+        type_name: str,
+        value: Any,
+        *,
+        tags: list[str] | None = None,
+        doc: str | None = None,
+        expected_version: int | None = None,
+    ) -> Variable:
+        check_name(name)
+        normalised = validate_value(type_name, value)
+        checked_tags = None if tags is None else check_tags(tags)
+        with self._write():
+            return self._put_locked(
+                name, type_name, normalised, checked_tags, doc, expected_version
+            )
+
+    def put_many(self, items: list[dict[str, Any]]) -> list[Variable]:
+        """All or nothing: every item is validated before any is written."""
+        prepared = []
+        errors = []
+        for item in items:
+            try:
+                name = str(item.get("name"))
+                check_name(name)
+                prepared.append(
+                    (
+                        name,
+                        str(item.get("type")),
+                        validate_value(str(item.get("type")), item.get("value")),
+                        check_tags(list(item.get("tags") or [])),
+                        str(item.get("doc") or ""),
+                    )
+                )
+            except InvalidValue as exc:
+                errors.append(f"{item.get('name')!r}: {exc.message}")
+        if errors:
+            raise InvalidValue("nothing imported: " + "; ".join(errors), code="invalid_import")
+        with self._write():
+            return [self._put_locked(*p, expected_version=None) for p in prepared]
+
+    def delete(self, name: str, expected_version: int | None = None) -> Variable:
+        with self._write():
+            current = self._current(name)
+            if current is None:
+                raise NotFound(f"no variable named {name!r}", code="variable_not_found")
+            self._check_version(current, expected_version)
+            now = time.time()
+            self._db.execute("DELETE FROM variables WHERE name = ?", (name,))
+            self._db.execute(
+                "INSERT INTO history (name, version, type, value, tags, doc, updated, deleted) "
+                "VALUES (?, ?, ?, NULL, ?, ?, ?, 1)",
+                (
+                    name,
+                    current.version + 1,
+                    current.type,
+                    json.dumps(current.tags),
+                    current.doc,
+                    now,
+                ),
+            )
+            self._prune(name)
+            return current
+
+    def _put_locked(
+        self,
+        name: str,
+        type_name: str,
+        value: Any,
+        tags: list[str] | None,
+        doc: str | None,
+        expected_version: int | None,
+    ) -> Variable:
+        current = self._current(name)
+        self._check_version(current, expected_version)
+        if current is not None and current.type != type_name:
+            raise Conflict(
+                f"{name!r} is a {current.type}; delete it before storing a {type_name}",
+                code="type_mismatch",
+            )
+        now = time.time()
+        version = self._next_version(name)
+        variable = Variable(
+            name=name,
+            type=type_name,
+            value=value,
+            tags=tags if tags is not None else (current.tags if current else []),
+            doc=doc if doc is not None else (current.doc if current else ""),
+            created=current.created if current else now,
+            updated=now,
+            version=version,
+        )
+        encoded = json.dumps(value, allow_nan=False)
+        self._db.execute(
+            "INSERT INTO variables (name, type, value, tags, doc, created, updated, version) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT(name) DO UPDATE SET "
+            "type=excluded.type, value=excluded.value, tags=excluded.tags, doc=excluded.doc, "
+            "updated=excluded.updated, version=excluded.version",
+            (
+                name,
+                type_name,
+                encoded,
+                json.dumps(variable.tags),
+                variable.doc,
+                variable.created,
+                now,
+                version,
+            ),
+        )
+        self._db.execute(
+            "INSERT INTO history (name, version, type, value, tags, doc, updated, deleted) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?, 0)",
+            (name, version, type_name, encoded, json.dumps(variable.tags), variable.doc, now),
+        )
+        self._prune(name)
+        return variable
+
+    def _current(self, name: str) -> Variable | None:
+        row = self._db.execute(
+            "SELECT name, type, value, tags, doc, created, updated, version "
+            "FROM variables WHERE name = ?",
+            (name,),
+        ).fetchone()
+        return None if row is None else _variable(row)
+
+    def _next_version(self, name: str) -> int:
+        # Versions keep counting across a delete, so history never reuses a number.
+        row = self._db.execute(
+            "SELECT MAX(version) FROM history WHERE name = ?", (name,)
+        ).fetchone()
+        return int(row[0] or 0) + 1
+
+    @staticmethod
+    def _check_version(current: Variable | None, expected: int | None) -> None:
+        if expected is None:
+            return
+        actual = current.version if current is not None else 0
+        if actual != expected:
+            raise Conflict(
+                f"version is {actual}, not {expected}: someone else changed it",
+                code="version_conflict",
+                details={"version": actual},
+            )
+
+    def _prune(self, name: str) -> None:
+        self._db.execute(
+            "DELETE FROM history WHERE name = ? AND version <= "
+            "(SELECT MAX(version) FROM history WHERE name = ?) - ?",
+            (name, name, self.history_depth),
+        )
+
+    def integrity_check(self) -> str:
+        with self._lock:
+            return str(self._db.execute("PRAGMA integrity_check").fetchone()[0])
+
+
+def _variable(row: tuple[Any, ...]) -> Variable:
+    return Variable(
+        name=row[0],
+        type=row[1],
+        value=json.loads(row[2]),
+        tags=json.loads(row[3]),
+        doc=row[4],
+        created=row[5],
+        updated=row[6],
+        version=row[7],
+    )
