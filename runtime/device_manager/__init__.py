@@ -1,0 +1,1 @@
+"""Device manager: discovery, the registry of added devices, connections and live state."""

@@ -1,0 +1,58 @@
+"""API models of the device manager."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, Field, model_validator
+
+from runtime.interfaces.common import Strict
+
+LOCAL_NAME_PATTERN = r"^[a-z][a-z0-9_]{0,31}$"
+
+ConnectionStatus = Literal["connecting", "connected", "disconnected"]
+
+
+class DetectedDevice(BaseModel):
+    """A device seen on the network. Text fields come from the device: untrusted."""
+
+    uuid: str
+    name: str
+    kind: str
+    model: str
+    api: str
+    address: str
+    url: str
+    added_as: str | None = None
+    last_seen: float
+
+
+class AddedDevice(BaseModel):
+    local_name: str
+    uuid: str
+    kind: str
+    model: str
+    name: str
+    url: str
+    status: ConnectionStatus
+    last_error: str = ""
+    connected_since: float | None = None
+    detected: bool = False
+
+
+class DeviceDetails(AddedDevice):
+    info: dict[str, Any] | None = None
+
+
+class AddDeviceRequest(Strict):
+    """Add a detected device by uuid, or any device by its URL."""
+
+    local_name: str = Field(pattern=LOCAL_NAME_PATTERN)
+    uuid: str | None = Field(default=None, min_length=1, max_length=64)
+    url: str | None = Field(default=None, pattern=r"^https?://[^\s/]+(:\d+)?/?$", max_length=256)
+
+    @model_validator(mode="after")
+    def _one_of(self) -> AddDeviceRequest:
+        if (self.uuid is None) == (self.url is None):
+            raise ValueError("give either a uuid (of a detected device) or a url")
+        return self

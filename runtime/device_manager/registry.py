@@ -1,0 +1,274 @@
+"""Detected and added devices. Free of web framework code: the routes call into this."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import time
+from collections.abc import Coroutine
+from typing import Any
+
+import httpx
+
+from runtime.device_manager.connection import DeviceConnection
+from runtime.device_manager.models import (
+    AddDeviceRequest,
+    AddedDevice,
+    DetectedDevice,
+    DeviceDetails,
+)
+from runtime.kit.discovery import Detected, clean_text
+from runtime.kit.errors import Conflict, DeviceError, NotFound, OpenPendantError, Unavailable
+from runtime.kit.websocket import Fanout
+from runtime.variable_storage.client import StorageClient
+from runtime.variable_storage.types import DeviceRecord
+
+log = logging.getLogger(__name__)
+
+RECORD_PREFIX = "devices."
+
+
+class DeviceRegistry:
+    def __init__(self, storage: StorageClient, fanout: Fanout) -> None:
+        self.storage = storage
+        self.fanout = fanout
+        self.detected: dict[str, Detected] = {}
+        self.connections: dict[str, DeviceConnection] = {}
+        self.loaded = False
+        self._lock = asyncio.Lock()
+        self._tasks: set[asyncio.Task[None]] = set()
+
+    # Discovery ------------------------------------------------------------------------------
+
+    def on_found(self, device: Detected) -> None:
+        self.detected[device.uuid] = device
+        self._publish_detected()
+        for conn in self.connections.values():
+            if conn.record.uuid == device.uuid and conn.record.url != device.url:
+                log.info("%s moved to %s", conn.name, device.url)
+                conn.move_to(device.url)
+                self._background(self._persist_url(conn.name, conn.record))
+                self._publish_devices()
+
+    def on_gone(self, service_name: str) -> None:
+        gone = [uuid for uuid, d in self.detected.items() if d.service_name == service_name]
+        for uuid in gone:
+            del self.detected[uuid]
+        if gone:
+            self._publish_detected()
+            self._publish_devices()
+
+    def _background(self, job: Coroutine[Any, Any, None]) -> None:
+        task = asyncio.ensure_future(job)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _persist_url(self, local_name: str, record: DeviceRecord) -> None:
+        async with self._lock:
+            conn = self.connections.get(local_name)
+            if conn is None or conn.record.uuid != record.uuid:
+                return  # removed meanwhile: writing now would bring it back
+            try:
+                await self.storage.put(RECORD_PREFIX + local_name, "device", record.model_dump())
+            except OpenPendantError as exc:
+                log.warning("could not store the new address of %s: %s", local_name, exc.message)
+
+    # Added devices --------------------------------------------------------------------------
+
+    async def load(self) -> None:
+        """Reconnect every device added before; waits for the storage to come up."""
+        while True:
+            try:
+                variables = await self.storage.query(type_name="device")
+                break
+            except OpenPendantError as exc:
+                log.info("waiting for variable storage: %s", exc.message)
+                await asyncio.sleep(0.2)
+        async with self._lock:
+            for variable in variables:
+                record = DeviceRecord.model_validate(variable.value)
+                if record.local_name not in self.connections:
+                    self._connect(record)
+            self.loaded = True
+        self._publish_devices()
+
+    async def add(self, request: AddDeviceRequest) -> AddedDevice:
+        async with self._lock:
+            if request.local_name in self.connections:
+                raise Conflict(
+                    f"the name {request.local_name!r} is already used", code="name_taken"
+                )
+            if request.uuid is not None:
+                record = self._record_from_detected(request.uuid, request.local_name)
+            else:
+                record = await self._record_from_url(str(request.url), request.local_name)
+            for conn in self.connections.values():
+                if conn.record.uuid == record.uuid:
+                    raise Conflict(
+                        f"this device is already added as {conn.name!r}", code="already_added"
+                    )
+            # Persist first: if storage refuses, nothing has changed.
+            await self.storage.put(
+                RECORD_PREFIX + record.local_name,
+                "device",
+                record.model_dump(),
+                tags=["device"],
+                expected_version=0,
+            )
+            conn = self._connect(record)
+        self._publish_devices()
+        self._publish_detected()
+        return self._added(conn)
+
+    async def remove(self, local_name: str) -> AddedDevice:
+        async with self._lock:
+            conn = self._get(local_name)
+            await self.storage.delete(RECORD_PREFIX + local_name)
+            del self.connections[local_name]
+            await conn.stop()
+        self._publish_devices()
+        self._publish_detected()
+        return self._added(conn)
+
+    def _record_from_detected(self, uuid: str, local_name: str) -> DeviceRecord:
+        found = self.detected.get(uuid)
+        if found is None:
+            raise NotFound(f"no detected device with uuid {uuid!r}", code="device_not_detected")
+        return DeviceRecord(
+            uuid=found.uuid,
+            local_name=local_name,
+            kind=found.kind,
+            model=found.model,
+            name=found.name,
+            url=found.url,
+        )
+
+    async def _record_from_url(self, url: str, local_name: str) -> DeviceRecord:
+        url = url.rstrip("/")
+        try:
+            async with httpx.AsyncClient(base_url=url, timeout=2.0) as http:
+                response = await http.get("/info")
+                response.raise_for_status()
+                identity = response.json()["identity"]
+        except (httpx.HTTPError, ValueError, KeyError, TypeError) as exc:
+            raise DeviceError(
+                f"no OpenPendant device answers at {url}", code="device_unreachable"
+            ) from exc
+        return DeviceRecord(
+            uuid=clean_text(str(identity.get("uuid", "")), 64),
+            local_name=local_name,
+            kind=clean_text(str(identity.get("kind", "")), 16),
+            model=clean_text(str(identity.get("model", "")), 64),
+            name=clean_text(str(identity.get("name", "")), 64),
+            url=url,
+        )
+
+    def _connect(self, record: DeviceRecord) -> DeviceConnection:
+        conn = DeviceConnection(record, self._on_state, lambda _: self._publish_devices())
+        self.connections[record.local_name] = conn
+        found = self.detected.get(record.uuid)
+        if found is not None and found.url != record.url:
+            conn.move_to(found.url)
+            self._background(self._persist_url(record.local_name, conn.record))
+        conn.start()
+        return conn
+
+    async def close(self) -> None:
+        for conn in list(self.connections.values()):
+            await conn.stop()
+
+    # Views ----------------------------------------------------------------------------------
+
+    def _get(self, local_name: str) -> DeviceConnection:
+        conn = self.connections.get(local_name)
+        if conn is None:
+            raise NotFound(f"no device named {local_name!r}", code="device_not_found")
+        return conn
+
+    def _added(self, conn: DeviceConnection) -> AddedDevice:
+        r = conn.record
+        return AddedDevice(
+            local_name=r.local_name,
+            uuid=r.uuid,
+            kind=r.kind,
+            model=r.model,
+            name=r.name,
+            url=r.url,
+            status=conn.status,
+            last_error=conn.last_error,
+            connected_since=conn.connected_since,
+            detected=r.uuid in self.detected,
+        )
+
+    def added_list(self) -> list[AddedDevice]:
+        return [self._added(c) for _, c in sorted(self.connections.items())]
+
+    def details(self, local_name: str) -> DeviceDetails:
+        conn = self._get(local_name)
+        return DeviceDetails(**self._added(conn).model_dump(), info=conn.info)
+
+    def detected_list(self) -> list[DetectedDevice]:
+        added_as = {c.record.uuid: name for name, c in self.connections.items()}
+        return [
+            DetectedDevice(
+                uuid=d.uuid,
+                name=d.name,
+                kind=d.kind,
+                model=d.model,
+                api=d.api,
+                address=f"{d.host}:{d.port}",
+                url=d.url,
+                added_as=added_as.get(d.uuid),
+                last_seen=d.last_seen,
+            )
+            for d in sorted(self.detected.values(), key=lambda d: (d.kind, d.name, d.uuid))
+        ]
+
+    def state_text(self, local_name: str) -> str:
+        conn = self._get(local_name)
+        if conn.status != "connected" or conn.last_state is None:
+            raise Unavailable(
+                f"{local_name} is {conn.status}"
+                + (f": {conn.last_error}" if conn.last_error else ""),
+                code="device_disconnected",
+            )
+        return conn.last_state
+
+    # Live updates ---------------------------------------------------------------------------
+
+    def snapshot_messages(self) -> list[str]:
+        messages = [self._detected_message(), self._devices_message()]
+        for name, conn in sorted(self.connections.items()):
+            if conn.last_state is not None:
+                messages.append(_state_message(name, conn.last_state))
+        return messages
+
+    def _on_state(self, conn: DeviceConnection, text: str) -> None:
+        if self.fanout.subscribers:
+            self.fanout.publish(_state_message(conn.name, text), key=f"state:{conn.name}")
+
+    def _detected_message(self) -> str:
+        return json.dumps(
+            {"type": "detected", "detected": [d.model_dump() for d in self.detected_list()]}
+        )
+
+    def _devices_message(self) -> str:
+        return json.dumps(
+            {"type": "devices", "devices": [d.model_dump() for d in self.added_list()]}
+        )
+
+    def _publish_detected(self) -> None:
+        if self.fanout.subscribers:
+            self.fanout.publish(self._detected_message())
+
+    def _publish_devices(self) -> None:
+        if self.fanout.subscribers:
+            self.fanout.publish(self._devices_message())
+
+
+def _state_message(local_name: str, state_text: str) -> str:
+    return (
+        f'{{"type":"state","device":{json.dumps(local_name)},"ts":{time.time()},'
+        f'"state":{state_text}}}'
+    )

@@ -1,0 +1,88 @@
+"""Device manager routes: /devices/…"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections.abc import AsyncIterator
+from typing import Any
+
+from fastapi import APIRouter, FastAPI, Response, WebSocket
+
+from runtime.device_manager.models import (
+    AddDeviceRequest,
+    AddedDevice,
+    DetectedDevice,
+    DeviceDetails,
+)
+from runtime.device_manager.registry import DeviceRegistry
+from runtime.kit.app import create_app
+from runtime.kit.discovery import Browser
+from runtime.kit.errors import Unavailable
+from runtime.kit.settings import RuntimeSettings
+from runtime.kit.websocket import Fanout
+from runtime.variable_storage.client import StorageClient
+
+
+def devices_router(registry: DeviceRegistry) -> APIRouter:
+    router = APIRouter(prefix="/devices")
+
+    @router.get("/detected")
+    async def detected() -> list[DetectedDevice]:
+        return registry.detected_list()
+
+    @router.websocket("/ws")
+    async def live(ws: WebSocket, max_rate: float | None = None) -> None:
+        """Detected list, added devices with status, and every device's state, pushed."""
+        await registry.fanout.serve(ws, registry.snapshot_messages(), max_rate_hz=max_rate)
+
+    @router.get("")
+    async def added() -> list[AddedDevice]:
+        return registry.added_list()
+
+    @router.post("", status_code=201)
+    async def add(body: AddDeviceRequest) -> AddedDevice:
+        return await registry.add(body)
+
+    @router.get("/{local_name}")
+    async def details(local_name: str) -> DeviceDetails:
+        return registry.details(local_name)
+
+    @router.delete("/{local_name}")
+    async def remove(local_name: str) -> AddedDevice:
+        return await registry.remove(local_name)
+
+    @router.get("/{local_name}/state")
+    async def state(local_name: str) -> Response:
+        return Response(registry.state_text(local_name), media_type="application/json")
+
+    return router
+
+
+def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
+    storage = StorageClient(urls["variable_storage"])
+    registry = DeviceRegistry(storage, Fanout())
+    browser = Browser(settings.zeroconf_interfaces(), registry.on_found, registry.on_gone)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        await browser.start()
+        loader = asyncio.create_task(registry.load())
+        try:
+            yield
+        finally:
+            loader.cancel()
+            await browser.stop()
+            await registry.close()
+            await storage.aclose()
+
+    async def health() -> dict[str, Any]:
+        if not registry.loaded:
+            raise Unavailable(
+                "loading the added devices from the variable storage", code="starting"
+            )
+        return {"devices": len(registry.connections), "detected": len(registry.detected)}
+
+    app = create_app("device_manager", lifespan=lifespan, health=health)
+    app.include_router(devices_router(registry))
+    return app
