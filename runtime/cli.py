@@ -1,0 +1,110 @@
+"""The `openpendant` command."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from pathlib import Path
+
+from runtime import __version__
+
+
+def _run(args: argparse.Namespace) -> int:
+    from runtime.kit.logs import setup_logging
+    from runtime.kit.settings import load_settings
+    from runtime.launcher.run import run
+
+    settings = load_settings(
+        args.config,
+        host=args.host,
+        port=args.port,
+        data_dir=args.data_dir,
+        sim=False if args.no_sim else None,
+    )
+    setup_logging("launcher", settings.log_level, human=True)
+    return run(settings)
+
+
+def _service(args: argparse.Namespace) -> int:
+    from runtime.kit.settings import settings_from_env
+    from runtime.services import run_service
+
+    settings = settings_from_env()
+    if args.data_dir is not None:
+        settings = settings.model_copy(update={"data_dir": args.data_dir})
+    run_service(args.name, fd=args.fd, host=args.host, port=args.port, settings=settings)
+    return 0
+
+
+def _sim_robot(rest: list[str]) -> int:
+    from device_drivers.sim_robot.__main__ import main
+
+    return main(rest)
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from runtime.paths import REPO_ROOT
+
+    sys.path.insert(0, str(REPO_ROOT))
+    try:
+        runner = importlib.import_module("tests.bench.runner")
+    except ImportError:
+        print(
+            "openpendant bench: the benchmarks live in tests/bench of a source checkout",
+            file=sys.stderr,
+        )
+        return 2
+    return int(runner.main(only=args.only, json_path=args.json))
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="openpendant", description="OpenPendant teach pendant")
+    p.add_argument("--version", action="version", version=f"openpendant {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    run = sub.add_parser("run", help="start the runtime (services + simulated robot)")
+    run.add_argument("--port", type=int, default=None, help="UI port (default 8080)")
+    run.add_argument("--host", default=None, help="UI address (default 127.0.0.1)")
+    run.add_argument("--config", type=Path, default=None, help="site config YAML")
+    run.add_argument("--data-dir", type=Path, default=None, help="database and logs")
+    run.add_argument("--no-sim", action="store_true", help="start no simulated robot")
+    run.set_defaults(handler=_run)
+
+    sub.add_parser(
+        "sim-robot", help="start one more simulated robot (see sim-robot --help)", add_help=False
+    )
+
+    service = sub.add_parser("service", help="run one service (the launcher does this)")
+    from runtime.services import ALL_SERVICES
+
+    service.add_argument("name", choices=sorted(ALL_SERVICES))
+    service.add_argument("--fd", type=int, default=None, help="inherited listening socket")
+    service.add_argument("--host", default="127.0.0.1")
+    service.add_argument("--port", type=int, default=None)
+    service.add_argument("--data-dir", type=Path, default=None)
+    service.set_defaults(handler=_service)
+
+    bench = sub.add_parser("bench", help="run the benchmarks (tests/bench)")
+    bench.add_argument(
+        "--only",
+        action="append",
+        default=None,
+        metavar="NAME",
+        help="run only this benchmark or figure (repeatable)",
+    )
+    bench.add_argument("--json", type=Path, default=None, help="write the figures here")
+    bench.set_defaults(handler=_bench)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["sim-robot"]:
+        return _sim_robot(argv[1:])
+    args = parser().parse_args(argv)
+    return int(args.handler(args))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,1 @@
+"""`openpendant run`: start every service and the simulated devices, supervise, stop cleanly."""

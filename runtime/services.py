@@ -1,0 +1,67 @@
+"""The runtime's services: one entry each. Adding a service is one line here plus its package;
+the webui routes /api/<prefix>/… to the service that owns <prefix>."""
+
+from __future__ import annotations
+
+import importlib
+import json
+import os
+import socket
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from fastapi import FastAPI
+
+from runtime.kit.logs import setup_logging
+from runtime.kit.serve import listening_socket, run_app
+from runtime.kit.settings import RuntimeSettings, settings_from_env
+
+URLS_ENV = "OPENPENDANT_SERVICE_URLS"
+
+AppFactory = Callable[[RuntimeSettings, dict[str, str]], FastAPI]
+
+
+@dataclass(frozen=True)
+class ServiceSpec:
+    name: str
+    factory: str  # "module:function" that builds the app from (settings, service urls)
+    prefixes: tuple[str, ...] = ()
+
+
+SERVICES: tuple[ServiceSpec, ...] = (
+    ServiceSpec("variable_storage", "runtime.variable_storage.service:build_app", ("variables",)),
+    ServiceSpec("device_manager", "runtime.device_manager.service:build_app", ("devices",)),
+)
+WEBUI = ServiceSpec("webui", "webui.server:build_app")
+ALL_SERVICES = {spec.name: spec for spec in (*SERVICES, WEBUI)}
+
+
+def load_factory(spec: ServiceSpec) -> AppFactory:
+    module, _, attr = spec.factory.partition(":")
+    factory: AppFactory = getattr(importlib.import_module(module), attr)
+    return factory
+
+
+def urls_from_env() -> dict[str, str]:
+    raw = os.environ.get(URLS_ENV, "{}")
+    urls = json.loads(raw)
+    if not isinstance(urls, dict):
+        raise ValueError(f"{URLS_ENV} must be a JSON object")
+    return {str(k): str(v) for k, v in urls.items()}
+
+
+def run_service(
+    name: str,
+    *,
+    fd: int | None,
+    host: str,
+    port: int | None,
+    settings: RuntimeSettings | None = None,
+) -> None:
+    """Run one service in this process, on an inherited socket or a port of its own."""
+    spec = ALL_SERVICES[name]
+    settings = settings or settings_from_env()
+    setup_logging(name, settings.log_level)
+    app = load_factory(spec)(settings, urls_from_env())
+    sock = socket.socket(fileno=fd) if fd is not None else listening_socket(host, port or 0)
+    run_app(app, sock)
