@@ -1,0 +1,127 @@
+import { LitElement, css, html } from "lit";
+import { feed } from "./live";
+import { panels } from "./panels/registry";
+import { shared } from "./styles";
+import "./status-bar";
+
+function panelFromHash(): string {
+  const id = location.hash.replace(/^#\/?/, "");
+  return panels.some((p) => p.id === id) ? id : panels[0].id;
+}
+
+export class OpApp extends LitElement {
+  static properties = { panel: { state: true } };
+  declare panel: string;
+
+  static styles = [
+    shared,
+    css`
+      :host {
+        display: grid;
+        grid-template-rows: auto 1fr;
+        height: 100vh;
+        height: 100dvh;
+        background: var(--bg);
+      }
+      .body {
+        display: grid;
+        grid-template-columns: 112px 1fr;
+        min-height: 0;
+      }
+      nav {
+        display: flex;
+        flex-direction: column;
+        gap: 8px;
+        padding: 10px 8px;
+        background: var(--panel);
+        border-right: 1px solid var(--line);
+      }
+      nav button {
+        display: flex;
+        flex-direction: column;
+        align-items: center;
+        justify-content: center;
+        gap: 4px;
+        min-height: 84px;
+        padding: 6px;
+        font-size: 15px;
+        background: transparent;
+        border-color: transparent;
+      }
+      nav button[aria-current="page"] {
+        background: var(--raised);
+        border-color: var(--accent);
+        color: var(--accent);
+      }
+      main {
+        overflow: auto;
+        padding: 16px;
+        min-width: 0;
+      }
+      @media (max-width: 700px) {
+        .body {
+          grid-template-columns: 1fr;
+          grid-template-rows: 1fr auto;
+        }
+        nav {
+          order: 2;
+          flex-direction: row;
+          justify-content: space-around;
+          border-right: none;
+          border-top: 1px solid var(--line);
+          padding: 6px;
+        }
+        nav button {
+          flex: 1;
+          min-height: 64px;
+        }
+        main {
+          padding: 10px;
+        }
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    this.panel = panelFromHash();
+  }
+
+  private onHash = () => {
+    this.panel = panelFromHash();
+  };
+
+  connectedCallback(): void {
+    super.connectedCallback();
+    window.addEventListener("hashchange", this.onHash);
+    feed.start();
+  }
+
+  disconnectedCallback(): void {
+    window.removeEventListener("hashchange", this.onHash);
+    super.disconnectedCallback();
+  }
+
+  render() {
+    const active = panels.find((p) => p.id === this.panel) ?? panels[0];
+    return html`
+      <op-status-bar></op-status-bar>
+      <div class="body">
+        <nav aria-label="Panels">
+          ${panels.map(
+            (p) => html`<button
+              data-testid="nav-${p.id}"
+              aria-current=${p.id === active.id ? "page" : "false"}
+              @click=${() => (location.hash = `#/${p.id}`)}
+            >
+              ${p.icon}<span>${p.title}</span>
+            </button>`,
+          )}
+        </nav>
+        <main>${active.render()}</main>
+      </div>
+    `;
+  }
+}
+
+customElements.define("op-app", OpApp);

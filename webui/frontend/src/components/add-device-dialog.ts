@@ -1,0 +1,117 @@
+import { LitElement, css, html } from "lit";
+import { api, errorText } from "../api";
+import { LOCAL_NAME } from "../format";
+import { shared } from "../styles";
+import type { AddedDevice, DetectedDevice } from "../types";
+import "./modal";
+
+// Choose the local name a detected device (or a device at a URL) is added under.
+export class OpAddDeviceDialog extends LitElement {
+  static properties = {
+    device: { attribute: false },
+    url: { type: String },
+    suggested: { type: String },
+    localName: { state: true },
+    error: { state: true },
+    busy: { state: true },
+  };
+  declare device: DetectedDevice | null;
+  declare url: string;
+  declare suggested: string;
+  declare localName: string;
+  declare error: string;
+  declare busy: boolean;
+
+  static styles = [
+    shared,
+    css`
+      label {
+        display: block;
+        margin: 12px 0 6px;
+        font-weight: 600;
+      }
+      .hint {
+        font-size: 15px;
+        margin-top: 6px;
+      }
+      .actions {
+        display: flex;
+        gap: 12px;
+        justify-content: flex-end;
+        margin-top: 20px;
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    this.device = null;
+    this.url = "";
+    this.suggested = "";
+    this.localName = "";
+    this.error = "";
+    this.busy = false;
+  }
+
+  willUpdate(changed: Map<string, unknown>): void {
+    if (changed.has("suggested") && !this.localName) this.localName = this.suggested;
+  }
+
+  firstUpdated(): void {
+    this.renderRoot.querySelector("input")?.focus();
+  }
+
+  private close() {
+    this.dispatchEvent(new CustomEvent("close", { bubbles: true, composed: true }));
+  }
+
+  private async add(e: Event) {
+    e.preventDefault();
+    if (!LOCAL_NAME.test(this.localName) || this.busy) return;
+    this.busy = true;
+    this.error = "";
+    try {
+      const body = this.device
+        ? { uuid: this.device.uuid, local_name: this.localName }
+        : { url: this.url, local_name: this.localName };
+      const added = await api<AddedDevice>("POST", "/api/devices", body);
+      this.dispatchEvent(new CustomEvent("added", { detail: added, bubbles: true, composed: true }));
+    } catch (err) {
+      this.error = errorText(err);
+    } finally {
+      this.busy = false;
+    }
+  }
+
+  render() {
+    const valid = LOCAL_NAME.test(this.localName);
+    const what = this.device ? `${this.device.name} (${this.device.model})` : this.url;
+    return html`<op-modal heading="Add device" data-testid="add-dialog">
+      <p>Add <strong>${what}</strong> to this cell.</p>
+      <form @submit=${this.add}>
+        <label for="local-name">Local name (used in programs)</label>
+        <input
+          id="local-name"
+          data-testid="local-name"
+          autocomplete="off"
+          autocapitalize="none"
+          spellcheck="false"
+          .value=${this.localName}
+          @input=${(e: InputEvent) => (this.localName = (e.target as HTMLInputElement).value.trim())}
+        />
+        <div class="hint ${valid ? "muted" : "error"}">
+          Lowercase letters, digits and _; starts with a letter; up to 32 characters.
+        </div>
+        ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
+        <div class="actions">
+          <button type="button" @click=${this.close}>Cancel</button>
+          <button class="primary" type="submit" data-testid="confirm-add" ?disabled=${!valid || this.busy}>
+            ${this.busy ? "Adding…" : "Add"}
+          </button>
+        </div>
+      </form>
+    </op-modal>`;
+  }
+}
+
+customElements.define("op-add-device-dialog", OpAddDeviceDialog);

@@ -1,0 +1,82 @@
+// One WebSocket to the device manager: detected devices, added devices with their status,
+// and the live state of each. Reconnects by itself; views re-render once per frame at most.
+
+import type { AddedDevice, DetectedDevice, RobotState } from "./types";
+
+type Message =
+  | { type: "detected"; detected: DetectedDevice[] }
+  | { type: "devices"; devices: AddedDevice[] }
+  | { type: "state"; device: string; state: RobotState }
+  | { type: "error"; error: { message: string } };
+
+export class DeviceFeed extends EventTarget {
+  detected: DetectedDevice[] = [];
+  devices: AddedDevice[] = [];
+  states = new Map<string, RobotState>();
+  online = false;
+  private socket: WebSocket | null = null;
+  private frame = 0;
+  private retry = 0;
+
+  constructor(private readonly path = "/api/devices/ws?max_rate=30") {
+    super();
+  }
+
+  start(): void {
+    if (this.socket) return;
+    const scheme = location.protocol === "https:" ? "wss" : "ws";
+    const socket = new WebSocket(`${scheme}://${location.host}${this.path}`);
+    this.socket = socket;
+    socket.onopen = () => {
+      this.online = true;
+      this.retry = 0;
+      this.changed();
+    };
+    socket.onmessage = (event) => this.receive(event.data as string);
+    socket.onclose = () => {
+      this.socket = null;
+      this.online = false;
+      this.states.clear();
+      this.changed();
+      const delay = Math.min(500 * 2 ** this.retry++, 5000);
+      window.setTimeout(() => this.start(), delay);
+    };
+  }
+
+  private receive(text: string): void {
+    let message: Message;
+    try {
+      message = JSON.parse(text) as Message;
+    } catch {
+      return;
+    }
+    switch (message.type) {
+      case "detected":
+        this.detected = message.detected;
+        break;
+      case "devices":
+        this.devices = message.devices;
+        for (const name of [...this.states.keys()]) {
+          const device = this.devices.find((d) => d.local_name === name);
+          if (!device || device.status !== "connected") this.states.delete(name);
+        }
+        break;
+      case "state":
+        this.states.set(message.device, message.state);
+        break;
+      default:
+        return;
+    }
+    this.changed();
+  }
+
+  private changed(): void {
+    if (this.frame) return;
+    this.frame = requestAnimationFrame(() => {
+      this.frame = 0;
+      this.dispatchEvent(new Event("change"));
+    });
+  }
+}
+
+export const feed = new DeviceFeed();

@@ -1,0 +1,256 @@
+import { LitElement, css, html } from "lit";
+import { api, errorText } from "../api";
+import { suggestLocalName } from "../format";
+import { feed } from "../live";
+import { shared } from "../styles";
+import type { AddedDevice, DetectedDevice } from "../types";
+import "../components/add-device-dialog";
+import "../components/device-details";
+import "../components/modal";
+import "../components/robot-live";
+
+type Dialog =
+  | { kind: "add"; device: DetectedDevice | null; url: string }
+  | { kind: "remove"; device: AddedDevice }
+  | { kind: "details"; name: string }
+  | null;
+
+// Devices found on the network, devices added to this cell, and adding and removing them.
+export class OpDevicesPanel extends LitElement {
+  static properties = {
+    dialog: { state: true },
+    url: { state: true },
+    error: { state: true },
+  };
+  declare dialog: Dialog;
+  declare url: string;
+  declare error: string;
+
+  static styles = [
+    shared,
+    css`
+      section {
+        margin-bottom: 24px;
+      }
+      .grid {
+        display: grid;
+        grid-template-columns: repeat(auto-fill, minmax(min(340px, 100%), 1fr));
+        gap: 12px;
+      }
+      .head {
+        display: flex;
+        align-items: center;
+        gap: 10px;
+        margin-bottom: 8px;
+        flex-wrap: wrap;
+      }
+      .title {
+        font-size: 20px;
+        font-weight: 700;
+        overflow-wrap: anywhere;
+      }
+      .sub {
+        font-size: 15px;
+        overflow-wrap: anywhere;
+      }
+      .row {
+        display: flex;
+        gap: 10px;
+        margin-top: 12px;
+        flex-wrap: wrap;
+        align-items: center;
+      }
+      .spacer {
+        flex: 1;
+      }
+      form.by-url {
+        display: flex;
+        gap: 10px;
+        max-width: 640px;
+      }
+      .empty {
+        padding: 20px;
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    this.dialog = null;
+    this.url = "";
+    this.error = "";
+  }
+
+  private onChange = () => this.requestUpdate();
+
+  connectedCallback(): void {
+    super.connectedCallback();
+    feed.addEventListener("change", this.onChange);
+  }
+
+  disconnectedCallback(): void {
+    feed.removeEventListener("change", this.onChange);
+    super.disconnectedCallback();
+  }
+
+  private suggestion(kind: string): string {
+    return suggestLocalName(kind, new Set(feed.devices.map((d) => d.local_name)));
+  }
+
+  private async removeDevice(device: AddedDevice) {
+    try {
+      await api("DELETE", `/api/devices/${encodeURIComponent(device.local_name)}`);
+      this.dialog = null;
+    } catch (err) {
+      this.error = errorText(err);
+      this.dialog = null;
+    }
+  }
+
+  private statusChip(device: AddedDevice) {
+    const cls = device.status === "connected" ? "ok" : device.status === "connecting" ? "warn" : "bad";
+    const label = { connected: "Connected", connecting: "Connecting…", disconnected: "Disconnected" }[
+      device.status
+    ];
+    return html`<span class="chip ${cls}" data-testid="device-status" title=${device.last_error}
+      >${label}</span
+    >`;
+  }
+
+  private detectedCard(d: DetectedDevice) {
+    return html`<div class="card" data-testid="detected-device" data-uuid=${d.uuid}>
+      <div class="head">
+        <span class="title">${d.name || "(unnamed)"}</span>
+        <span class="chip">${d.kind}</span>
+      </div>
+      <div class="sub muted">${d.model} · ${d.address}</div>
+      <div class="row">
+        ${d.added_as
+          ? html`<span class="chip ok">Added as ${d.added_as}</span>`
+          : html`<button
+              class="primary"
+              data-testid="add-device"
+              @click=${() => (this.dialog = { kind: "add", device: d, url: "" })}
+            >
+              Add
+            </button>`}
+      </div>
+    </div>`;
+  }
+
+  private addedCard(d: AddedDevice) {
+    const state = feed.states.get(d.local_name);
+    return html`<div class="card" data-testid="device-card" data-name=${d.local_name}>
+      <div class="head">
+        <span class="title">${d.local_name}</span>
+        ${this.statusChip(d)}
+      </div>
+      <div class="sub muted">${d.name} · ${d.model} · ${d.url}</div>
+      ${d.status !== "connected" && d.last_error
+        ? html`<div class="sub error">${d.last_error}</div>`
+        : ""}
+      ${d.kind === "robot" && d.status === "connected"
+        ? html`<div class="row"><op-robot-live .state=${state}></op-robot-live></div>`
+        : ""}
+      <div class="row">
+        <button @click=${() => (this.dialog = { kind: "details", name: d.local_name })}>
+          Details
+        </button>
+        <span class="spacer"></span>
+        <button
+          class="danger"
+          data-testid="remove-device"
+          @click=${() => (this.dialog = { kind: "remove", device: d })}
+        >
+          Remove
+        </button>
+      </div>
+    </div>`;
+  }
+
+  private renderDialog() {
+    const dialog = this.dialog;
+    if (!dialog) return "";
+    const close = () => (this.dialog = null);
+    switch (dialog.kind) {
+      case "add":
+        return html`<op-add-device-dialog
+          .device=${dialog.device}
+          url=${dialog.url}
+          suggested=${this.suggestion(dialog.device?.kind ?? "robot")}
+          @close=${close}
+          @added=${close}
+        ></op-add-device-dialog>`;
+      case "details":
+        return html`<op-device-details name=${dialog.name} @close=${close}></op-device-details>`;
+      case "remove":
+        return html`<op-modal heading="Remove ${dialog.device.local_name}?" @close=${close}>
+          <p>
+            Programs that use <strong>${dialog.device.local_name}</strong> will not find it any more.
+            The device itself is not changed, and it can be added again.
+          </p>
+          <div class="row">
+            <span class="spacer"></span>
+            <button @click=${close}>Cancel</button>
+            <button class="danger" data-testid="confirm-remove" @click=${() => this.removeDevice(dialog.device)}>
+              Remove
+            </button>
+          </div>
+        </op-modal>`;
+    }
+  }
+
+  private addByUrl(e: Event) {
+    e.preventDefault();
+    const url = this.url.trim();
+    if (!/^https?:\/\/\S+$/.test(url)) {
+      this.error = "Enter an address like http://192.168.1.20:8000";
+      return;
+    }
+    this.error = "";
+    this.dialog = { kind: "add", device: null, url };
+  }
+
+  render() {
+    const notAdded = feed.detected.filter((d) => !d.added_as).length;
+    return html`
+      ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
+      <section>
+        <h2>Added devices</h2>
+        <div class="grid" data-testid="added-devices">
+          ${feed.devices.length
+            ? feed.devices.map((d) => this.addedCard(d))
+            : html`<div class="card empty muted">
+                No devices added yet. Add one from the devices detected on the network below.
+              </div>`}
+        </div>
+      </section>
+      <section>
+        <h2>Detected on the network <span class="muted">(${notAdded} not added)</span></h2>
+        <div class="grid" data-testid="detected-devices">
+          ${feed.detected.length
+            ? feed.detected.map((d) => this.detectedCard(d))
+            : html`<div class="card empty muted">
+                ${feed.online ? "Searching the network…" : "Not connected to the runtime."}
+              </div>`}
+        </div>
+      </section>
+      <section>
+        <h2>Add by address</h2>
+        <form class="by-url" @submit=${this.addByUrl}>
+          <input
+            placeholder="http://192.168.1.20:8000"
+            aria-label="Device address"
+            inputmode="url"
+            .value=${this.url}
+            @input=${(e: InputEvent) => (this.url = (e.target as HTMLInputElement).value)}
+          />
+          <button type="submit">Add…</button>
+        </form>
+      </section>
+      ${this.renderDialog()}
+    `;
+  }
+}
+
+customElements.define("op-devices-panel", OpDevicesPanel);

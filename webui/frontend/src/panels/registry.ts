@@ -1,0 +1,27 @@
+// The panels of the app. Adding a panel is a new element plus one entry here.
+import { html, type SVGTemplateResult, type TemplateResult } from "lit";
+import { icons } from "../icons";
+import "./devices-panel";
+import "./system-panel";
+
+export interface Panel {
+  id: string;
+  title: string;
+  icon: SVGTemplateResult;
+  render: () => TemplateResult;
+}
+
+export const panels: Panel[] = [
+  {
+    id: "devices",
+    title: "Devices",
+    icon: icons.devices,
+    render: () => html`<op-devices-panel></op-devices-panel>`,
+  },
+  {
+    id: "system",
+    title: "System",
+    icon: icons.system,
+    render: () => html`<op-system-panel></op-system-panel>`,
+  },
+];

@@ -1,0 +1,123 @@
+import { css } from "lit";
+
+// Touch-first: every control is at least 48 px tall, text is large, contrast is high.
+export const shared = css`
+  :host {
+    --bg: #10161d;
+    --panel: #18212b;
+    --raised: #222d3a;
+    --line: #2f3d4d;
+    --text: #e8eef5;
+    --muted: #9fb0c2;
+    --accent: #f5a524;
+    --ok: #3fb950;
+    --warn: #d29922;
+    --bad: #f85149;
+    --touch: 56px;
+    color: var(--text);
+    font-size: 18px;
+  }
+  * {
+    box-sizing: border-box;
+  }
+  button {
+    min-height: var(--touch);
+    min-width: var(--touch);
+    padding: 0 22px;
+    border-radius: 10px;
+    border: 2px solid var(--line);
+    background: var(--raised);
+    color: var(--text);
+    font: inherit;
+    font-weight: 600;
+    cursor: pointer;
+    touch-action: manipulation;
+    user-select: none;
+  }
+  button:active {
+    transform: translateY(1px);
+    filter: brightness(1.2);
+  }
+  button:disabled {
+    opacity: 0.45;
+    cursor: default;
+  }
+  button.primary {
+    background: var(--accent);
+    border-color: var(--accent);
+    color: #1a1204;
+  }
+  button.danger {
+    border-color: var(--bad);
+    color: #ffd7d5;
+  }
+  input {
+    min-height: var(--touch);
+    padding: 0 14px;
+    border-radius: 10px;
+    border: 2px solid var(--line);
+    background: var(--bg);
+    color: var(--text);
+    font: inherit;
+    width: 100%;
+  }
+  input:focus {
+    outline: 3px solid var(--accent);
+    outline-offset: 1px;
+  }
+  .card {
+    background: var(--panel);
+    border: 1px solid var(--line);
+    border-radius: 14px;
+    padding: 16px;
+  }
+  .muted {
+    color: var(--muted);
+  }
+  .chip {
+    display: inline-flex;
+    align-items: center;
+    gap: 6px;
+    padding: 4px 12px;
+    border-radius: 999px;
+    font-size: 15px;
+    font-weight: 600;
+    background: var(--raised);
+    white-space: nowrap;
+  }
+  .chip.ok {
+    background: #173d24;
+    color: #aff5b4;
+  }
+  .chip.warn {
+    background: #3d2e0a;
+    color: #f8e3a1;
+  }
+  .chip.bad {
+    background: #4a1513;
+    color: #ffd7d5;
+  }
+  .dot {
+    width: 12px;
+    height: 12px;
+    border-radius: 50%;
+    display: inline-block;
+    background: var(--muted);
+  }
+  .dot.ok {
+    background: var(--ok);
+  }
+  .dot.warn {
+    background: var(--warn);
+  }
+  .dot.bad {
+    background: var(--bad);
+  }
+  .error {
+    color: #ffb4ae;
+  }
+  h2 {
+    font-size: 22px;
+    margin: 8px 0 12px;
+  }
+`;

@@ -1,0 +1,92 @@
+// Shapes of the runtime's API (see runtime/device_manager/models.py, runtime/interfaces/).
+
+export interface DetectedDevice {
+  uuid: string;
+  name: string;
+  kind: string;
+  model: string;
+  api: string;
+  address: string;
+  url: string;
+  added_as: string | null;
+  last_seen: number;
+}
+
+export type ConnectionStatus = "connecting" | "connected" | "disconnected";
+
+export interface AddedDevice {
+  local_name: string;
+  uuid: string;
+  kind: string;
+  model: string;
+  name: string;
+  url: string;
+  status: ConnectionStatus;
+  last_error: string;
+  connected_since: number | null;
+  detected: boolean;
+}
+
+export interface Pose {
+  position: [number, number, number];
+  orientation: [number, number, number, number];
+}
+
+export interface RobotFlags {
+  enabled: boolean;
+  ready: boolean;
+  error: boolean;
+  estop: boolean;
+  homed: boolean;
+  communication_failure: boolean;
+  trajectory_running: boolean;
+}
+
+export interface RobotState {
+  seqno: number;
+  ts: number;
+  command_mode: string;
+  operational_mode: string;
+  flags: RobotFlags;
+  joint_position: number[];
+  joint_velocity: number[];
+  tcp_pose: Pose;
+  speed_ratio: number;
+  error_message: string;
+}
+
+export interface JointLimits {
+  name: string;
+  lower: number;
+  upper: number;
+  max_velocity: number;
+  max_acceleration: number;
+  max_jerk: number | null;
+}
+
+export interface RobotInfo {
+  model: string;
+  manufacturer: string;
+  description: string;
+  joints: JointLimits[];
+  capabilities: string[];
+}
+
+export interface DeviceDetails extends AddedDevice {
+  info: { identity: Record<string, string>; info: RobotInfo } | null;
+}
+
+export interface ServiceHealth {
+  status: string;
+  service?: string;
+  version?: string;
+  pid?: number;
+  uptime_s?: number;
+  url?: string;
+  message?: string;
+}
+
+export interface Health {
+  status: string;
+  services: Record<string, ServiceHealth>;
+}

@@ -1,0 +1,121 @@
+"""Forwarding /api/<prefix>/… to the service that owns <prefix>, over HTTP and WebSocket."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+
+import httpx
+import websockets
+from fastapi import Request, Response, WebSocket
+from starlette.websockets import WebSocketDisconnect
+
+from runtime.kit.app import error_response
+
+# Hop-by-hop and length headers are the proxy's own business.
+_SKIP_REQUEST = {
+    "host",
+    "connection",
+    "content-length",
+    "transfer-encoding",
+    "upgrade",
+    "keep-alive",
+    "accept-encoding",
+}
+_KEEP_RESPONSE = {"content-type", "content-disposition", "cache-control", "etag"}
+
+
+class ServiceProxy:
+    def __init__(self, routes: dict[str, tuple[str, str]]) -> None:
+        """routes: prefix -> (service name, base url)"""
+        self.routes = routes
+        self.http = httpx.AsyncClient(timeout=httpx.Timeout(30.0, connect=2.0))
+
+    async def aclose(self) -> None:
+        await self.http.aclose()
+
+    def _target(self, prefix: str) -> tuple[str, str] | None:
+        return self.routes.get(prefix)
+
+    async def forward(self, request: Request, prefix: str, path: str) -> Response:
+        target = self._target(prefix)
+        if target is None:
+            return error_response(404, "not_found", f"no service serves /api/{prefix}")
+        service, base = target
+        url = f"{base}/{prefix}" + (f"/{path}" if path else "")
+        headers = {k: v for k, v in request.headers.items() if k.lower() not in _SKIP_REQUEST}
+        try:
+            upstream = await self.http.request(
+                request.method,
+                url,
+                params=request.query_params,
+                headers=headers,
+                content=await request.body(),
+            )
+        except httpx.TransportError:
+            return error_response(503, "service_unavailable", f"{service} is not responding")
+        kept = {k: v for k, v in upstream.headers.items() if k.lower() in _KEEP_RESPONSE}
+        return Response(upstream.content, status_code=upstream.status_code, headers=kept)
+
+    async def forward_ws(self, ws: WebSocket, prefix: str, path: str) -> None:
+        target = self._target(prefix)
+        await ws.accept()
+        if target is None:
+            await _close_with_error(ws, "not_found", f"no service serves /api/{prefix}")
+            return
+        service, base = target
+        query = f"?{ws.url.query}" if ws.url.query else ""
+        url = base.replace("http://", "ws://", 1) + f"/{prefix}/{path}{query}"
+        try:
+            upstream = await websockets.connect(url, open_timeout=2.0, max_size=2**24)
+        except (OSError, websockets.WebSocketException, TimeoutError):
+            await _close_with_error(ws, "service_unavailable", f"{service} is not responding")
+            return
+        async with upstream:
+            await _pipe(ws, upstream)
+
+
+async def _pipe(client: WebSocket, upstream: websockets.ClientConnection) -> None:
+    async def down() -> None:
+        async for message in upstream:
+            if isinstance(message, str):
+                await client.send_text(message)
+            else:
+                await client.send_bytes(message)
+
+    async def up() -> None:
+        while True:
+            message = await client.receive()
+            if message["type"] == "websocket.disconnect":
+                return
+            if message.get("text") is not None:
+                await upstream.send(message["text"])
+            elif message.get("bytes") is not None:
+                await upstream.send(message["bytes"])
+
+    tasks = [asyncio.create_task(down()), asyncio.create_task(up())]
+    try:
+        await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+    finally:
+        for task in tasks:
+            task.cancel()
+        for task in tasks:
+            with contextlib.suppress(
+                asyncio.CancelledError,
+                WebSocketDisconnect,
+                websockets.WebSocketException,
+                RuntimeError,
+                OSError,
+            ):
+                await task
+        with contextlib.suppress(RuntimeError, OSError):
+            await client.close()
+
+
+async def _close_with_error(ws: WebSocket, code: str, message: str) -> None:
+    with contextlib.suppress(RuntimeError, OSError, WebSocketDisconnect):
+        await ws.send_text(
+            json.dumps({"type": "error", "error": {"code": code, "message": message}})
+        )
+        await ws.close(code=1011)

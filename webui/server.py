@@ -1,0 +1,95 @@
+"""The webui service: serves the built UI and routes /api/<prefix>/… to the services."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections.abc import AsyncIterator
+from pathlib import Path
+from typing import Any
+
+import httpx
+from fastapi import FastAPI, Request, Response, WebSocket
+from fastapi.responses import HTMLResponse
+from fastapi.staticfiles import StaticFiles
+
+from runtime.kit.app import create_app
+from runtime.kit.settings import RuntimeSettings
+from runtime.services import SERVICES
+from webui.proxy import ServiceProxy
+
+DIST = Path(__file__).resolve().parent / "frontend" / "dist"
+
+NOT_BUILT = """<!doctype html><meta charset="utf-8"><title>OpenPendant</title>
+<body style="font:18px sans-serif;padding:2em"><h1>The UI has not been built</h1>
+<p>Run <code>make run</code> (it builds the UI), or <code>make ui</code>.</p>
+<p>The API is up: <a href="/api/health">/api/health</a></p></body>"""
+
+METHODS = ["GET", "POST", "PUT", "PATCH", "DELETE"]
+
+
+async def service_health(client: httpx.AsyncClient, name: str, base: str) -> dict[str, Any]:
+    try:
+        response = await client.get(f"{base}/health", timeout=1.0)
+        body = response.json()
+    except (httpx.HTTPError, ValueError):
+        return {"status": "down", "url": base}
+    if response.status_code != 200:
+        message = body.get("error", {}).get("message", "") if isinstance(body, dict) else ""
+        return {"status": "starting", "url": base, "message": message}
+    return {**body, "url": base}
+
+
+def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
+    routes = {
+        prefix: (spec.name, urls[spec.name])
+        for spec in SERVICES
+        if spec.name in urls
+        for prefix in spec.prefixes
+    }
+    proxy = ServiceProxy(routes)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        try:
+            yield
+        finally:
+            await proxy.aclose()
+
+    app = create_app("webui", lifespan=lifespan)
+
+    @app.get("/api/health")
+    async def health() -> dict[str, Any]:
+        names = [spec.name for spec in SERVICES]
+        results = await asyncio.gather(
+            *(service_health(proxy.http, name, urls[name]) for name in names if name in urls)
+        )
+        services: dict[str, Any] = {"webui": {"status": "ok"}}
+        services.update(dict(zip([n for n in names if n in urls], results, strict=True)))
+        missing = [n for n in names if n not in urls]
+        for name in missing:
+            services[name] = {"status": "down", "message": "no address configured"}
+        ok = all(s.get("status") == "ok" for s in services.values())
+        return {"status": "ok" if ok else "degraded", "services": services}
+
+    @app.api_route("/api/{prefix}", methods=METHODS)
+    async def api_root(request: Request, prefix: str) -> Response:
+        return await proxy.forward(request, prefix, "")
+
+    @app.api_route("/api/{prefix}/{path:path}", methods=METHODS)
+    async def api(request: Request, prefix: str, path: str) -> Response:
+        return await proxy.forward(request, prefix, path)
+
+    @app.websocket("/api/{prefix}/{path:path}")
+    async def api_ws(ws: WebSocket, prefix: str, path: str) -> None:
+        await proxy.forward_ws(ws, prefix, path)
+
+    if (DIST / "index.html").is_file():
+        app.mount("/", StaticFiles(directory=DIST, html=True), name="ui")
+    else:
+
+        @app.get("/", response_class=HTMLResponse)
+        async def not_built() -> str:
+            return NOT_BUILT
+
+    return app
