@@ -1,0 +1,202 @@
+"""Real processes on loopback for the integration, browser and benchmark suites."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import queue
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any, TypeVar
+
+import httpx
+
+T = TypeVar("T")
+
+# Every process a test starts does discovery on loopback only (DESIGN.md §5, §8).
+LOOPBACK_ENV = {"OPENPENDANT_DISCOVERY__INTERFACES": '["127.0.0.1"]'}
+
+
+def test_env(home: Path, **extra: str) -> dict[str, str]:
+    env = dict(os.environ)
+    env.pop("OPENPENDANT_SETTINGS_JSON", None)
+    env.update(LOOPBACK_ENV)
+    env["XDG_DATA_HOME"] = str(home)
+    env["PYTHONUNBUFFERED"] = "1"
+    env.update(extra)
+    return env
+
+
+def free_port() -> int:
+    with contextlib.closing(socket.socket(socket.AF_INET, socket.SOCK_STREAM)) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def wait_for(
+    check: Callable[[], T | None], timeout: float, interval: float = 0.05, what: str = "condition"
+) -> T:
+    deadline = time.monotonic() + timeout
+    last_error: Exception | None = None
+    while time.monotonic() < deadline:
+        try:
+            result = check()
+            if result:
+                return result
+        except (httpx.HTTPError, OSError, ValueError, KeyError) as exc:
+            last_error = exc
+        time.sleep(interval)
+    raise TimeoutError(
+        f"timed out after {timeout} s waiting for {what}"
+        + (f" (last error: {last_error})" if last_error else "")
+    )
+
+
+class Proc:
+    """A child process whose stdout lines are collected by a reader thread."""
+
+    def __init__(self, argv: list[str], env: dict[str, str], log_path: Path) -> None:
+        self.argv = argv
+        self.log_path = log_path
+        log_path.parent.mkdir(parents=True, exist_ok=True)
+        self._log = log_path.open("ab")
+        self.lines: queue.Queue[str] = queue.Queue()
+        self.popen = subprocess.Popen(
+            argv, env=env, stdout=subprocess.PIPE, stderr=self._log, stdin=subprocess.DEVNULL
+        )
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.popen.stdout is not None
+        for raw in self.popen.stdout:
+            self._log.write(raw)
+            self._log.flush()
+            self.lines.put(raw.decode(errors="replace").rstrip("\n"))
+
+    def wait_line(self, match: Callable[[str], bool], timeout: float) -> str:
+        deadline = time.monotonic() + timeout
+        while True:
+            remaining = deadline - time.monotonic()
+            if remaining <= 0 or (self.popen.poll() is not None and self.lines.empty()):
+                raise TimeoutError(
+                    f"{self.argv[2:4]} did not print the expected line; see {self.log_path}"
+                )
+            try:
+                line = self.lines.get(timeout=min(remaining, 0.2))
+            except queue.Empty:
+                continue
+            if match(line):
+                return line
+
+    @property
+    def pid(self) -> int:
+        return self.popen.pid
+
+    def alive(self) -> bool:
+        return self.popen.poll() is None
+
+    def stop(self, timeout: float = 10.0) -> int:
+        if self.alive():
+            self.popen.send_signal(signal.SIGTERM)
+            try:
+                self.popen.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.popen.kill()
+                self.popen.wait()
+        self._reader.join(timeout=2)
+        self._log.close()
+        return int(self.popen.returncode)
+
+    def kill(self) -> None:
+        self.popen.kill()
+        self.popen.wait()
+
+
+class Runtime(Proc):
+    """`openpendant run` on a free port with its own data directory."""
+
+    def __init__(
+        self,
+        home: Path,
+        port: int | None = None,
+        extra: list[str] | None = None,
+        env: dict[str, str] | None = None,
+    ) -> None:
+        self.home = home
+        self.port = port or free_port()
+        self.data_dir = home / "openpendant"
+        argv = [
+            sys.executable,
+            "-m",
+            "runtime.cli",
+            "run",
+            "--port",
+            str(self.port),
+            "--data-dir",
+            str(self.data_dir),
+            *(extra or []),
+        ]
+        super().__init__(argv, env or test_env(home), home / "logs" / f"runtime-{self.port}.log")
+        self.url = ""
+        self.started_in = 0.0
+
+    def wait_ready(self, timeout: float = 60.0) -> str:
+        t0 = time.monotonic()
+        line = self.wait_line(lambda s: "OpenPendant UI:" in s, timeout)
+        self.started_in = time.monotonic() - t0
+        self.url = line.split("OpenPendant UI:", 1)[1].strip().rstrip("/")
+        return self.url
+
+    def api(self, method: str, path: str, **kwargs: Any) -> httpx.Response:
+        return httpx.request(method, f"{self.url}/api{path}", timeout=10.0, **kwargs)
+
+
+class SimRobotProc(Proc):
+    """`openpendant sim-robot` as a standalone, advertised device."""
+
+    def __init__(
+        self,
+        home: Path,
+        name: str,
+        model: str = "ur5",
+        port: int = 0,
+        extra: list[str] | None = None,
+    ) -> None:
+        argv = [
+            sys.executable,
+            "-m",
+            "runtime.cli",
+            "sim-robot",
+            "--model",
+            model,
+            "--name",
+            name,
+            "--port",
+            str(port),
+            *(extra or []),
+        ]
+        super().__init__(argv, test_env(home), home / "logs" / f"sim-{name}-{port}.log")
+        self.url = ""
+        self.uuid = ""
+
+    def wait_ready(self, timeout: float = 30.0) -> str:
+        line = self.wait_line(lambda s: s.startswith('{"event": "ready"'), timeout)
+        ready = json.loads(line)
+        self.url, self.uuid = ready["url"], ready["uuid"]
+        return str(self.url)
+
+
+@contextlib.contextmanager
+def running(proc: Proc) -> Iterator[Proc]:
+    try:
+        yield proc
+    finally:
+        proc.stop()

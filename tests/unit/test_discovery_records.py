@@ -1,0 +1,68 @@
+"""Advertisements as seen by the browser: hostile or malformed TXT records."""
+
+from __future__ import annotations
+
+import socket
+
+from zeroconf.asyncio import AsyncServiceInfo
+
+from runtime.kit.discovery import SERVICE_TYPE, Advertisement, clean_text, parse_info
+
+
+def info(properties: dict[bytes, bytes], port: int = 8000) -> AsyncServiceInfo:
+    return AsyncServiceInfo(
+        SERVICE_TYPE,
+        f"x.{SERVICE_TYPE}",
+        port=port,
+        addresses=[socket.inet_aton("127.0.0.1")],
+        properties=properties,
+    )
+
+
+def test_advertisement_round_trip() -> None:
+    ad = Advertisement(
+        uuid="1234-abcd", kind="robot", model="ur5", name="cell ur5", host="127.0.0.1", port=4321
+    )
+    found = parse_info(ad.service_info())
+    assert found is not None
+    assert (found.uuid, found.kind, found.model, found.name, found.url) == (
+        "1234-abcd",
+        "robot",
+        "ur5",
+        "cell ur5",
+        "http://127.0.0.1:4321",
+    )
+
+
+def test_unknown_kind_missing_uuid_or_port_is_ignored() -> None:
+    assert parse_info(info({b"uuid": b"u", b"kind": b"toaster"})) is None
+    assert parse_info(info({b"kind": b"robot"})) is None
+    assert parse_info(info({b"uuid": b"u", b"kind": b"robot"}, port=0)) is None
+
+
+def test_untrusted_text_is_cleaned_not_interpreted() -> None:
+    found = parse_info(
+        info(
+            {
+                b"uuid": b"u\x00\x1b[31m",
+                b"kind": b"robot",
+                b"name": b"<script>alert(1)</script>\n" + b"\xff" * 150,
+            }
+        )
+    )
+    assert found is not None
+    assert found.uuid == "u[31m"
+    assert found.name.startswith("<script>alert(1)</script>")  # kept as text; the UI escapes
+    assert len(found.name) <= 64 and "\n" not in found.name
+    assert clean_text(None) == ""
+
+
+def test_instance_names_are_safe_and_unique_per_device() -> None:
+    a = Advertisement(
+        uuid="aaaaaaaa-1", kind="robot", model="m", name="<bad> name!", host="127.0.0.1", port=1
+    )
+    b = Advertisement(
+        uuid="bbbbbbbb-1", kind="robot", model="m", name="<bad> name!", host="127.0.0.1", port=1
+    )
+    assert a.instance_name() != b.instance_name()
+    assert "<" not in a.instance_name()

@@ -1,0 +1,89 @@
+"""Robot-info files and forward kinematics."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from runtime.kinematics import Kinematics
+from runtime.kit.errors import InvalidValue, NotFound
+from runtime.robot_info import available_models, load_robot_info
+
+# Universal Robots' published DH parameters of the UR5 (CB3), an independent model.
+UR5_DH = {
+    "d": [0.089159, 0, 0, 0.10915, 0.09465, 0.0823],
+    "a": [0, -0.425, -0.39225, 0, 0, 0],
+    "alpha": [np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0],
+}
+
+
+def dh_forward(q: np.ndarray) -> np.ndarray:
+    t = np.eye(4)
+    for i, theta in enumerate(q):
+        a, alpha, d = UR5_DH["a"][i], UR5_DH["alpha"][i], UR5_DH["d"][i]
+        ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
+        t = t @ np.array(
+            [
+                [ct, -st * ca, st * sa, a * ct],
+                [st, ct * ca, -ct * sa, a * st],
+                [0, sa, ca, d],
+                [0, 0, 0, 1],
+            ]
+        )
+    return t
+
+
+def test_required_models_are_available() -> None:
+    assert {"ur3", "ur5", "ur10", "panda"} <= set(available_models())
+
+
+@pytest.mark.parametrize("model", ["ur3", "ur5", "ur10", "panda"])
+def test_every_model_loads_with_complete_limits(model: str) -> None:
+    info = load_robot_info(model)
+    assert info.dof == (7 if model == "panda" else 6)
+    for joint in info.joints:
+        assert joint.lower < joint.upper
+        assert joint.max_velocity > 0 and joint.max_acceleration > 0
+    pose = Kinematics(info).tcp_pose(info.home)
+    assert np.linalg.norm(pose.position) < 1.5
+
+
+def test_ur5_kinematics_match_the_vendor_dh_model() -> None:
+    kinematics = Kinematics(load_robot_info("ur5"))
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        q = rng.uniform(-np.pi, np.pi, 6)
+        expected = dh_forward(q)
+        actual = kinematics.tcp(q)
+        assert np.allclose(actual.translation, expected[:3, 3], atol=1e-9)
+        assert np.allclose(actual.rotation, expected[:3, :3], atol=1e-9)
+
+
+def test_panda_limits_come_from_the_urdf() -> None:
+    info = load_robot_info("panda")
+    assert info.joints[3].lower == pytest.approx(-3.0718)
+    assert info.joints[3].upper == pytest.approx(-0.0698)
+    assert info.joints[0].max_velocity == pytest.approx(2.175)
+
+
+def test_unknown_model_names_the_known_ones() -> None:
+    with pytest.raises(NotFound, match=r"known: .*ur5"):
+        load_robot_info("abb-irb-9999")
+
+
+def test_robot_info_with_a_joint_missing_from_the_urdf_is_rejected(tmp_path: Path) -> None:
+    source = (Path(__file__).parents[2] / "deploy" / "robots" / "ur5.yaml").read_text()
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(source.replace("wrist_3_joint", "wrist_9_joint"))
+    with pytest.raises(InvalidValue, match="wrist_9_joint"):
+        load_robot_info(str(bad))
+
+
+def test_home_outside_the_limits_is_rejected(tmp_path: Path) -> None:
+    source = (Path(__file__).parents[2] / "deploy" / "robots" / "ur5.yaml").read_text()
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(source.replace("home: [0.0, -1.5708, 1.5708", "home: [0.0, -1.5708, 9.0"))
+    with pytest.raises(InvalidValue, match="home"):
+        load_robot_info(str(bad))

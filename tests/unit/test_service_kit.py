@@ -1,0 +1,89 @@
+"""The app factory's error contract and the WebSocket fan-out."""
+
+from __future__ import annotations
+
+import asyncio
+
+from fastapi import FastAPI
+from fastapi.testclient import TestClient
+
+from runtime.interfaces.common import Pose, Strict
+from runtime.kit.app import create_app
+from runtime.kit.errors import Conflict
+from runtime.kit.websocket import OutboxOverflow, Subscriber
+
+
+class Body(Strict):
+    pose: Pose
+    speed: float
+
+
+def make_app() -> FastAPI:
+    app = create_app("test")
+
+    @app.post("/move")
+    async def move(body: Body) -> dict[str, float]:
+        return {"speed": body.speed}
+
+    @app.get("/busy")
+    async def busy() -> None:
+        raise Conflict("robot is busy", code="busy")
+
+    @app.get("/crash")
+    async def crash() -> None:
+        raise RuntimeError("boom")
+
+    return app
+
+
+def test_health() -> None:
+    body = TestClient(make_app()).get("/health").json()
+    assert body["status"] == "ok" and body["service"] == "test"
+
+
+def test_nan_and_infinity_in_a_body_are_a_clear_422() -> None:
+    client = TestClient(make_app())
+    for raw in (
+        '{"pose": {"position": [0, 0, NaN]}, "speed": 1}',
+        '{"pose": {"position": [0, 0, 0]}, "speed": Infinity}',
+    ):
+        response = client.post("/move", content=raw, headers={"content-type": "application/json"})
+        assert response.status_code == 422
+        error = response.json()["error"]
+        assert error["code"] == "invalid_request"
+        assert "finite" in error["message"]
+
+
+def test_domain_errors_unknown_routes_and_crashes_use_the_error_body() -> None:
+    client = TestClient(make_app(), raise_server_exceptions=False)
+    assert client.get("/busy").status_code == 409
+    assert client.get("/busy").json() == {"error": {"code": "busy", "message": "robot is busy"}}
+    assert client.get("/nope").json()["error"]["code"] == "not_found"
+    crash = client.get("/crash")
+    assert crash.status_code == 500 and crash.json()["error"]["code"] == "internal_error"
+
+
+def test_subscriber_keeps_only_the_newest_state_but_every_event() -> None:
+    async def scenario() -> list[str]:
+        sub = Subscriber()
+        for i in range(100):
+            sub.push(f"state {i}", key="state:robot")
+        sub.push("event a")
+        sub.push("event b")
+        return await sub.next_batch()
+
+    assert asyncio.run(scenario()) == ["event a", "event b", "state 99"]
+
+
+def test_a_subscriber_that_falls_far_behind_is_dropped() -> None:
+    async def scenario() -> None:
+        sub = Subscriber(max_events=3)
+        for i in range(5):
+            sub.push(f"event {i}")
+        await sub.next_batch()
+
+    try:
+        asyncio.run(scenario())
+    except OutboxOverflow:
+        return
+    raise AssertionError("an overflowing subscriber must be dropped")

@@ -1,0 +1,252 @@
+"""The simulated controller, stepped deterministically (no threads, no clock)."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+
+import numpy as np
+import pytest
+
+from device_drivers.sim_robot.core import CYCLE, SimCore
+from device_drivers.sim_robot.driver import SimRobot
+from runtime.interfaces.device import DeviceIdentity
+from runtime.interfaces.limits import FloatArray, JointLimitChecker
+from runtime.interfaces.robot import (
+    CommandMode,
+    JogJointCommand,
+    JointTrajectory,
+    PositionCommand,
+    RobotInfo,
+    TrajectoryState,
+    TrajectoryWaypoint,
+)
+from runtime.kinematics import Kinematics
+from runtime.kit.errors import RobotError
+from runtime.robot_info import load_robot_info
+
+
+@pytest.fixture(scope="module")
+def ur5() -> RobotInfo:
+    return load_robot_info("ur5")
+
+
+@pytest.fixture
+def core(ur5: RobotInfo) -> SimCore:
+    c = SimCore(ur5, Kinematics(ur5))
+    c.enable()
+    return c
+
+
+class Clock:
+    def __init__(self, core: SimCore) -> None:
+        self.core = core
+        self.now = 0.0
+
+    def run(self, seconds: float, each: object = None) -> None:
+        for _ in range(round(seconds / CYCLE)):
+            self.now += CYCLE
+            if callable(each):
+                each(self.now)
+            self.core.step(self.now)
+
+
+def assert_within_limits(core: SimCore) -> None:
+    """Every recorded setpoint respects position, velocity and acceleration limits."""
+    info = core.info
+    lower = np.array([j.lower for j in info.joints])
+    upper = np.array([j.upper for j in info.joints])
+    vmax = np.array([j.max_velocity for j in info.joints])
+    amax = np.array([j.max_acceleration for j in info.joints])
+    for s in core.setpoints:
+        assert np.all(s.position >= lower - 1e-9) and np.all(s.position <= upper + 1e-9)
+        assert np.all(np.abs(s.velocity) <= vmax * (1 + 1e-6)), s
+        assert np.all(np.abs(s.acceleration) <= amax * (1 + 1e-6)), s
+
+
+def test_joint_jog_moves_the_right_joint_the_right_way(core: SimCore) -> None:
+    clock = Clock(core)
+    core.set_mode(CommandMode.jog)
+    start = core.tracker.position.copy()
+    v = np.zeros(6)
+    v[2] = -0.3
+    clock.run(0.5, lambda now: core.stream(CommandMode.jog, v, None, 0.1, now))
+    moved = core.tracker.position - start
+    assert moved[2] < -0.1
+    assert np.allclose(np.delete(moved, 2), 0.0)
+    assert math.isclose(core.tracker.velocity[2], -0.3, rel_tol=1e-6)
+
+
+def test_jog_stops_when_commands_stop_arriving(core: SimCore) -> None:
+    clock = Clock(core)
+    core.set_mode(CommandMode.jog)
+    v = np.array([0.5, 0, 0, 0, 0, 0])
+    clock.run(0.4, lambda now: core.stream(CommandMode.jog, v, None, 0.05, now))
+    assert core.tracker.velocity[0] > 0.4
+    clock.run(0.5)  # no more commands: the 50 ms timeout lapses, the robot halts
+    assert core.command is None
+    assert core.command_timeouts == 1
+    assert np.allclose(core.tracker.velocity, 0.0)
+    stopped_at = core.tracker.position.copy()
+    clock.run(0.2)
+    assert np.array_equal(core.tracker.position, stopped_at)
+    assert_within_limits(core)
+
+
+def test_jog_into_a_position_limit_stops_exactly_at_it(ur5: RobotInfo) -> None:
+    core = SimCore(ur5, Kinematics(ur5), history=20000)
+    core.enable()
+    clock = Clock(core)
+    core.set_mode(CommandMode.jog)
+    v = np.zeros(6)
+    v[2] = ur5.joints[2].max_velocity  # elbow, limits ±π, starts at π/2
+    clock.run(3.0, lambda now: core.stream(CommandMode.jog, v, None, 0.1, now))
+    assert core.tracker.position[2] == pytest.approx(ur5.joints[2].upper, abs=1e-6)
+    assert not core.error
+    assert_within_limits(core)
+
+
+def test_random_command_storm_never_exceeds_limits(ur5: RobotInfo) -> None:
+    rng = np.random.default_rng(7)
+    core = SimCore(ur5, Kinematics(ur5), history=100_000)
+    core.enable()
+    clock = Clock(core)
+    vmax = np.array([j.max_velocity for j in ur5.joints])
+    for _ in range(40):
+        modes = [
+            CommandMode.jog,
+            CommandMode.velocity_command,
+            CommandMode.position_command,
+            CommandMode.halt,
+        ]
+        mode = modes[int(rng.integers(len(modes)))]
+        core.set_mode(mode)
+        if mode is CommandMode.halt:
+            clock.run(0.1)
+            continue
+        if mode is CommandMode.position_command:
+            target = rng.uniform([j.lower for j in ur5.joints], [j.upper for j in ur5.joints])
+            clock.run(0.3, lambda now, t=target, m=mode: core.stream(m, None, t, 0.05, now))
+        else:
+            v = rng.uniform(-vmax, vmax)
+            core.set_speed_ratio(float(rng.uniform(0.1, 1.0)))
+            clock.run(0.3, lambda now, v=v, m=mode: core.stream(m, v, None, 0.05, now))
+    assert not core.error, core.error_message
+    assert_within_limits(core)
+
+
+def test_estop_halts_within_limits_and_blocks_motion(core: SimCore) -> None:
+    clock = Clock(core)
+    core.set_mode(CommandMode.jog)
+    v = np.array([0, 2.0, 0, 0, 0, 0])
+    clock.run(0.5, lambda now: core.stream(CommandMode.jog, v, None, 0.2, now))
+    core.set_estop(True)
+    assert not core.enabled and core.mode is CommandMode.halt
+    clock.run(1.0)
+    assert np.allclose(core.tracker.velocity, 0.0)
+    assert_within_limits(core)
+    with pytest.raises(RobotError) as err:
+        core.set_mode(CommandMode.jog)
+    assert err.value.code == "not_enabled"
+    with pytest.raises(RobotError):
+        core.enable()
+    core.set_estop(False)
+    core.enable()
+    core.set_mode(CommandMode.jog)
+
+
+def test_fault_stops_motion_until_reset(core: SimCore) -> None:
+    clock = Clock(core)
+    core.set_mode(CommandMode.jog)
+    clock.run(0.2, lambda now: core.stream(CommandMode.jog, np.full(6, 0.2), None, 0.2, now))
+    core.fault("simulated overload")
+    assert core.error and core.error_message == "simulated overload"
+    clock.run(0.5)
+    assert np.allclose(core.tracker.velocity, 0.0)
+    with pytest.raises(RobotError):
+        core.stream(CommandMode.jog, np.zeros(6), None, 0.1, clock.now)
+    core.reset_errors()
+    core.set_mode(CommandMode.jog)
+
+
+def test_mode_change_passes_through_halt(core: SimCore) -> None:
+    clock = Clock(core)
+    core.set_mode(CommandMode.jog)
+    clock.run(0.2, lambda now: core.stream(CommandMode.jog, np.full(6, 0.3), None, 0.5, now))
+    core.set_mode(CommandMode.position_command)
+    assert core.command is None
+    clock.run(0.5)
+    assert np.allclose(core.tracker.velocity, 0.0)
+
+
+def test_trajectory_reaches_its_end(core: SimCore, ur5: RobotInfo) -> None:
+    clock = Clock(core)
+    core.set_mode(CommandMode.trajectory)
+    start = core.tracker.position.copy()
+    goal = start + np.array([0.4, -0.2, 0.3, 0.1, -0.1, 0.5])
+    checker = JointLimitChecker(ur5)
+    trajectory = JointTrajectory(
+        waypoints=[
+            TrajectoryWaypoint(time_from_start=1.0, position=list(start + (goal - start) / 2)),
+            TrajectoryWaypoint(time_from_start=2.0, position=list(goal)),
+        ]
+    )
+    trajectory_id = core.start_trajectory(checker.trajectory(trajectory, start))
+    clock.run(1.0)
+    assert core.trajectory_status(trajectory_id).state is TrajectoryState.running
+    clock.run(2.0)
+    status = core.trajectory_status(trajectory_id)
+    assert status.state is TrajectoryState.finished and status.progress == 1.0
+    assert np.allclose(core.tracker.position, goal, atol=1e-9)
+    assert_within_limits(core)
+
+
+def test_position_stream_tracks_a_moving_reference(core: SimCore) -> None:
+    clock = Clock(core)
+    core.set_mode(CommandMode.position_command)
+    start = core.tracker.position.copy()
+
+    def reference(t: float) -> FloatArray:
+        result: FloatArray = start + 0.2 * np.sin(2 * np.pi * 0.5 * t)
+        return result
+
+    errors = []
+
+    def send(now: float) -> None:
+        # The tracker's setpoint is the previous cycle's result: compare it with then.
+        errors.append(np.abs(core.tracker.position - reference(now - CYCLE)).max())
+        core.stream(CommandMode.position_command, None, reference(now), 0.05, now)
+
+    clock.run(3.0, send)
+    # The sine starts with a velocity step the robot must first catch up with; once on it,
+    # the setpoint follows within 5 mrad.
+    assert max(errors[500:]) < 0.005
+    assert_within_limits(core)
+
+
+def test_driver_rejects_non_finite_and_out_of_limit_targets(ur5: RobotInfo) -> None:
+    robot = SimRobot(DeviceIdentity(uuid="u-1", kind="robot", model="ur5", name="t"), ur5)
+    with robot.lock:
+        robot.core.enable()
+        robot.core.set_mode(CommandMode.jog)
+
+    async def scenario() -> None:
+        bad = [0.0] * 6
+        bad[1] = math.nan
+        with pytest.raises(RobotError) as err:
+            await robot.jog_joint(JogJointCommand.model_construct(velocity=bad, timeout=0.1))
+        assert err.value.code == "not_finite"
+        with pytest.raises(RobotError) as err:
+            await robot.jog_joint(JogJointCommand(velocity=[9.0, 0, 0, 0, 0, 0], timeout=0.1))
+        assert err.value.code == "velocity_limit"
+        with pytest.raises(RobotError) as err:
+            await robot.jog_joint(JogJointCommand(velocity=[0.0] * 5, timeout=0.1))
+        assert err.value.code == "wrong_length"
+        await robot.set_command_mode(CommandMode.position_command)
+        with pytest.raises(RobotError) as err:
+            await robot.position_command(PositionCommand(position=[0, 0, 4.0, 0, 0, 0]))
+        assert err.value.code == "position_limit"
+
+    asyncio.run(scenario())
+    assert robot.core.command is None  # nothing was accepted
+    assert np.allclose(robot.core.tracker.position, ur5.home)

@@ -1,0 +1,194 @@
+"""Variable types and the SQLite store (in-process; the service tests go over HTTP)."""
+
+from __future__ import annotations
+
+import math
+import sqlite3
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from runtime.kit.errors import Conflict, InvalidValue, NotFound
+from runtime.variable_storage.store import VariableStore
+from runtime.variable_storage.types import REGISTRY
+
+UNIT_Q = [0.0, 0.0, 0.7071067811865476, 0.7071067811865476]
+
+# One valid value per registered type, and what must come back.
+ROUND_TRIP: dict[str, Any] = {
+    "number": 12.5,
+    "string": "pick from bin ‹A› — ok",
+    "bool": True,
+    "joint_waypoint": {"joints": [0.1, -1.2, 1.3, -0.5, -1.57, 0.0], "robot": "robot"},
+    "pose_waypoint": {
+        "pose": {"position": [0.4, 0.1, 0.3], "orientation": UNIT_Q},
+        "frame": "base",
+        "robot": "robot",
+    },
+    "pose": {"position": [1.0, 2.0, 3.0], "orientation": [0.0, 0.0, 0.0, 1.0]},
+    "frame": {"pose": {"position": [0.5, 0.0, 0.0], "orientation": UNIT_Q}, "parent": "world"},
+    "list": [1, "two", [3.0], {"four": 4}],
+    "json": {"a": [1, 2, {"b": None}], "c": "d"},
+    "device": {
+        "uuid": "abc",
+        "local_name": "robot2",
+        "kind": "robot",
+        "model": "ur5",
+        "name": "sim",
+        "url": "http://127.0.0.1:1234",
+    },
+}
+
+# Values each type must refuse.
+REJECT: list[tuple[str, Any]] = [
+    ("number", math.nan),
+    ("number", math.inf),
+    ("number", "1"),
+    ("number", True),
+    ("string", 3),
+    ("bool", 1),
+    ("bool", "true"),
+    ("joint_waypoint", {"joints": [0.0, math.nan], "robot": "r"}),
+    ("joint_waypoint", {"joints": [], "robot": "r"}),
+    ("joint_waypoint", {"joints": [[0.0]], "robot": "r"}),
+    ("joint_waypoint", {"joints": [0.0]}),
+    ("joint_waypoint", {"joints": [0.0], "robot": "r", "extra": 1}),
+    ("pose", {"position": [0.0, 0.0], "orientation": [0, 0, 0, 1]}),
+    ("pose", {"position": [0.0, 0.0, math.inf], "orientation": [0, 0, 0, 1]}),
+    ("pose", {"position": [0.0, 0.0, 0.0], "orientation": [0, 0, 0, 2]}),
+    ("pose", {"position": [0.0, 0.0, 0.0], "orientation": [0, 0, 1]}),
+    ("pose_waypoint", {"pose": {"position": [0, 0, 0], "orientation": [0, 0, 0, 1]}, "frame": ""}),
+    ("frame", {"pose": "here"}),
+    ("list", {"not": "a list"}),
+    ("list", [1.0, math.nan]),
+    ("json", {"deep": [math.inf]}),
+    (
+        "device",
+        {"uuid": "x", "local_name": "Robot 2", "kind": "robot", "model": "", "name": "", "url": ""},
+    ),
+    ("no_such_type", 1),
+]
+
+
+@pytest.fixture
+def store(tmp_path: Path) -> VariableStore:
+    return VariableStore(tmp_path / "v.sqlite", history_depth=5)
+
+
+def test_every_registered_type_has_a_round_trip_case() -> None:
+    assert set(ROUND_TRIP) == set(REGISTRY)
+
+
+@pytest.mark.parametrize("type_name", sorted(ROUND_TRIP))
+def test_round_trip_survives_reopening(tmp_path: Path, type_name: str) -> None:
+    path = tmp_path / "v.sqlite"
+    first = VariableStore(path)
+    first.put(f"v_{type_name}", type_name, ROUND_TRIP[type_name], tags=["t"], doc="d")
+    first.close()
+    again = VariableStore(path)
+    got = again.get(f"v_{type_name}")
+    assert (got.type, got.value, got.tags, got.doc, got.version) == (
+        type_name,
+        ROUND_TRIP[type_name],
+        ["t"],
+        "d",
+        1,
+    )
+
+
+@pytest.mark.parametrize(("type_name", "value"), REJECT)
+def test_invalid_values_are_rejected_and_change_nothing(
+    store: VariableStore, type_name: str, value: Any
+) -> None:
+    store.put("keep", "number", 1.0)
+    with pytest.raises(InvalidValue):
+        store.put("keep" if type_name == "number" else "new", type_name, value)
+    assert store.get("keep").value == 1.0 and store.get("keep").version == 1
+    with pytest.raises(NotFound):
+        store.get("new")
+
+
+@pytest.mark.parametrize("name", ["", "1abc", "_private", "a b", "a/b", "x" * 129, "ä"])
+def test_bad_names_are_rejected(store: VariableStore, name: str) -> None:
+    with pytest.raises(InvalidValue):
+        store.put(name, "number", 1)
+
+
+def test_quaternions_are_stored_normalised(store: VariableStore) -> None:
+    store.put("p", "pose", {"position": [0, 0, 0], "orientation": [0, 0, 0, 1.0005]})
+    assert store.get("p").value["orientation"] == [0.0, 0.0, 0.0, 1.0]
+
+
+def test_versions_history_and_pruning(store: VariableStore) -> None:
+    for i in range(8):
+        store.put("n", "number", i)
+    assert store.get("n").version == 8
+    history = store.history("n")
+    assert [h.version for h in history] == [8, 7, 6, 5, 4]  # depth 5
+    assert [h.value for h in history] == [7, 6, 5, 4, 3]
+
+
+def test_delete_keeps_history_and_versions_keep_counting(store: VariableStore) -> None:
+    store.put("w", "string", "a")
+    store.put("w", "string", "b")
+    deleted = store.delete("w")
+    assert deleted.value == "b"
+    with pytest.raises(NotFound):
+        store.get("w")
+    history = store.history("w")
+    assert history[0].deleted and history[1].value == "b"
+    assert store.put("w", "string", "c").version == 4
+
+
+def test_expected_version_prevents_lost_updates(store: VariableStore) -> None:
+    store.put("c", "number", 0, expected_version=0)
+    with pytest.raises(Conflict) as err:
+        store.put("c", "number", 1, expected_version=0)
+    assert err.value.code == "version_conflict"
+    store.put("c", "number", 1, expected_version=1)
+    assert store.get("c").value == 1
+
+
+def test_type_of_a_variable_cannot_silently_change(store: VariableStore) -> None:
+    store.put("x", "number", 1)
+    with pytest.raises(Conflict):
+        store.put("x", "string", "1")
+    assert store.get("x").type == "number"
+
+
+def test_tags_filter_and_type_filter(store: VariableStore) -> None:
+    store.put("a", "number", 1, tags=["cell1", "pick"])
+    store.put("b", "number", 2, tags=["cell1"])
+    store.put("c", "string", "x", tags=["pick"])
+    assert [v.name for v in store.query(tag="pick")] == ["a", "c"]
+    assert [v.name for v in store.query(type_name="number")] == ["a", "b"]
+    assert [v.name for v in store.query(tag="cell1", type_name="number")] == ["a", "b"]
+
+
+def test_import_is_all_or_nothing(store: VariableStore) -> None:
+    store.put("a", "number", 1)
+    with pytest.raises(InvalidValue, match="nothing imported"):
+        store.put_many(
+            [
+                {"name": "a", "type": "number", "value": 2},
+                {"name": "b", "type": "number", "value": math.nan},
+            ]
+        )
+    assert store.get("a").value == 1
+    with pytest.raises(NotFound):
+        store.get("b")
+    store.put_many(
+        [
+            {"name": "a", "type": "number", "value": 2},
+            {"name": "b", "type": "bool", "value": False, "tags": ["x"]},
+        ]
+    )
+    assert store.get("a").value == 2 and store.get("b").tags == ["x"]
+
+
+def test_database_is_wal_with_full_sync(store: VariableStore) -> None:
+    db = sqlite3.connect(store.path)
+    assert db.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+    assert store._db.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL
+    assert store.integrity_check() == "ok"
