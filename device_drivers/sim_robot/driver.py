@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from collections import deque
@@ -20,6 +21,8 @@ from runtime.interfaces.robot import (
 )
 from runtime.interfaces.robot_driver import RobotDriver
 from runtime.kinematics import Kinematics
+
+log = logging.getLogger(__name__)
 
 
 class LoopTimer:
@@ -75,7 +78,12 @@ class SimRobot(RobotDriver):
             start = time.perf_counter()
             self.timer.tick(start)
             with self.lock:
-                self.core.step(time.monotonic())
+                try:
+                    self.core.step(time.monotonic())
+                except Exception as exc:
+                    # The loop must outlive any bug in a cycle: fault the robot, keep running.
+                    log.exception("control cycle failed")
+                    self.core.fault(f"control loop error: {exc}")
             deadline += CYCLE
             delay = deadline - time.perf_counter()
             if delay > 0:

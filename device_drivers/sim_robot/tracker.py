@@ -6,13 +6,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import numpy.typing as npt
 from ruckig import (
     ControlInterface,
     InputParameter,
     OutputParameter,
     Result,
     Ruckig,
+    RuckigError,
     Synchronization,
+    Trajectory,
 )
 
 from runtime.interfaces.limits import FloatArray
@@ -34,6 +37,7 @@ class JointTracker:
         self.upper = np.array([j.upper for j in joints])
         self.max_velocity = np.array([j.max_velocity for j in joints])
         self.max_acceleration = np.array([j.max_acceleration for j in joints])
+        self.max_jerk = np.array([j.max_jerk or math.inf for j in joints])
         self._otg = Ruckig(n, dt)
         self._in = InputParameter(n)
         self._out = OutputParameter(n)
@@ -46,6 +50,18 @@ class JointTracker:
         self.position = np.array(position, dtype=float)
         self.velocity = np.zeros(n)
         self.acceleration = np.zeros(n)
+        # The limit guard plans, offline, the fastest stop from each new state.
+        self._brake = Ruckig(n)
+        self._brake_in = InputParameter(n)
+        self._brake_in.control_interface = _VELOCITY
+        self._brake_in.synchronization = Synchronization.No
+        self._brake_in.target_velocity = [0.0] * n
+        self._brake_in.target_acceleration = [0.0] * n
+        self._brake_in.max_velocity = self.max_velocity.tolist()
+        self._brake_in.max_acceleration = self.max_acceleration.tolist()
+        self._brake_in.max_jerk = self._in.max_jerk
+        self._brake_path = Trajectory(n)
+        self.guard_trips = 0
 
     @property
     def moving(self) -> bool:
@@ -71,24 +87,27 @@ class JointTracker:
     def step_position(
         self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray | None = None
     ) -> None:
-        """Track a moving reference (position, its velocity and acceleration)."""
+        """Track a moving reference (position, and its velocity and acceleration)."""
         target = np.clip(position, self.lower, self.upper)
-        # A reference still heading for a limit must be able to stop before it.
+        # A reference still heading for a limit must be able to stop before it; half the
+        # acceleration limit leaves room for the jerk-limited ramps.
         room = np.where(velocity > 0, self.upper - target, target - self.lower)
-        stop_speed = np.sqrt(2.0 * self.max_acceleration * np.maximum(room, 0.0))
-        capped = np.clip(
-            velocity,
-            -np.minimum(stop_speed, self.max_velocity),
-            np.minimum(stop_speed, self.max_velocity),
-        )
+        stop_speed = np.sqrt(self.max_acceleration * np.maximum(room, 0.0))
+        bound = np.minimum(stop_speed, self.max_velocity)
+        capped = np.clip(velocity, -bound, bound)
         accel = np.zeros_like(position) if acceleration is None else acceleration
-        # Arriving with the reference's acceleration avoids a lag; keep it inside the limit.
-        accel = np.where(
-            capped == velocity,
-            np.clip(accel, -0.9 * self.max_acceleration, 0.9 * self.max_acceleration),
-            0.0,
-        )
+        accel = np.where(capped == velocity, self._feasible_acceleration(capped, accel), 0.0)
         self._run([_POSITION] * len(position), target, capped, self.max_velocity, accel)
+
+    def _feasible_acceleration(self, velocity: FloatArray, acceleration: FloatArray) -> FloatArray:
+        """Arriving with the reference's acceleration avoids a lag. But jerk is limited, so a
+        target state with acceleration a was reached through a velocity a²/2j away from its
+        own; ruckig rejects targets where that passes the velocity limit."""
+        room = np.maximum(self.max_velocity - np.abs(velocity), 0.0)
+        reachable = np.sqrt(2.0 * self.max_jerk * 0.9 * room)
+        bound = np.minimum(0.9 * self.max_acceleration, reachable)
+        result: FloatArray = np.clip(acceleration, -bound, bound)
+        return result
 
     def _run(
         self,
@@ -98,17 +117,62 @@ class JointTracker:
         max_velocity: FloatArray,
         target_acceleration: FloatArray | None = None,
     ) -> None:
-        self._in.per_dof_control_interface = interfaces
-        self._in.target_acceleration = (
-            [0.0] * len(interfaces) if target_acceleration is None else target_acceleration.tolist()
-        )
-        self._in.target_position = target_position.tolist()
-        self._in.target_velocity = target_velocity.tolist()
-        self._in.max_velocity = max_velocity.tolist()
-        result = self._otg.update(self._in, self._out)
-        if result not in (Result.Working, Result.Finished):
-            raise TrackerError(f"trajectory generation failed: {result}")
+        accel = np.zeros(len(interfaces)) if target_acceleration is None else target_acceleration
+        self._update(interfaces, target_position, target_velocity, max_velocity, accel)
+        unsafe = self._cannot_stop_in_limits()
+        if unsafe.any():
+            # Like a controller's joint-limit braking: those joints stop now, from the
+            # previous state, which was checked to have a stop within the limits.
+            self.guard_trips += 1
+            interfaces = [_VELOCITY if u else i for u, i in zip(unsafe, interfaces, strict=True)]
+            self._update(
+                interfaces,
+                target_position,
+                np.where(unsafe, 0.0, target_velocity),
+                max_velocity,
+                np.where(unsafe, 0.0, accel),
+            )
         self._out.pass_to_input(self._in)
         self.position = np.array(self._out.new_position)
         self.velocity = np.array(self._out.new_velocity)
         self.acceleration = np.array(self._out.new_acceleration)
+
+    def _update(
+        self,
+        interfaces: list[ControlInterface],
+        target_position: FloatArray,
+        target_velocity: FloatArray,
+        max_velocity: FloatArray,
+        target_acceleration: FloatArray,
+    ) -> None:
+        self._in.per_dof_control_interface = interfaces
+        self._in.target_position = target_position.tolist()
+        self._in.target_velocity = target_velocity.tolist()
+        self._in.target_acceleration = target_acceleration.tolist()
+        self._in.max_velocity = max_velocity.tolist()
+        try:
+            result = self._otg.update(self._in, self._out)
+        except RuckigError as exc:
+            raise TrackerError(f"trajectory generation failed: {str(exc).strip()}") from exc
+        if result not in (Result.Working, Result.Finished):
+            raise TrackerError(f"trajectory generation failed: {result}")
+
+    def _cannot_stop_in_limits(self) -> npt.NDArray[np.bool_]:
+        """Joints whose fastest stop from the proposed new state would pass a limit (and
+        move further out than they already are)."""
+        position = np.array(self._out.new_position)
+        self._brake_in.current_position = self._out.new_position
+        self._brake_in.current_velocity = self._out.new_velocity
+        self._brake_in.current_acceleration = self._out.new_acceleration
+        try:
+            self._brake.calculate(self._brake_in, self._brake_path)
+        except RuckigError:
+            return np.ones(len(position), dtype=bool)
+        extrema = self._brake_path.position_extrema
+        low = np.array([e.min for e in extrema])
+        high = np.array([e.max for e in extrema])
+        eps = 1e-9
+        result: npt.NDArray[np.bool_] = (high > np.maximum(self.upper, position) + eps) | (
+            low < np.minimum(self.lower, position) - eps
+        )
+        return result

@@ -250,3 +250,29 @@ def test_driver_rejects_non_finite_and_out_of_limit_targets(ur5: RobotInfo) -> N
     asyncio.run(scenario())
     assert robot.core.command is None  # nothing was accepted
     assert np.allclose(robot.core.tracker.position, ur5.home)
+
+
+def test_a_position_stream_near_a_limit_brakes_in_time(ur5: RobotInfo) -> None:
+    """The elbow arrives fast near its limit and a stream then swings its target across
+    the limit: the robot must brake in time on its own, not fault and not overshoot."""
+    core = SimCore(ur5, Kinematics(ur5), history=20000)
+    core.enable()
+    clock = Clock(core)
+    core.set_mode(CommandMode.jog)
+    full = np.array([j.max_velocity for j in ur5.joints])
+    clock.run(0.5, lambda now: core.stream(CommandMode.jog, full, None, 0.1, now))
+    clock.run(0.2)  # the jog lapses; the robot is still braking
+    core.set_mode(CommandMode.position_command)
+    here = core.tracker.position.copy()
+    assert ur5.joints[2].upper - here[2] < 0.2
+    ticks = iter(range(10**6))
+
+    def send(now: float) -> None:
+        k = next(ticks)
+        if k % 5 == 0:  # a 100 Hz stream
+            core.stream(CommandMode.position_command, None, here + 0.3 * np.sin(k / 30), 0.1, now)
+
+    clock.run(1.0, send)
+    assert not core.error, core.error_message
+    assert core.tracker.guard_trips > 0
+    assert_within_limits(core)

@@ -1,0 +1,251 @@
+"""The simulated robot as a driver process, over its HTTP and WebSocket API."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import httpx
+import numpy as np
+import pytest
+from websockets.sync.client import connect
+
+from runtime.robot_info import load_robot_info
+from tests.support.processes import SimRobotProc, wait_for
+
+INFO = load_robot_info("ur5")
+LOWER = np.array([j.lower for j in INFO.joints])
+UPPER = np.array([j.upper for j in INFO.joints])
+VMAX = np.array([j.max_velocity for j in INFO.joints])
+AMAX = np.array([j.max_acceleration for j in INFO.joints])
+
+
+class Robot:
+    def __init__(self, url: str) -> None:
+        self.http = httpx.Client(base_url=url, timeout=5.0)
+        self.ws_url = url.replace("http://", "ws://")
+
+    def call(self, method: str, path: str, body: Any = None, expect: int = 200) -> Any:
+        response = self.http.request(method, path, json=body)
+        assert response.status_code == expect, response.text
+        return response.json() if response.content else None
+
+    def state(self) -> dict[str, Any]:
+        return self.call("GET", "/state")  # type: ignore[no-any-return]
+
+    def setpoints(self, after: int) -> dict[str, Any]:
+        return self.call("GET", f"/sim/setpoints?after={after}")  # type: ignore[no-any-return]
+
+    def jog(self, velocity: list[float], seconds: float, timeout: float = 0.1) -> None:
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.call("POST", "/jog_joint", {"velocity": velocity, "timeout": timeout}, 204)
+            time.sleep(0.02)
+
+    def stopped(self) -> bool:
+        return bool(np.allclose(self.state()["joint_velocity"], 0.0))
+
+    def recover(self) -> None:
+        self.call("POST", "/sim/estop", {"engaged": False})
+        self.call("POST", "/reset_errors")
+        self.call("POST", "/enable")
+        self.call("PUT", "/command_mode", {"mode": "halt"})
+
+
+@pytest.fixture
+def robot(sim: SimRobotProc) -> Iterator[Robot]:
+    r = Robot(sim.url)
+    r.recover()
+    wait_for(r.stopped, 5, what="robot at rest")
+    yield r
+    r.http.close()
+
+
+def assert_setpoints_within_limits(samples: dict[str, Any]) -> None:
+    q, v, a = (np.array(samples[k]) for k in ("position", "velocity", "acceleration"))
+    assert len(q) > 0
+    assert np.all(q >= LOWER - 1e-9)
+    assert np.all(q <= UPPER + 1e-9)
+    assert np.all(np.abs(v) <= VMAX * (1 + 1e-6))
+    assert np.all(np.abs(a) <= AMAX * (1 + 1e-6))
+    # The cycle-to-cycle steps agree with the reported velocities: nothing jumps.
+    assert np.all(np.abs(np.diff(q, axis=0)) <= VMAX * 0.002 * (1 + 1e-6))
+
+
+def test_identity_info_and_health(sim: SimRobotProc, robot: Robot) -> None:
+    described = robot.call("GET", "/info")
+    assert described["identity"]["uuid"] == sim.uuid
+    assert described["identity"]["kind"] == "robot"
+    assert [j["name"] for j in described["info"]["joints"]][0] == "shoulder_pan_joint"
+    assert robot.call("GET", "/health")["status"] == "ok"
+
+
+def test_joint_jog_moves_then_stops_on_command_timeout(robot: Robot) -> None:
+    robot.call("PUT", "/command_mode", {"mode": "jog"})
+    start = robot.state()
+    timeouts_before = robot.call("GET", "/sim/loop_stats")["command_timeouts"]
+    robot.jog([0.0, 0.0, 0.0, 0.0, 0.0, 0.6], seconds=0.6)
+    moving = robot.state()
+    assert moving["joint_velocity"][5] > 0.5
+    # No more commands: the driver halts by itself once the 100 ms command timeout lapses.
+    wait_for(robot.stopped, 2, what="halt after command timeout")
+    stats = robot.call("GET", "/sim/loop_stats")
+    assert stats["command_timeouts"] == timeouts_before + 1
+    end = robot.state()
+    moved = np.array(end["joint_position"]) - np.array(start["joint_position"])
+    assert moved[5] > 0.3
+    assert np.allclose(moved[:5], 0.0)
+    assert_setpoints_within_limits(robot.setpoints(start["seqno"]))
+
+
+def test_limits_hold_through_jogs_streams_and_trajectories(robot: Robot) -> None:
+    first = robot.state()["seqno"]
+    robot.call("PUT", "/command_mode", {"mode": "jog"})
+    robot.jog([3.15, -3.15, 3.15, 3.2, -3.2, 3.2], seconds=0.4)  # every joint at full speed
+    robot.call("PUT", "/command_mode", {"mode": "position_command"})  # passes through halt
+    here = np.array(robot.state()["joint_position"])
+    for k in range(40):
+        target = here + 0.3 * np.sin(k / 6.0)
+        robot.call("POST", "/position_command", {"position": target.tolist()}, 204)
+        time.sleep(0.01)
+    robot.call("PUT", "/command_mode", {"mode": "trajectory"})
+    wait_for(robot.stopped, 3, what="stop before trajectory")
+    start = np.array(robot.state()["joint_position"])
+    goal = np.clip(start + np.array([0.5, -0.3, 0.4, 0.2, 0.2, -0.5]), LOWER, UPPER)
+    accepted = robot.call(
+        "POST",
+        "/trajectory",
+        {
+            "waypoints": [
+                {"time_from_start": 0.8, "position": ((start + goal) / 2).tolist()},
+                {"time_from_start": 1.6, "position": goal.tolist()},
+            ]
+        },
+    )
+    status = wait_for(
+        lambda: (
+            (s := robot.call("GET", f"/trajectory/{accepted['id']}"))["state"] == "finished" and s
+        ),
+        10,
+        what="trajectory finished",
+    )
+    assert status["progress"] == 1.0
+    assert np.allclose(robot.state()["joint_position"], goal, atol=1e-6)
+    samples = robot.setpoints(first)
+    assert samples["seqno"][0] == first + 1  # the whole run is in the buffer
+    assert_setpoints_within_limits(samples)
+
+
+def test_estop_halts_and_blocks_motion_until_released(robot: Robot) -> None:
+    robot.call("PUT", "/command_mode", {"mode": "jog"})
+    robot.jog([0.0, 1.5, 0.0, 0.0, 0.0, 0.0], seconds=0.4, timeout=1.0)
+    state = robot.call("POST", "/sim/estop", {"engaged": True})
+    assert state["flags"]["estop"]
+    assert not state["flags"]["enabled"]
+    assert state["command_mode"] == "halt"
+    wait_for(robot.stopped, 1, what="stop after E-stop")
+    refused = robot.http.post("/jog_joint", json={"velocity": [0.1] * 6, "timeout": 0.1})
+    assert refused.status_code == 409
+    assert refused.json()["error"]["code"] == "estop"
+    assert robot.http.post("/enable").json()["error"]["code"] == "estop"
+    robot.call("POST", "/sim/estop", {"engaged": False})
+    robot.call("POST", "/enable")
+    robot.call("PUT", "/command_mode", {"mode": "jog"})
+
+
+def test_fault_needs_a_reset(robot: Robot) -> None:
+    state = robot.call("POST", "/sim/fault", {"message": "simulated protective stop"})
+    assert state["flags"]["error"]
+    assert state["error_message"] == "simulated protective stop"
+    refused = robot.http.put("/command_mode", json={"mode": "jog"})
+    assert refused.json()["error"]["code"] == "robot_fault"
+    robot.call("POST", "/reset_errors")
+    robot.call("PUT", "/command_mode", {"mode": "jog"})
+
+
+@pytest.mark.parametrize(
+    ("path", "raw", "status", "code"),
+    [
+        (
+            "/jog_joint",
+            '{"velocity": [NaN, 0, 0, 0, 0, 0], "timeout": 0.1}',
+            422,
+            "invalid_request",
+        ),
+        (
+            "/jog_joint",
+            '{"velocity": [0, 0, 0, 0, 0, Infinity], "timeout": 0.1}',
+            422,
+            "invalid_request",
+        ),
+        ("/jog_joint", '{"velocity": [0, 0, 0], "timeout": 0.1}', 409, "wrong_length"),
+        ("/jog_joint", '{"velocity": [9, 0, 0, 0, 0, 0], "timeout": 0.1}', 409, "velocity_limit"),
+        ("/jog_joint", '{"velocity": [0, 0, 0, 0, 0, 0], "timeout": 5}', 422, "invalid_request"),
+        ("/jog_joint", '{"velocity": "fast"}', 422, "invalid_request"),
+        ("/jog_joint", "not json", 422, "invalid_request"),
+    ],
+)
+def test_bad_jog_commands_are_refused_and_nothing_moves(
+    robot: Robot, path: str, raw: str, status: int, code: str
+) -> None:
+    robot.call("PUT", "/command_mode", {"mode": "jog"})
+    before = robot.state()["joint_position"]
+    response = robot.http.post(path, content=raw, headers={"content-type": "application/json"})
+    assert response.status_code == status
+    assert response.json()["error"]["code"] == code
+    time.sleep(0.1)
+    assert robot.state()["joint_position"] == before
+
+
+def test_out_of_limit_targets_are_refused_before_anything_moves(robot: Robot) -> None:
+    robot.call("PUT", "/command_mode", {"mode": "position_command"})
+    before = robot.state()["joint_position"]
+    bad = list(before)
+    bad[2] = 3.5  # elbow limit is ±π
+    response = robot.http.post("/position_command", json={"position": bad})
+    assert response.json()["error"]["code"] == "position_limit"
+    robot.call("PUT", "/command_mode", {"mode": "trajectory"})
+    too_fast = robot.http.post(
+        "/trajectory",
+        json={
+            "waypoints": [
+                {
+                    "time_from_start": 0.1,
+                    "position": [b - 1.0 if b > 0 else b + 1.0 for b in before],
+                }
+            ]
+        },
+    )
+    assert too_fast.json()["error"]["code"] == "velocity_limit"
+    time.sleep(0.1)
+    assert robot.state()["joint_position"] == before
+
+
+def test_commands_in_the_wrong_mode_are_refused(robot: Robot) -> None:
+    response = robot.http.post("/jog_joint", json={"velocity": [0.1] * 6})
+    assert response.status_code == 409
+    assert response.json()["error"]["code"] == "wrong_mode"
+
+
+def test_state_streams_over_websocket(robot: Robot) -> None:
+    with connect(f"{robot.ws_url}/state/ws") as ws:
+        seqnos = [json.loads(ws.recv(timeout=2))["seqno"] for _ in range(30)]
+    assert seqnos == sorted(seqnos)
+    assert len(set(seqnos)) == 30
+
+
+def test_a_dropped_command_stream_halts_the_robot(robot: Robot) -> None:
+    robot.call("PUT", "/command_mode", {"mode": "jog"})
+    with connect(f"{robot.ws_url}/command/ws") as ws:
+        ws.send(json.dumps({"type": "jog_joint", "velocity": [0.5, 0, 0, 0, 0, 0], "timeout": 1.0}))
+        ws.send(json.dumps({"type": "jog_joint", "velocity": ["NaN"]}))
+        error = json.loads(ws.recv(timeout=2))
+        assert error["type"] == "error"
+        assert error["error"]["code"] == "invalid_request"
+        time.sleep(0.3)
+        assert robot.state()["joint_velocity"][0] > 0.4
+    # The socket closed long before the 1 s command timeout: the robot halts at once.
+    wait_for(robot.stopped, 0.8, what="halt on dropped stream")
+    assert robot.state()["command_mode"] == "halt"
