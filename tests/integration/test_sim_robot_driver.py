@@ -78,7 +78,7 @@ def test_identity_info_and_health(sim: SimRobotProc, robot: Robot) -> None:
     described = robot.call("GET", "/info")
     assert described["identity"]["uuid"] == sim.uuid
     assert described["identity"]["kind"] == "robot"
-    assert [j["name"] for j in described["info"]["joints"]][0] == "shoulder_pan_joint"
+    assert described["info"]["joints"][0]["name"] == "shoulder_pan_joint"
     assert robot.call("GET", "/health")["status"] == "ok"
 
 
