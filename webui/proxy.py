@@ -30,7 +30,8 @@ class ServiceProxy:
     def __init__(self, routes: dict[str, tuple[str, str]]) -> None:
         """routes: prefix -> (service name, base url)"""
         self.routes = routes
-        self.http = httpx.AsyncClient(timeout=httpx.Timeout(30.0, connect=2.0))
+        # Long work is a resource with a status, never a long request: 10 s means hung.
+        self.http = httpx.AsyncClient(timeout=httpx.Timeout(10.0, connect=2.0))
 
     async def aclose(self) -> None:
         await self.http.aclose()
@@ -53,6 +54,8 @@ class ServiceProxy:
                 headers=headers,
                 content=await request.body(),
             )
+        except httpx.TimeoutException:
+            return error_response(504, "service_timeout", f"{service} did not answer in time")
         except httpx.TransportError:
             return error_response(503, "service_unavailable", f"{service} is not responding")
         kept = {k: v for k, v in upstream.headers.items() if k.lower() in _KEEP_RESPONSE}

@@ -16,7 +16,7 @@ import pytest
 import yaml
 from websockets.sync.client import connect
 
-from tests.support.processes import Proc, free_port, test_env, wait_for
+from tests.support.processes import Proc, child_env, free_port, wait_for
 from tests.unit.test_variable_store import REJECT, ROUND_TRIP
 
 
@@ -37,7 +37,7 @@ class Storage(Proc):
                 "--data-dir",
                 str(data_dir),
             ],
-            test_env(home),
+            child_env(home),
             home / "logs" / f"storage-{self.port}.log",
         )
         wait_for(

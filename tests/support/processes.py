@@ -24,7 +24,7 @@ T = TypeVar("T")
 LOOPBACK_ENV = {"OPENPENDANT_DISCOVERY__INTERFACES": '["127.0.0.1"]'}
 
 
-def test_env(home: Path, **extra: str) -> dict[str, str]:
+def child_env(home: Path, **extra: str) -> dict[str, str]:
     env = dict(os.environ)
     env.pop("OPENPENDANT_SETTINGS_JSON", None)
     env.update(LOOPBACK_ENV)
@@ -144,7 +144,7 @@ class Runtime(Proc):
             str(self.data_dir),
             *(extra or []),
         ]
-        super().__init__(argv, env or test_env(home), home / "logs" / f"runtime-{self.port}.log")
+        super().__init__(argv, env or child_env(home), home / "logs" / f"runtime-{self.port}.log")
         self.url = ""
         self.started_in = 0.0
 
@@ -156,7 +156,8 @@ class Runtime(Proc):
         return self.url
 
     def api(self, method: str, path: str, **kwargs: Any) -> httpx.Response:
-        return httpx.request(method, f"{self.url}/api{path}", timeout=10.0, **kwargs)
+        kwargs.setdefault("timeout", 10.0)
+        return httpx.request(method, f"{self.url}/api{path}", **kwargs)
 
 
 class SimRobotProc(Proc):
@@ -183,7 +184,7 @@ class SimRobotProc(Proc):
             str(port),
             *(extra or []),
         ]
-        super().__init__(argv, test_env(home), home / "logs" / f"sim-{name}-{port}.log")
+        super().__init__(argv, child_env(home), home / "logs" / f"sim-{name}-{port}.log")
         self.url = ""
         self.uuid = ""
 

@@ -1,0 +1,145 @@
+"""`openpendant run`: supervision, clean stops, the /api routing and the served UI."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+from websockets.sync.client import connect
+
+from tests.support.processes import Runtime, child_env, free_port, wait_for
+
+
+@pytest.fixture(scope="module")
+def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
+    proc = Runtime(tmp_path_factory.mktemp("launcher"))
+    proc.wait_ready()
+    yield proc
+    proc.stop()
+
+
+def health(runtime: Runtime) -> dict[str, dict[str, Any]]:
+    return runtime.api("GET", "/health").json()["services"]  # type: ignore[no-any-return]
+
+
+def test_health_reports_every_service(runtime: Runtime) -> None:
+    body = runtime.api("GET", "/health").json()
+    assert body["status"] == "ok"
+    assert set(body["services"]) == {"webui", "variable_storage", "device_manager"}
+    assert all(s["status"] == "ok" for s in body["services"].values())
+
+
+def test_a_crashed_service_is_restarted_at_the_same_address(runtime: Runtime) -> None:
+    before = health(runtime)["device_manager"]
+    os.kill(int(before["pid"]), signal.SIGKILL)
+    after = wait_for(
+        lambda: (
+            (h := health(runtime)["device_manager"])["status"] == "ok"
+            and h["pid"] != before["pid"]
+            and h
+        ),
+        30,
+        what="device manager restarted",
+    )
+    assert after["url"] == before["url"]
+    log = (runtime.home / "logs" / f"runtime-{runtime.port}.log").read_text()
+    assert "device_manager exited" in log
+
+
+def test_a_frozen_service_shows_as_down(runtime: Runtime) -> None:
+    pid = int(health(runtime)["variable_storage"]["pid"])
+    os.kill(pid, signal.SIGSTOP)
+    try:
+        body = runtime.api("GET", "/health").json()
+        assert body["status"] == "degraded"
+        assert body["services"]["variable_storage"]["status"] == "down"
+        assert body["services"]["device_manager"]["status"] == "ok"
+    finally:
+        os.kill(pid, signal.SIGCONT)
+    wait_for(
+        lambda: runtime.api("GET", "/health").json()["status"] == "ok", 10, what="healthy again"
+    )
+
+
+def test_unknown_api_prefix_is_a_json_404(runtime: Runtime) -> None:
+    response = runtime.api("GET", "/nonsense/thing")
+    assert response.status_code == 404
+    assert response.json()["error"]["code"] == "not_found"
+    with connect(runtime.url.replace("http", "ws") + "/api/nonsense/ws") as ws:
+        message = json.loads(ws.recv(timeout=5))
+    assert message["error"]["code"] == "not_found"
+
+
+def test_the_ui_is_served_from_the_same_origin(runtime: Runtime) -> None:
+    page = httpx.get(f"{runtime.url}/")
+    assert page.status_code == 200
+    assert "<op-app>" in page.text
+    script = page.text.split('src="', 1)[1].split('"', 1)[0]
+    assert httpx.get(f"{runtime.url}{script}").status_code == 200
+
+
+def test_a_port_in_use_is_a_clear_error(home: Path) -> None:
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        result = subprocess.run(
+            [
+                sys.executable,
+                "-m",
+                "runtime.cli",
+                "run",
+                "--port",
+                str(port),
+                "--data-dir",
+                str(home / "d"),
+            ],
+            env=child_env(home),
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+    assert result.returncode == 1
+    assert f"cannot listen on 127.0.0.1:{port}" in result.stderr
+    assert "--port" in result.stderr
+
+
+def test_ctrl_c_stops_everything(home: Path) -> None:
+    runtime = Runtime(home, port=free_port())
+    runtime.wait_ready()
+    pids = [
+        int(s["pid"])
+        for s in runtime.api("GET", "/health").json()["services"].values()
+        if "pid" in s
+    ]
+    runtime.popen.send_signal(signal.SIGINT)
+    assert runtime.popen.wait(20) == 0
+    for pid in pids:
+        assert (
+            not Path(f"/proc/{pid}").exists()
+            or "State:\tZ" in Path(f"/proc/{pid}/status").read_text()
+        )
+    runtime.stop()
+
+
+def test_a_bad_config_file_stops_start_up_with_its_reason(home: Path) -> None:
+    config = home / "bad.yaml"
+    config.write_text("port: 8080\nsim_robots:\n  - {model: ur5, nmae: typo}\n")
+    result = subprocess.run(
+        [sys.executable, "-m", "runtime.cli", "run", "--config", str(config)],
+        env=child_env(home),
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert result.returncode != 0
+    assert "nmae" in result.stderr
