@@ -1,0 +1,99 @@
+"""Real Chromium (Debian's /usr/bin/chromium) driven by Playwright, against a real runtime."""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from playwright.sync_api import (
+    BrowserContext,
+    ConsoleMessage,
+    Page,
+    Playwright,
+    ViewportSize,
+    sync_playwright,
+)
+
+from tests.support.processes import Runtime
+
+pytestmark = pytest.mark.browser
+
+CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_ARGS = [
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--no-first-run",
+    "--disable-sync",
+]
+TABLET: ViewportSize = {"width": 1280, "height": 800}
+PHONE: ViewportSize = {"width": 390, "height": 844}
+
+
+@pytest.fixture(scope="session")
+def playwright() -> Iterator[Playwright]:
+    if not Path(CHROMIUM).is_file():
+        # Browser tests must fail, never skip, when they cannot run (.ci/run installs it).
+        pytest.fail(f"{CHROMIUM} is missing: install Debian's chromium package")
+    with sync_playwright() as p:
+        yield p
+
+
+def open_context(playwright: Playwright, viewport: ViewportSize) -> BrowserContext:
+    profile = tempfile.mkdtemp(prefix="op-chromium-")
+    context = playwright.chromium.launch_persistent_context(
+        profile,
+        executable_path=CHROMIUM,
+        headless=True,
+        args=CHROMIUM_ARGS,
+        viewport=viewport,
+        has_touch=True,
+        is_mobile=viewport["width"] < 600,
+    )
+    context.on("close", lambda _: shutil.rmtree(profile, ignore_errors=True))
+    return context
+
+
+@pytest.fixture
+def tablet(playwright: Playwright) -> Iterator[BrowserContext]:
+    context = open_context(playwright, TABLET)
+    yield context
+    context.close()
+
+
+@pytest.fixture
+def phone(playwright: Playwright) -> Iterator[BrowserContext]:
+    context = open_context(playwright, PHONE)
+    yield context
+    context.close()
+
+
+@pytest.fixture(scope="module")
+def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
+    proc = Runtime(tmp_path_factory.mktemp("browser"))
+    proc.wait_ready()
+    yield proc
+    proc.stop()
+
+
+class PageErrors:
+    """Console errors and uncaught exceptions of a page: a test fails on any."""
+
+    def __init__(self, page: Page) -> None:
+        self.errors: list[str] = []
+        page.on("console", self._console)
+        page.on("pageerror", lambda e: self.errors.append(str(e)))
+
+    def _console(self, message: ConsoleMessage) -> None:
+        if message.type == "error":
+            self.errors.append(message.text)
+
+
+@pytest.fixture
+def artifacts(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Where a test leaves its screenshots."""
+    return tmp_path_factory.mktemp(f"shots-{request.node.name}"[:60])

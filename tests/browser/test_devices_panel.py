@@ -1,0 +1,124 @@
+"""The Devices panel in a real browser, by touch."""
+
+from __future__ import annotations
+
+import re
+import time
+from pathlib import Path
+
+import httpx
+from playwright.sync_api import BrowserContext, expect
+
+from tests.browser.conftest import PageErrors
+from tests.support.processes import Runtime, SimRobotProc
+
+
+def jog_first_joint(url: str, seconds: float) -> None:
+    """Move the simulated robot through its own driver API, as another client would."""
+    with httpx.Client(base_url=url, timeout=5) as robot:
+        robot.post("/enable").raise_for_status()
+        robot.put("/command_mode", json={"mode": "jog"}).raise_for_status()
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            robot.post("/jog_joint", json={"velocity": [0.5, 0, 0, 0, 0, 0], "timeout": 0.1})
+            time.sleep(0.02)
+
+
+def test_add_the_detected_robot_by_touch_and_see_it_live(
+    runtime: Runtime, tablet: BrowserContext, artifacts: Path
+) -> None:
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(runtime.url)
+    expect(page.get_by_test_id("runtime-link")).to_have_text("Runtime connected")
+    card = page.get_by_test_id("detected-device").filter(has_text="sim-ur5")
+    expect(card).to_be_visible(timeout=15_000)
+    expect(card).to_contain_text("ur5")
+    page.screenshot(path=artifacts / "1-detected.png")
+
+    card.get_by_test_id("add-device").tap()
+    name = page.get_by_test_id("local-name")
+    expect(name).to_have_value("robot")
+    page.screenshot(path=artifacts / "2-add-dialog.png")
+    page.get_by_test_id("confirm-add").tap()
+
+    added = page.get_by_test_id("device-card").filter(has_text="robot")
+    expect(added.get_by_test_id("device-status")).to_have_text("Connected", timeout=15_000)
+    joints = added.get_by_test_id("joint-value")
+    expect(joints).to_have_count(6)
+    expect(joints.nth(1)).to_contain_text("-90.0°")
+    expect(card).to_contain_text("Added as robot")
+    expect(page.get_by_test_id("status-robot")).to_contain_text("Manual")
+
+    # Live: the robot moves (commanded by another client) and the numbers follow.
+    first = joints.nth(0).inner_text()
+    sim_url = httpx.get(f"{runtime.url}/api/devices/robot").json()["url"]
+    jog_first_joint(sim_url, 0.6)
+    expect(joints.nth(0)).not_to_have_text(first)
+    page.screenshot(path=artifacts / "3-added-live.png")
+
+    # Remove it again, by touch, through the confirmation.
+    added.get_by_test_id("remove-device").tap()
+    page.get_by_test_id("confirm-remove").tap()
+    expect(page.get_by_test_id("device-card")).to_have_count(0)
+    expect(card.get_by_test_id("add-device")).to_be_visible()
+    assert errors.errors == []
+
+
+def test_a_hostile_device_name_is_shown_as_text(
+    runtime: Runtime, tablet: BrowserContext, tmp_path: Path
+) -> None:
+    hostile = '<img src=x onerror="window.__pwned=1">'
+    sim = SimRobotProc(tmp_path, name=hostile)
+    try:
+        sim.wait_ready()
+        page = tablet.new_page()
+        page.goto(runtime.url)
+        card = page.get_by_test_id("detected-device").filter(has_text=hostile)
+        expect(card).to_be_visible(timeout=15_000)
+        assert page.evaluate("window.__pwned") is None
+        assert page.locator("img[src=x]").count() == 0
+    finally:
+        sim.stop()
+
+
+def test_phone_layout_has_big_targets_and_no_sideways_scroll(
+    runtime: Runtime, phone: BrowserContext, artifacts: Path
+) -> None:
+    page = phone.new_page()
+    page.goto(runtime.url)
+    add = page.get_by_test_id("add-device").first
+    expect(add).to_be_visible(timeout=15_000)
+    box = add.bounding_box()
+    assert box is not None
+    assert box["height"] >= 48
+    nav = page.get_by_test_id("nav-devices").bounding_box()
+    assert nav is not None
+    assert nav["y"] > 844 / 2  # the navigation sits at the bottom on a phone
+    assert page.evaluate("document.documentElement.scrollWidth <= window.innerWidth")
+    page.screenshot(path=artifacts / "phone.png", full_page=True)
+
+
+def test_system_panel_lists_the_services(runtime: Runtime, tablet: BrowserContext) -> None:
+    page = tablet.new_page()
+    page.goto(runtime.url)
+    page.get_by_test_id("nav-system").tap()
+    expect(page).to_have_url(re.compile(r"#/system$"))
+    rows = page.get_by_test_id("service")
+    expect(rows).to_have_count(3)
+    for name in ("webui", "variable_storage", "device_manager"):
+        expect(rows.filter(has_text=name)).to_contain_text("ok")
+
+
+def test_losing_the_runtime_is_shown(tablet: BrowserContext, tmp_path: Path) -> None:
+    runtime = Runtime(tmp_path, extra=["--no-sim"])
+    try:
+        runtime.wait_ready()
+        page = tablet.new_page()
+        page.goto(runtime.url)
+        link = page.get_by_test_id("runtime-link")
+        expect(link).to_have_text("Runtime connected")
+        runtime.stop()
+        expect(link).to_contain_text("No connection to the runtime", timeout=10_000)
+    finally:
+        runtime.stop()
