@@ -263,9 +263,10 @@ class SimCore:
 
     # State ----------------------------------------------------------------------------------
 
-    def state(self) -> RobotState:
+    def snapshot(self) -> Snapshot:
+        """Copy what the state needs, cheaply, so the control lock is held only briefly."""
         t = self.tracker
-        return RobotState(
+        return Snapshot(
             seqno=self.seqno,
             ts=time.time(),
             command_mode=self.mode,
@@ -278,11 +279,42 @@ class SimCore:
                 homed=True,
                 trajectory_running=self.trajectory is not None,
             ),
-            joint_position=t.position.tolist(),
-            joint_velocity=t.velocity.tolist(),
-            joint_position_command=t.position.tolist(),
-            tcp_pose=self.kinematics.tcp_pose(t.position),
+            position=t.position.copy(),
+            velocity=t.velocity.copy(),
             speed_ratio=self.speed_ratio,
             error_message=self.error_message,
             trajectory=self.trajectory.status() if self.trajectory is not None else None,
+        )
+
+    def state(self) -> RobotState:
+        return self.snapshot().to_state(self.kinematics)
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    seqno: int
+    ts: float
+    command_mode: CommandMode
+    operational_mode: OperationalMode
+    flags: RobotFlags
+    position: FloatArray
+    velocity: FloatArray
+    speed_ratio: float
+    error_message: str
+    trajectory: TrajectoryStatus | None
+
+    def to_state(self, kinematics: Kinematics) -> RobotState:
+        return RobotState(
+            seqno=self.seqno,
+            ts=self.ts,
+            command_mode=self.command_mode,
+            operational_mode=self.operational_mode,
+            flags=self.flags,
+            joint_position=self.position.tolist(),
+            joint_velocity=self.velocity.tolist(),
+            joint_position_command=self.position.tolist(),
+            tcp_pose=kinematics.tcp_pose(self.position),
+            speed_ratio=self.speed_ratio,
+            error_message=self.error_message,
+            trajectory=self.trajectory,
         )

@@ -33,6 +33,11 @@ class LoopTimer:
         self.overruns = 0
         self._last: float | None = None
 
+    def reset(self) -> None:
+        self.periods.clear()
+        self.overruns = 0
+        self._last = None
+
     def tick(self, now: float) -> None:
         if self._last is not None:
             self.periods.append(now - self._last)
@@ -95,7 +100,8 @@ class SimRobot(RobotDriver):
 
     def state(self) -> RobotState:
         with self.lock:
-            return self.core.state()
+            snapshot = self.core.snapshot()
+        return snapshot.to_state(self.core.kinematics)
 
     async def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus:
         with self.lock:

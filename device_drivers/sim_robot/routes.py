@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Query
+from fastapi import APIRouter, Query, Response
 from pydantic import Field
 
 from device_drivers.sim_robot.driver import SimRobot
@@ -48,6 +48,12 @@ def sim_router(robot: SimRobot) -> APIRouter:
         with robot.lock:
             timeouts = robot.core.command_timeouts
         return {**robot.timer.stats(), "command_timeouts": timeouts}
+
+    @router.delete("/loop_stats", status_code=204)
+    async def reset_loop_stats() -> Response:
+        """Start a fresh measurement window."""
+        robot.timer.reset()
+        return Response(status_code=204)
 
     @router.get("/setpoints")
     async def setpoints(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import logging
 import os
 import time
@@ -64,6 +65,14 @@ def install_error_handlers(app: FastAPI) -> None:
         return error_response(500, "internal_error", f"{type(exc).__name__}: {exc}")
 
 
+def _freeze_startup_objects() -> None:
+    """What start-up loaded (the web stack, URDF models) lives as long as the process. A full
+    garbage collection over it takes ~25 ms, a stall a 2 ms control loop or a 100 Hz state
+    stream would feel; frozen objects are skipped by every later collection."""
+    gc.collect()
+    gc.freeze()
+
+
 def create_app(
     service: str,
     *,
@@ -75,9 +84,11 @@ def create_app(
     @asynccontextmanager
     async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
         if lifespan is None:
+            _freeze_startup_objects()
             yield
             return
         async with lifespan(app):
+            _freeze_startup_objects()
             yield
 
     app = FastAPI(title=f"OpenPendant {service}", version=__version__, lifespan=_lifespan)

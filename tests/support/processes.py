@@ -155,6 +155,9 @@ class Runtime(Proc):
         self.url = line.split("OpenPendant UI:", 1)[1].strip().rstrip("/")
         return self.url
 
+    def is_detected(self, uuid: str) -> bool:
+        return any(d["uuid"] == uuid for d in self.api("GET", "/devices/detected").json())
+
     def api(self, method: str, path: str, **kwargs: Any) -> httpx.Response:
         kwargs.setdefault("timeout", 10.0)
         return httpx.request(method, f"{self.url}/api{path}", **kwargs)

@@ -1,0 +1,103 @@
+"""Period error of the simulated robot's 500 Hz control loop (target p99 ≤ 1 ms), measured
+while the driver also streams its state and takes jog commands, as in use."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import httpx
+import websockets
+
+from tests.bench.runner import Figure
+from tests.bench.stats import quick
+from tests.support.processes import SimRobotProc
+
+FIGURES = ("sim_loop_period_error_p99", "sim_loop_period_error_max", "host_timer_jitter_p99")
+
+# The same 2 ms sleep loop with nothing else in the process: how much of the period error
+# is the host's own (a VM's timer wake-ups can be late by milliseconds).
+BARE_LOOP = """
+import sys, time
+n = int(sys.argv[1]); last = time.perf_counter(); deadline = last; errors = []
+for _ in range(n):
+    deadline += 0.002
+    delay = deadline - time.perf_counter()
+    if delay > 0:
+        time.sleep(delay)
+    now = time.perf_counter(); errors.append(abs(now - last - 0.002) * 1000); last = now
+errors.sort(); print(errors[int(len(errors) * 0.99)])
+"""
+
+
+def host_jitter_p99(seconds: float) -> float:
+    result = subprocess.run(
+        [sys.executable, "-c", BARE_LOOP, str(int(seconds / 0.002))],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return float(result.stdout)
+
+
+async def load(url: str, seconds: float) -> None:
+    """Three state subscribers and a 50 Hz jog stream back and forth on joint 1."""
+    ws_url = url.replace("http://", "ws://")
+
+    async def subscriber() -> None:
+        async with websockets.connect(f"{ws_url}/state/ws") as ws:
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                json.loads(await ws.recv())
+
+    async def jogger() -> None:
+        async with websockets.connect(f"{ws_url}/command/ws") as ws:
+            end = time.monotonic() + seconds
+            k = 0
+            while time.monotonic() < end:
+                v = 0.5 if (k // 50) % 2 == 0 else -0.5
+                await ws.send(
+                    json.dumps(
+                        {"type": "jog_joint", "velocity": [v, 0, 0, 0, 0, 0], "timeout": 0.1}
+                    )
+                )
+                k += 1
+                await asyncio.sleep(0.02)
+
+    await asyncio.gather(subscriber(), subscriber(), subscriber(), jogger())
+
+
+def run() -> list[Figure]:
+    seconds = 3.0 if quick() else 15.0
+    home = Path(tempfile.mkdtemp(prefix="bench-sim-"))
+    sim = SimRobotProc(home, name="bench-loop")
+    try:
+        sim.wait_ready()
+        with httpx.Client(base_url=sim.url, timeout=5) as robot:
+            robot.post("/enable").raise_for_status()
+            robot.put("/command_mode", json={"mode": "jog"}).raise_for_status()
+            time.sleep(0.5)
+            robot.delete("/sim/loop_stats").raise_for_status()
+            asyncio.run(load(sim.url, seconds))
+            stats = robot.get("/sim/loop_stats").json()
+    finally:
+        sim.stop()
+    p99 = float(stats["error_p99_ms"])
+    host = host_jitter_p99(seconds)
+    details = {k: stats[k] for k in ("cycles", "error_p50_ms", "overruns")}
+    details["load"] = "3 state subscribers at 100 Hz + jog commands at 50 Hz"
+    return [
+        Figure("sim_loop_period_error_p99", p99, "ms", "≤ 1 ms", p99 <= 1.0, details),
+        Figure("sim_loop_period_error_max", float(stats["error_max_ms"]), "ms"),
+        Figure(
+            "host_timer_jitter_p99",
+            host,
+            "ms",
+            details={"measured": "a bare 2 ms sleep loop in its own process, right after"},
+        ),
+    ]
