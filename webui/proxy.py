@@ -112,7 +112,7 @@ async def _pipe(client: WebSocket, upstream: websockets.ClientConnection) -> Non
                 OSError,
             ):
                 await task
-        with contextlib.suppress(RuntimeError, OSError):
+        with contextlib.suppress(RuntimeError, OSError, WebSocketDisconnect):
             await client.close()
 
 

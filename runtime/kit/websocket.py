@@ -126,7 +126,7 @@ async def _pump(
                 asyncio.CancelledError, WebSocketDisconnect, OutboxOverflow, RuntimeError, OSError
             ):
                 await task
-        with contextlib.suppress(RuntimeError, OSError):
+        with contextlib.suppress(RuntimeError, OSError, WebSocketDisconnect):
             await ws.close()
 
 

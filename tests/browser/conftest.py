@@ -34,8 +34,10 @@ TABLET: ViewportSize = {"width": 1280, "height": 800}
 PHONE: ViewportSize = {"width": 390, "height": 844}
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def playwright() -> Iterator[Playwright]:
+    # Module scope: Playwright's sync API keeps an event loop in this thread while it lives,
+    # which would break asyncio.run() in any test that runs after it.
     if not Path(CHROMIUM).is_file():
         # Browser tests must fail, never skip, when they cannot run (.ci/run installs it).
         pytest.fail(f"{CHROMIUM} is missing: install Debian's chromium package")
@@ -78,6 +80,7 @@ def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
     proc.wait_ready()
     yield proc
     proc.stop()
+    assert proc.service_errors() == []
 
 
 class PageErrors:

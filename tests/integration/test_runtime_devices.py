@@ -117,6 +117,7 @@ def test_discover_add_stream_and_survive_restarts(home: Path) -> None:
     finally:
         second.stop()
         runtime.stop()
+    assert runtime.service_errors() == []
 
 
 def test_adding_mistakes_get_clear_errors_and_change_nothing(home: Path) -> None:

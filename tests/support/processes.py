@@ -155,6 +155,17 @@ class Runtime(Proc):
         self.url = line.split("OpenPendant UI:", 1)[1].strip().rstrip("/")
         return self.url
 
+    def service_errors(self) -> list[str]:
+        """Error-level entries in the service logs: a clean run has none."""
+        found = []
+        for log in sorted((self.data_dir / "logs").glob("*.log")):
+            for line in log.read_text(errors="replace").splitlines():
+                with contextlib.suppress(ValueError):
+                    entry = json.loads(line)
+                    if isinstance(entry, dict) and entry.get("level") in ("error", "critical"):
+                        found.append(f"{log.name}: {entry.get('msg')} {entry.get('exc', '')}")
+        return found
+
     def is_detected(self, uuid: str) -> bool:
         return any(d["uuid"] == uuid for d in self.api("GET", "/devices/detected").json())
 
