@@ -86,6 +86,7 @@ class SimCore:
         self.speed_ratio = 1.0
         self.seqno = 0
         self.sim_time = 0.0
+        self.cycle_time = time.time()  # wall-clock time of the latest cycle
         self.command: StreamCommand | None = None
         self.trajectory: RunningTrajectory | None = None
         self._finished: dict[str, TrajectoryStatus] = {}
@@ -212,6 +213,7 @@ class SimCore:
     def step(self, now: float) -> None:
         self.seqno += 1
         self.sim_time += CYCLE
+        self.cycle_time = time.time()
         command = self.command
         if command is not None and now > command.deadline:
             self.command = None
@@ -268,7 +270,7 @@ class SimCore:
         t = self.tracker
         return Snapshot(
             seqno=self.seqno,
-            ts=time.time(),
+            ts=self.cycle_time,
             command_mode=self.mode,
             operational_mode=self.operational_mode,
             flags=RobotFlags(

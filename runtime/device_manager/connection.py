@@ -95,11 +95,14 @@ class DeviceConnection:
         try:
             await asyncio.wait({session, wake}, return_when=asyncio.FIRST_COMPLETED)
         finally:
-            for task in (session, wake):
-                task.cancel()
-        if not session.done() or session.cancelled():
-            with contextlib.suppress(asyncio.CancelledError):
-                await session
+            wake.cancel()
+            if not session.done():
+                session.cancel()
+                with contextlib.suppress(asyncio.CancelledError, Exception):
+                    await session
+            elif not session.cancelled():
+                session.exception()  # looked at, even if we are being cancelled ourselves
+        if session.cancelled():
             return f"moved to {self.record.url}"
         exc = session.exception()
         if exc is None:

@@ -19,9 +19,14 @@ class StateStream:
 
     async def run(self) -> None:
         next_tick = time.monotonic()
+        last = ""
         while True:
             if self.fanout.subscribers:
-                self.fanout.publish(self.snapshot().model_dump_json(), key="state")
+                text = self.snapshot().model_dump_json()
+                # A state that has not changed since the last tick is not news.
+                if text != last:
+                    self.fanout.publish(text, key="state")
+                    last = text
             next_tick += self.period
             delay = next_tick - time.monotonic()
             if delay < -self.period:
