@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import json
 
@@ -12,6 +11,7 @@ from fastapi import Request, Response, WebSocket
 from starlette.websockets import WebSocketDisconnect
 
 from runtime.kit.app import error_response
+from runtime.kit.websocket import until_either_ends
 
 # Hop-by-hop and length headers are the proxy's own business.
 _SKIP_REQUEST = {
@@ -97,23 +97,7 @@ async def _pipe(client: WebSocket, upstream: websockets.ClientConnection) -> Non
             elif message.get("bytes") is not None:
                 await upstream.send(message["bytes"])
 
-    tasks = [asyncio.create_task(down()), asyncio.create_task(up())]
-    try:
-        await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
-    finally:
-        for task in tasks:
-            task.cancel()
-        for task in tasks:
-            with contextlib.suppress(
-                asyncio.CancelledError,
-                WebSocketDisconnect,
-                websockets.WebSocketException,
-                RuntimeError,
-                OSError,
-            ):
-                await task
-        with contextlib.suppress(RuntimeError, OSError, WebSocketDisconnect):
-            await client.close()
+    await until_either_ends(client, down(), up(), expected=(websockets.WebSocketException,))
 
 
 async def _close_with_error(ws: WebSocket, code: str, message: str) -> None:

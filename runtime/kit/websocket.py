@@ -7,7 +7,7 @@ import contextlib
 import json
 import time
 from collections import deque
-from collections.abc import Awaitable, Callable, Iterable
+from collections.abc import Awaitable, Callable, Coroutine, Iterable
 from typing import Any
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
@@ -115,7 +115,15 @@ async def _pump(
             except OpenPendantError as err:
                 await send_error(ws, err)
 
-    tasks = [asyncio.create_task(send_loop()), asyncio.create_task(receive_loop())]
+    await until_either_ends(ws, send_loop(), receive_loop())
+
+
+async def until_either_ends(
+    ws: WebSocket, *loops: Coroutine[Any, Any, None], expected: tuple[type[BaseException], ...] = ()
+) -> None:
+    """Run a socket's loops until one of them ends (its peer left, it fell behind, a send
+    failed), then stop the others and close the socket. Those endings are normal."""
+    tasks = [asyncio.create_task(loop) for loop in loops]
     try:
         await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
     finally:
@@ -123,7 +131,12 @@ async def _pump(
             task.cancel()
         for task in tasks:
             with contextlib.suppress(
-                asyncio.CancelledError, WebSocketDisconnect, OutboxOverflow, RuntimeError, OSError
+                asyncio.CancelledError,
+                WebSocketDisconnect,
+                OutboxOverflow,
+                RuntimeError,
+                OSError,
+                *expected,
             ):
                 await task
         with contextlib.suppress(RuntimeError, OSError, WebSocketDisconnect):

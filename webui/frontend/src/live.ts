@@ -1,6 +1,7 @@
 // One WebSocket to the device manager: detected devices, added devices with their status,
 // and the live state of each. Reconnects by itself; views re-render once per frame at most.
 
+import type { ReactiveController, ReactiveControllerHost } from "lit";
 import type { AddedDevice, DetectedDevice, RobotState } from "./types";
 
 type Message =
@@ -80,3 +81,20 @@ export class DeviceFeed extends EventTarget {
 }
 
 export const feed = new DeviceFeed();
+
+/** Re-renders its host whenever the feed changes, for as long as the host is on the page. */
+export class FeedController implements ReactiveController {
+  private readonly update = () => this.host.requestUpdate();
+
+  constructor(private readonly host: ReactiveControllerHost) {
+    host.addController(this);
+  }
+
+  hostConnected(): void {
+    feed.addEventListener("change", this.update);
+  }
+
+  hostDisconnected(): void {
+    feed.removeEventListener("change", this.update);
+  }
+}

@@ -1,6 +1,6 @@
 import { LitElement, css, html } from "lit";
 import { modeLabel } from "./format";
-import { feed } from "./live";
+import { FeedController, feed } from "./live";
 import { shared } from "./styles";
 import type { AddedDevice, RobotState } from "./types";
 
@@ -54,16 +54,9 @@ export class OpStatusBar extends LitElement {
     `,
   ];
 
-  private onChange = () => this.requestUpdate();
-
-  connectedCallback(): void {
-    super.connectedCallback();
-    feed.addEventListener("change", this.onChange);
-  }
-
-  disconnectedCallback(): void {
-    feed.removeEventListener("change", this.onChange);
-    super.disconnectedCallback();
+  constructor() {
+    super();
+    new FeedController(this);
   }
 
   private robotChip(device: AddedDevice, state: RobotState | undefined) {

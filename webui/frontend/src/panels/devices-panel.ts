@@ -1,7 +1,7 @@
 import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
 import { suggestLocalName } from "../format";
-import { feed } from "../live";
+import { FeedController, feed } from "../live";
 import { shared } from "../styles";
 import type { AddedDevice, DetectedDevice } from "../types";
 import "../components/add-device-dialog";
@@ -76,22 +76,12 @@ export class OpDevicesPanel extends LitElement {
 
   constructor() {
     super();
+    new FeedController(this);
     this.dialog = null;
     this.url = "";
     this.error = "";
   }
 
-  private onChange = () => this.requestUpdate();
-
-  connectedCallback(): void {
-    super.connectedCallback();
-    feed.addEventListener("change", this.onChange);
-  }
-
-  disconnectedCallback(): void {
-    feed.removeEventListener("change", this.onChange);
-    super.disconnectedCallback();
-  }
 
   private suggestion(kind: string): string {
     return suggestLocalName(kind, new Set(feed.devices.map((d) => d.local_name)));
