@@ -71,7 +71,9 @@ class ServiceProxy:
         query = f"?{ws.url.query}" if ws.url.query else ""
         url = base.replace("http://", "ws://", 1) + f"/{prefix}/{path}{query}"
         try:
-            upstream = await websockets.connect(url, open_timeout=2.0, max_size=2**24)
+            upstream = await websockets.connect(
+                url, open_timeout=2.0, close_timeout=1.0, max_size=2**24
+            )
         except (OSError, websockets.WebSocketException, TimeoutError):
             await _close_with_error(ws, "service_unavailable", f"{service} is not responding")
             return

@@ -22,6 +22,7 @@ log = logging.getLogger(__name__)
 # A stream silent for this long counts as a dropped connection.
 STALE_AFTER = 1.0
 BACKOFF = (0.2, 0.5, 1.0, 2.0, 5.0)
+CLOSE_TIMEOUT = 1.0
 
 
 class WrongDevice(Exception):
@@ -56,8 +57,7 @@ class DeviceConnection:
     async def stop(self) -> None:
         if self._task is not None:
             self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+            await asyncio.wait({self._task}, timeout=CLOSE_TIMEOUT * 2)
 
     def move_to(self, url: str) -> None:
         """Discovery saw this device at a new address: reconnect there now."""
@@ -98,9 +98,9 @@ class DeviceConnection:
             wake.cancel()
             if not session.done():
                 session.cancel()
-                with contextlib.suppress(asyncio.CancelledError, Exception):
-                    await session
-            elif not session.cancelled():
+                # asyncio.wait, unlike awaiting the task, never swallows our own cancellation.
+                await asyncio.wait({session})
+            if not session.cancelled():
                 session.exception()  # looked at, even if we are being cancelled ourselves
         if session.cancelled():
             return f"moved to {self.record.url}"
@@ -126,7 +126,9 @@ class DeviceConnection:
             raise WrongDevice(f"another device (uuid {uuid!r}) answers at {url}")
         self.info = info
         ws_url = url.replace("http://", "ws://", 1).replace("https://", "wss://", 1)
-        async with websockets.connect(f"{ws_url}/state/ws", open_timeout=2.0, max_size=2**22) as ws:
+        async with websockets.connect(
+            f"{ws_url}/state/ws", open_timeout=2.0, close_timeout=CLOSE_TIMEOUT, max_size=2**22
+        ) as ws:
             while True:
                 try:
                     message = await asyncio.wait_for(ws.recv(), STALE_AFTER)

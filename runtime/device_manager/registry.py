@@ -126,7 +126,7 @@ class DeviceRegistry:
             conn = self._get(local_name)
             await self.storage.delete(RECORD_PREFIX + local_name)
             del self.connections[local_name]
-            await conn.stop()
+        await conn.stop()
         self._publish_devices()
         self._publish_detected()
         return self._added(conn)
