@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import re
 from typing import Any, Literal
 
-from pydantic import BaseModel, Field, model_validator
+from pydantic import BaseModel, Field, field_validator, model_validator
 
 from runtime.interfaces.common import Strict
 
@@ -47,9 +48,19 @@ class DeviceDetails(AddedDevice):
 class AddDeviceRequest(Strict):
     """Add a detected device by uuid, or any device by its URL."""
 
-    local_name: str = Field(pattern=LOCAL_NAME_PATTERN)
+    local_name: str
     uuid: str | None = Field(default=None, min_length=1, max_length=64)
     url: str | None = Field(default=None, pattern=r"^https?://[^\s/]+(:\d+)?/?$", max_length=256)
+
+    @field_validator("local_name")
+    @classmethod
+    def _local_name(cls, value: str) -> str:
+        if not re.fullmatch(LOCAL_NAME_PATTERN, value):
+            raise ValueError(
+                "a local name starts with a lowercase letter and has only lowercase letters, "
+                "digits and '_', at most 32 characters (it is used in programs)"
+            )
+        return value
 
     @model_validator(mode="after")
     def _one_of(self) -> AddDeviceRequest:

@@ -144,6 +144,8 @@ def test_adding_mistakes_get_clear_errors_and_change_nothing(home: Path) -> None
             response = runtime.api("POST", "/devices", json=body)
             assert response.status_code == status, (body, response.text)
             assert response.json()["error"]["code"] == code
+            if body.get("local_name") == "Robot One":
+                assert "starts with a lowercase letter" in response.json()["error"]["message"]
         assert runtime.api("GET", "/devices").json() == []
         assert (
             runtime.api(
