@@ -12,6 +12,7 @@ from collections.abc import AsyncIterator, Sequence
 
 from fastapi import APIRouter, FastAPI
 
+from runtime.drivers.command_log import CommandLog
 from runtime.drivers.robot_routes import robot_router
 from runtime.drivers.state_stream import StateStream
 from runtime.interfaces.robot_driver import RobotDriver
@@ -73,7 +74,7 @@ def build_driver_app(
 
     name = f"{driver.kind}-driver:{driver.identity.name}"
     app = create_app(name, lifespan=lifespan)
-    app.include_router(robot_router(driver, stream))
+    app.include_router(robot_router(driver, stream, CommandLog()))
     for router in extra_routers:
         app.include_router(router)
     return app

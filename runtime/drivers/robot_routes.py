@@ -7,6 +7,7 @@ from typing import Any
 from fastapi import APIRouter, Response, WebSocket
 from pydantic import ValidationError
 
+from runtime.drivers.command_log import CommandLog, LoggedCommand
 from runtime.drivers.state_stream import StateStream
 from runtime.interfaces.robot import (
     CommandModeRequest,
@@ -26,8 +27,13 @@ from runtime.kit.errors import OpenPendantError
 from runtime.kit.websocket import Fanout
 
 
-def robot_router(driver: RobotDriver, stream: StateStream) -> APIRouter:
+def robot_router(driver: RobotDriver, stream: StateStream, log: CommandLog) -> APIRouter:
     router = APIRouter()
+
+    @router.get("/command_log")
+    async def command_log(after: int = 0) -> list[LoggedCommand]:
+        """Commands this driver accepted, newest last (the last 2000)."""
+        return log.since(after)
 
     @router.get("/info")
     async def info() -> RobotDescription:
@@ -44,51 +50,62 @@ def robot_router(driver: RobotDriver, stream: StateStream) -> APIRouter:
     @router.post("/enable")
     async def enable() -> RobotState:
         await driver.enable()
+        log.record("enable")
         return driver.state()
 
     @router.post("/disable")
     async def disable() -> RobotState:
         await driver.disable()
+        log.record("disable")
         return driver.state()
 
     @router.post("/reset_errors")
     async def reset_errors() -> RobotState:
         await driver.reset_errors()
+        log.record("reset_errors")
         return driver.state()
 
     @router.post("/halt")
     async def halt() -> RobotState:
         await driver.halt()
+        log.record("halt")
         return driver.state()
 
     @router.put("/command_mode")
     async def command_mode(body: CommandModeRequest) -> RobotState:
         await driver.set_command_mode(body.mode)
+        log.record(f"command_mode:{body.mode.value}")
         return driver.state()
 
     @router.put("/speed_ratio")
     async def speed_ratio(body: SpeedRatioRequest) -> RobotState:
         await driver.set_speed_ratio(body.ratio)
+        log.record("speed_ratio")
         return driver.state()
 
     @router.post("/jog_joint", status_code=204)
     async def jog_joint(body: JogJointCommand) -> Response:
         await driver.jog_joint(body)
+        log.record("jog_joint", body.tag)
         return Response(status_code=204)
 
     @router.post("/velocity_command", status_code=204)
     async def velocity_command(body: VelocityCommand) -> Response:
         await driver.velocity_command(body)
+        log.record("velocity_command", body.tag)
         return Response(status_code=204)
 
     @router.post("/position_command", status_code=204)
     async def position_command(body: PositionCommand) -> Response:
         await driver.position_command(body)
+        log.record("position_command", body.tag)
         return Response(status_code=204)
 
     @router.post("/trajectory")
     async def trajectory(body: JointTrajectory) -> TrajectoryAccepted:
-        return await driver.execute_trajectory(body)
+        accepted = await driver.execute_trajectory(body)
+        log.record("trajectory", accepted.id)
+        return accepted
 
     @router.get("/trajectory/{trajectory_id}")
     async def trajectory_status(trajectory_id: str) -> TrajectoryStatus:
@@ -102,7 +119,7 @@ def robot_router(driver: RobotDriver, stream: StateStream) -> APIRouter:
 
         async def handle(message: Any) -> None:
             nonlocal commanded
-            await dispatch_stream_command(driver, message)
+            await dispatch_stream_command(driver, message, log)
             commanded = True
 
         try:
@@ -111,24 +128,33 @@ def robot_router(driver: RobotDriver, stream: StateStream) -> APIRouter:
             # A stream that drops must not leave the robot coasting until its timeout.
             if commanded:
                 await driver.halt()
+                log.record("halt", "command stream closed")
 
     return router
 
 
-async def dispatch_stream_command(driver: RobotDriver, message: Any) -> None:
+async def dispatch_stream_command(driver: RobotDriver, message: Any, log: CommandLog) -> None:
     if not isinstance(message, dict):
         raise OpenPendantError("a command must be a JSON object", code="bad_message")
     kind = message.get("type")
     fields = {k: v for k, v in message.items() if k != "type"}
     try:
         if kind == "jog_joint":
-            await driver.jog_joint(JogJointCommand.model_validate(fields))
+            jog = JogJointCommand.model_validate(fields)
+            await driver.jog_joint(jog)
+            log.record(kind, jog.tag)
         elif kind == "velocity_command":
-            await driver.velocity_command(VelocityCommand.model_validate(fields))
+            velocity = VelocityCommand.model_validate(fields)
+            await driver.velocity_command(velocity)
+            log.record(kind, velocity.tag)
         elif kind == "position_command":
-            await driver.position_command(PositionCommand.model_validate(fields))
+            position = PositionCommand.model_validate(fields)
+            await driver.position_command(position)
+            log.record(kind, position.tag)
         elif kind == "halt":
             await driver.halt()
+            tag = fields.get("tag")
+            log.record(kind, tag[:64] if isinstance(tag, str) else None)
         else:
             raise OpenPendantError(f"unknown command type {kind!r}", code="bad_message")
     except ValidationError as exc:

@@ -122,6 +122,8 @@ class RobotDescription(BaseModel):
 # Commands ---------------------------------------------------------------------------------
 
 CommandTimeout = Annotated[float, Field(gt=0, le=MAX_COMMAND_TIMEOUT)]
+# A client's label for a command, kept in the driver's command log (tracing, timing).
+Tag = Annotated[str | None, Field(default=None, max_length=64)]
 
 
 class CommandModeRequest(Strict):
@@ -133,11 +135,13 @@ class JogJointCommand(Strict):
 
     velocity: JointVector
     timeout: CommandTimeout = 0.2
+    tag: Tag = None
 
 
 class VelocityCommand(Strict):
     velocity: JointVector
     timeout: CommandTimeout = 0.1
+    tag: Tag = None
 
 
 class PositionCommand(Strict):
@@ -146,6 +150,7 @@ class PositionCommand(Strict):
     position: JointVector
     velocity: JointVector | None = None
     timeout: CommandTimeout = 0.1
+    tag: Tag = None
 
 
 class TrajectoryWaypoint(Strict):

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from runtime.kinematics import Kinematics
@@ -87,3 +88,52 @@ def test_home_outside_the_limits_is_rejected(tmp_path: Path) -> None:
     bad.write_text(source.replace("home: [0.0, -1.5708, 1.5708", "home: [0.0, -1.5708, 9.0"))
     with pytest.raises(InvalidValue, match="home"):
         load_robot_info(str(bad))
+
+
+@pytest.mark.parametrize("model", ["ur5", "panda"])
+def test_jacobian_matches_finite_differences(model: str) -> None:
+    info = load_robot_info(model)
+    kinematics = Kinematics(info)
+    rng = np.random.default_rng(2)
+    for _ in range(5):
+        q = np.clip(
+            np.array(info.home) + rng.uniform(-0.4, 0.4, info.dof),
+            kinematics.lower,
+            kinematics.upper,
+        )
+        jacobian = kinematics.jacobian(q)
+        before = kinematics.tcp(q)
+        eps = 1e-7
+        for j in range(info.dof):
+            dq = np.zeros(info.dof)
+            dq[j] = eps
+            after = kinematics.tcp(q + dq)
+            linear = (after.translation - before.translation) / eps
+            angular = pin.log3(after.rotation @ before.rotation.T) / eps
+            assert np.allclose(jacobian[:3, j], linear, atol=1e-6)
+            assert np.allclose(jacobian[3:, j], angular, atol=1e-6)
+
+
+@pytest.mark.parametrize("model", ["ur5", "panda"])
+def test_inverse_kinematics_round_trip_near_the_seed(model: str) -> None:
+    info = load_robot_info(model)
+    kinematics = Kinematics(info)
+    rng = np.random.default_rng(3)
+    seed = np.array(info.home)
+    for _ in range(50):
+        q = np.clip(seed + rng.uniform(-0.5, 0.5, info.dof), kinematics.lower, kinematics.upper)
+        target = kinematics.tcp(q)
+        solution = kinematics.inverse(target, seed)
+        reached = kinematics.tcp(solution)
+        assert np.allclose(reached.translation, target.translation, atol=1e-8)
+        assert np.linalg.norm(pin.log3(reached.rotation.T @ target.rotation)) < 1e-8
+        assert np.all(solution >= kinematics.lower)
+        assert np.all(solution <= kinematics.upper)
+
+
+def test_an_unreachable_pose_is_refused() -> None:
+    kinematics = Kinematics(load_robot_info("ur5"))
+    far = pin.SE3(np.eye(3), np.array([3.0, 0.0, 0.5]))
+    with pytest.raises(InvalidValue) as err:
+        kinematics.inverse(far, load_robot_info("ur5").home)
+    assert err.value.code == "unreachable"
