@@ -39,6 +39,8 @@ class AddedDevice(BaseModel):
     last_error: str = ""
     connected_since: float | None = None
     detected: bool = False
+    controlled_by: str | None = None
+    control_expires: float | None = None
 
 
 class DeviceDetails(AddedDevice):

@@ -12,6 +12,7 @@ from typing import Any
 import httpx
 
 from runtime.device_manager.connection import DeviceConnection
+from runtime.device_manager.leases import LeaseBook, LeaseGranted, LeaseInfo
 from runtime.device_manager.models import (
     AddDeviceRequest,
     AddedDevice,
@@ -30,12 +31,13 @@ RECORD_PREFIX = "devices."
 
 
 class DeviceRegistry:
-    def __init__(self, storage: StorageClient, fanout: Fanout) -> None:
+    def __init__(self, storage: StorageClient, fanout: Fanout, lease_seconds: float = 15.0) -> None:
         self.storage = storage
         self.fanout = fanout
         self.detected: dict[str, Detected] = {}
         self.connections: dict[str, DeviceConnection] = {}
         self.loaded = False
+        self.leases = LeaseBook(lease_seconds)
         self._lock = asyncio.Lock()
         self._tasks: set[asyncio.Task[None]] = set()
 
@@ -126,6 +128,7 @@ class DeviceRegistry:
             conn = self._get(local_name)
             await self.storage.delete(RECORD_PREFIX + local_name)
             del self.connections[local_name]
+            self.leases.drop(local_name)
         await conn.stop()
         self._publish_devices()
         self._publish_detected()
@@ -188,6 +191,7 @@ class DeviceRegistry:
 
     def _added(self, conn: DeviceConnection) -> AddedDevice:
         r = conn.record
+        lease = self.leases.info(r.local_name)
         return AddedDevice(
             local_name=r.local_name,
             uuid=r.uuid,
@@ -199,7 +203,36 @@ class DeviceRegistry:
             last_error=conn.last_error,
             connected_since=conn.connected_since,
             detected=r.uuid in self.detected,
+            controlled_by=lease.holder,
+            control_expires=lease.expires,
         )
+
+    # Control leases -------------------------------------------------------------------------
+
+    def acquire_lease(self, local_name: str, holder: str, token: str | None) -> LeaseGranted:
+        self._get(local_name)
+        granted = self.leases.acquire(local_name, holder, token)
+        self._publish_devices()
+        return granted
+
+    def check_lease(self, local_name: str, token: str | None) -> LeaseGranted:
+        self._get(local_name)
+        return self.leases.check(local_name, token)
+
+    def release_lease(self, local_name: str, token: str | None) -> None:
+        self._get(local_name)
+        self.leases.release(local_name, token)
+        self._publish_devices()
+
+    def lease_info(self, local_name: str) -> LeaseInfo:
+        self._get(local_name)
+        return self.leases.info(local_name)
+
+    async def sweep_leases(self) -> None:
+        while True:
+            await asyncio.sleep(0.5)
+            if self.leases.sweep():
+                self._publish_devices()
 
     def added_list(self) -> list[AddedDevice]:
         return [self._added(c) for _, c in sorted(self.connections.items())]

@@ -5,10 +5,11 @@ from __future__ import annotations
 import asyncio
 import contextlib
 from collections.abc import AsyncIterator
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import APIRouter, FastAPI, Response, WebSocket
+from fastapi import APIRouter, FastAPI, Header, Response, WebSocket
 
+from runtime.device_manager.leases import LeaseGranted, LeaseInfo, LeaseRequest
 from runtime.device_manager.models import (
     AddDeviceRequest,
     AddedDevice,
@@ -22,6 +23,8 @@ from runtime.kit.errors import Unavailable
 from runtime.kit.settings import RuntimeSettings
 from runtime.kit.websocket import Fanout
 from runtime.variable_storage.client import StorageClient
+
+LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 
 
 def devices_router(registry: DeviceRegistry) -> APIRouter:
@@ -52,6 +55,27 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
     async def remove(local_name: str) -> AddedDevice:
         return await registry.remove(local_name)
 
+    @router.get("/{local_name}/lease")
+    async def lease(local_name: str) -> LeaseInfo:
+        return registry.lease_info(local_name)
+
+    @router.post("/{local_name}/lease")
+    async def take_lease(
+        local_name: str, body: LeaseRequest, token: LeaseToken = None
+    ) -> LeaseGranted:
+        """Take control (or, with your token, renew it)."""
+        return registry.acquire_lease(local_name, body.holder, token)
+
+    @router.post("/{local_name}/lease/check")
+    async def check_lease(local_name: str, token: LeaseToken = None) -> LeaseGranted:
+        """For services: is this token in control? A valid check renews the lease."""
+        return registry.check_lease(local_name, token)
+
+    @router.delete("/{local_name}/lease", status_code=204)
+    async def release_lease(local_name: str, token: LeaseToken = None) -> Response:
+        registry.release_lease(local_name, token)
+        return Response(status_code=204)
+
     @router.get("/{local_name}/state")
     async def state(local_name: str) -> Response:
         return Response(registry.state_text(local_name), media_type="application/json")
@@ -61,17 +85,19 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
 
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
-    registry = DeviceRegistry(storage, Fanout())
+    registry = DeviceRegistry(storage, Fanout(), settings.lease_seconds)
     browser = Browser(settings.zeroconf_interfaces(), registry.on_found, registry.on_gone)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
         await browser.start()
         loader = asyncio.create_task(registry.load())
+        sweeper = asyncio.create_task(registry.sweep_leases())
         try:
             yield
         finally:
             loader.cancel()
+            sweeper.cancel()
             await browser.stop()
             await registry.close()
             await storage.aclose()

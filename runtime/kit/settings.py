@@ -53,6 +53,7 @@ class RuntimeSettings(BaseSettings):
     discovery: DiscoverySettings = Field(default_factory=DiscoverySettings)
     state_rate_hz: float = Field(default=100.0, gt=0, le=500)
     variable_history: int = Field(default=20, ge=1, le=1000)
+    lease_seconds: float = Field(default=15.0, gt=0, le=3600)
 
     @classmethod
     def settings_customise_sources(

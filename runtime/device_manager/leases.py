@@ -1,0 +1,110 @@
+"""Single point of control: at most one client holds a device's control lease at a time.
+Others may watch but not command it until the holder releases the lease or lets it lapse."""
+
+from __future__ import annotations
+
+import secrets
+import time
+from dataclasses import dataclass
+
+from pydantic import BaseModel, Field
+
+from runtime.interfaces.common import Strict
+from runtime.kit.errors import Conflict, OpenPendantError
+
+LEASE_SECONDS = 15.0
+
+
+class LeaseRefused(OpenPendantError):
+    status = 409
+    code = "lease_held"
+
+
+class LeaseRequest(Strict):
+    holder: str = Field(min_length=1, max_length=64)
+
+
+class LeaseGranted(BaseModel):
+    """Returned to the holder only: the token is what proves control."""
+
+    device: str
+    holder: str
+    token: str
+    expires: float
+
+
+class LeaseInfo(BaseModel):
+    device: str
+    holder: str | None = None
+    expires: float | None = None
+
+
+@dataclass
+class _Lease:
+    holder: str
+    token: str
+    expires: float
+
+
+class LeaseBook:
+    def __init__(self, seconds: float = LEASE_SECONDS) -> None:
+        self.seconds = seconds
+        self._leases: dict[str, _Lease] = {}
+
+    def _live(self, device: str, now: float) -> _Lease | None:
+        lease = self._leases.get(device)
+        if lease is not None and lease.expires <= now:
+            del self._leases[device]
+            return None
+        return lease
+
+    def info(self, device: str) -> LeaseInfo:
+        lease = self._live(device, time.time())
+        if lease is None:
+            return LeaseInfo(device=device)
+        return LeaseInfo(device=device, holder=lease.holder, expires=lease.expires)
+
+    def acquire(self, device: str, holder: str, token: str | None = None) -> LeaseGranted:
+        """Take the lease if it is free; the current holder (by token) renews it."""
+        now = time.time()
+        lease = self._live(device, now)
+        if lease is not None and lease.token != token:
+            raise LeaseRefused(
+                f"{device} is controlled by {lease.holder!r} for another "
+                f"{lease.expires - now:.0f} s unless they release it"
+            )
+        if lease is None:
+            lease = _Lease(holder=holder, token=secrets.token_urlsafe(16), expires=0.0)
+            self._leases[device] = lease
+        lease.expires = now + self.seconds
+        return LeaseGranted(
+            device=device, holder=lease.holder, token=lease.token, expires=lease.expires
+        )
+
+    def check(self, device: str, token: str | None) -> LeaseGranted:
+        """The holder's token is valid: the lease is renewed by the use. Otherwise refused."""
+        lease = self._live(device, time.time())
+        if lease is None:
+            raise LeaseRefused(f"take control of {device} first", code="lease_required")
+        if token is None or not secrets.compare_digest(lease.token, token):
+            raise LeaseRefused(f"{device} is controlled by {lease.holder!r}")
+        return self.acquire(device, lease.holder, token)
+
+    def release(self, device: str, token: str | None) -> None:
+        lease = self._live(device, time.time())
+        if lease is None:
+            return
+        if token is None or not secrets.compare_digest(lease.token, token):
+            raise Conflict(f"{device} is controlled by {lease.holder!r}", code="lease_held")
+        del self._leases[device]
+
+    def drop(self, device: str) -> None:
+        self._leases.pop(device, None)
+
+    def sweep(self) -> bool:
+        """Forget lapsed leases; True when any lapsed."""
+        now = time.time()
+        lapsed = [d for d, lease in self._leases.items() if lease.expires <= now]
+        for device in lapsed:
+            del self._leases[device]
+        return bool(lapsed)
