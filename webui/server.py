@@ -10,11 +10,13 @@ from typing import Any
 
 import httpx
 from fastapi import FastAPI, Request, Response, WebSocket
-from fastapi.responses import HTMLResponse
+from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
 from runtime.kit.app import create_app
+from runtime.kit.errors import NotFound
 from runtime.kit.settings import RuntimeSettings
+from runtime.paths import package_roots
 from runtime.services import SERVICES
 from webui.proxy import ServiceProxy
 
@@ -38,6 +40,21 @@ async def service_health(client: httpx.AsyncClient, name: str, base: str) -> dic
         message = body.get("error", {}).get("message", "") if isinstance(body, dict) else ""
         return {"status": "starting", "url": base, "message": message}
     return {**body, "url": base}
+
+
+ROBOT_FILE_TYPES = {".urdf", ".xacro", ".dae", ".stl", ".obj", ".mtl", ".png", ".jpg", ".jpeg"}
+
+
+def robot_file_path(package: str, path: str) -> Path:
+    root = package_roots().get(package)
+    if root is None:
+        raise NotFound(f"no URDF package {package!r}")
+    target = (root / path).resolve()
+    if not target.is_relative_to(root.resolve()) or not target.is_file():
+        raise NotFound(f"no file {path!r} in {package}")
+    if target.suffix.lower() not in ROBOT_FILE_TYPES:
+        raise NotFound(f"{target.suffix} files are not served")
+    return target
 
 
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
@@ -71,6 +88,13 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             services[name] = {"status": "down", "message": "no address configured"}
         ok = all(s.get("status") == "ok" for s in services.values())
         return {"status": "ok" if ok else "degraded", "services": services}
+
+    @app.get("/api/robot-files/{package}/{path:path}")
+    async def robot_file(package: str, path: str) -> FileResponse:
+        """URDFs and meshes for the 3D view, from the installed URDF packages."""
+        return FileResponse(
+            robot_file_path(package, path), headers={"Cache-Control": "public, max-age=3600"}
+        )
 
     @app.api_route("/api/{prefix}", methods=METHODS)
     async def api_root(request: Request, prefix: str) -> Response:

@@ -25,6 +25,10 @@ _POSITION = ControlInterface.Position
 _VELOCITY = ControlInterface.Velocity
 
 
+# A jogging joint this close in time to its limit aims at the limit to stop exactly there.
+LIMIT_LOOKAHEAD = 0.5  # s
+
+
 class TrackerError(RuntimeError):
     pass
 
@@ -75,14 +79,23 @@ class JointTracker:
         self._run([_VELOCITY] * n, self.position, np.zeros(n), self.max_velocity)
 
     def step_velocity(self, velocity: FloatArray) -> None:
-        """Move each joint at its commanded velocity, braking so as to stop exactly at its
-        position limit instead of running through it."""
-        moving = velocity != 0.0
-        interfaces = [_POSITION if m else _VELOCITY for m in moving]
-        target = np.where(velocity > 0, self.upper, self.lower)
-        target = np.where(moving, target, self.position)
-        speed = np.where(moving, np.minimum(np.abs(velocity), self.max_velocity), self.max_velocity)
-        self._run(interfaces, target, np.zeros_like(velocity), speed)
+        """Move each joint at its commanded velocity. Near its position limit a moving joint
+        aims at the limit instead, so it stops exactly there rather than running through;
+        far from it (the lookahead), it simply follows the velocity."""
+        speed = np.minimum(np.abs(velocity), self.max_velocity)
+        moving = speed > 1e-9
+        limit = np.where(velocity > 0, self.upper, self.lower)
+        room = np.abs(limit - self.position)
+        braking = speed * speed / (2.0 * self.max_acceleration)
+        near = moving & (room < speed * LIMIT_LOOKAHEAD + braking + 0.01)
+        interfaces = [_POSITION if n else _VELOCITY for n in near]
+        target_velocity = np.where(near, 0.0, np.sign(velocity) * speed)
+        self._run(
+            interfaces,
+            np.where(near, limit, self.position),
+            target_velocity,
+            np.where(near, speed, self.max_velocity),
+        )
 
     def step_position(
         self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray | None = None
@@ -152,7 +165,8 @@ class JointTracker:
         self._in.max_velocity = max_velocity.tolist()
         try:
             result = self._otg.update(self._in, self._out)
-        except RuckigError as exc:
+        except (RuckigError, ValueError) as exc:
+            # ValueError: the binding cannot map some error codes back to its Result enum.
             raise TrackerError(f"trajectory generation failed: {str(exc).strip()}") from exc
         if result not in (Result.Working, Result.Finished):
             raise TrackerError(f"trajectory generation failed: {result}")

@@ -33,7 +33,8 @@ RECORD_PREFIX = "devices."
 class DeviceRegistry:
     def __init__(self, storage: StorageClient, fanout: Fanout, lease_seconds: float = 15.0) -> None:
         self.storage = storage
-        self.fanout = fanout
+        self.fanout = fanout  # everything, device states included
+        self.events = Fanout()  # lists and leases only, for services
         self.detected: dict[str, Detected] = {}
         self.connections: dict[str, DeviceConnection] = {}
         self.loaded = False
@@ -270,8 +271,10 @@ class DeviceRegistry:
 
     # Live updates ---------------------------------------------------------------------------
 
-    def snapshot_messages(self) -> list[str]:
+    def snapshot_messages(self, states: bool = True) -> list[str]:
         messages = [self._detected_message(), self._devices_message()]
+        if not states:
+            return messages
         for name, conn in sorted(self.connections.items()):
             if conn.last_state is not None:
                 messages.append(_state_message(name, conn.last_state))
@@ -292,12 +295,16 @@ class DeviceRegistry:
         )
 
     def _publish_detected(self) -> None:
-        if self.fanout.subscribers:
-            self.fanout.publish(self._detected_message())
+        if self.fanout.subscribers or self.events.subscribers:
+            message = self._detected_message()
+            self.fanout.publish(message)
+            self.events.publish(message)
 
     def _publish_devices(self) -> None:
-        if self.fanout.subscribers:
-            self.fanout.publish(self._devices_message())
+        if self.fanout.subscribers or self.events.subscribers:
+            message = self._devices_message()
+            self.fanout.publish(message)
+            self.events.publish(message)
 
 
 def _state_message(local_name: str, state_text: str) -> str:

@@ -35,9 +35,11 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
         return registry.detected_list()
 
     @router.websocket("/ws")
-    async def live(ws: WebSocket, max_rate: float | None = None) -> None:
-        """Detected list, added devices with status, and every device's state, pushed."""
-        await registry.fanout.serve(ws, registry.snapshot_messages(), max_rate_hz=max_rate)
+    async def live(ws: WebSocket, max_rate: float | None = None, states: bool = True) -> None:
+        """Detected list, added devices with status, and (unless states=false) every
+        device's state, pushed."""
+        fanout = registry.fanout if states else registry.events
+        await fanout.serve(ws, registry.snapshot_messages(states), max_rate_hz=max_rate)
 
     @router.get("")
     async def added() -> list[AddedDevice]:

@@ -39,6 +39,7 @@ class ServiceClient:
         params: dict[str, Any] | None = ...,
         model: type[M],
         timeout: float | None = ...,
+        headers: dict[str, str] | None = ...,
     ) -> M: ...
 
     @overload
@@ -51,6 +52,7 @@ class ServiceClient:
         params: dict[str, Any] | None = ...,
         model: None = ...,
         timeout: float | None = ...,
+        headers: dict[str, str] | None = ...,
     ) -> Any: ...
 
     async def request(
@@ -62,8 +64,9 @@ class ServiceClient:
         params: dict[str, Any] | None = None,
         model: type[M] | None = None,
         timeout: float | None = None,
+        headers: dict[str, str] | None = None,
     ) -> Any:
-        kwargs: dict[str, Any] = {"json": json, "params": params}
+        kwargs: dict[str, Any] = {"json": json, "params": params, "headers": headers}
         if timeout is not None:
             kwargs["timeout"] = timeout
         try:

@@ -54,6 +54,8 @@ class RuntimeSettings(BaseSettings):
     state_rate_hz: float = Field(default=100.0, gt=0, le=500)
     variable_history: int = Field(default=20, ge=1, le=1000)
     lease_seconds: float = Field(default=15.0, gt=0, le=3600)
+    # Hold-to-run: the jog service halts a robot when heartbeats stop for this long.
+    deadman_seconds: float = Field(default=0.1, ge=0.02, le=0.5)
 
     @classmethod
     def settings_customise_sources(

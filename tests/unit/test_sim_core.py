@@ -276,3 +276,14 @@ def test_a_position_stream_near_a_limit_brakes_in_time(ur5: RobotInfo) -> None:
     assert not core.error, core.error_message
     assert core.tracker.guard_trips > 0
     assert_within_limits(core)
+
+
+def test_tiny_velocities_far_from_the_limits_are_followed(core: SimCore) -> None:
+    """A Cartesian jog gives some joints velocities of 1e-6 rad/s; aiming those at a limit
+    6 rad away would ask ruckig for a trajectory it cannot time."""
+    clock = Clock(core)
+    core.set_mode(CommandMode.velocity_command)
+    v = np.array([1e-6, -2e-7, 0.3, 1e-8, -1e-5, 0.0])
+    clock.run(0.5, lambda now: core.stream(CommandMode.velocity_command, v, None, 0.1, now))
+    assert not core.error, core.error_message
+    assert np.allclose(core.tracker.velocity, v, atol=1e-12)

@@ -28,3 +28,24 @@ def test_a_service_without_an_address_is_reported() -> None:
         assert client.get("/api/devices").status_code == 404
         health = client.get("/api/health").json()
     assert health["services"]["variable_storage"]["status"] == "down"
+
+
+def test_robot_files_are_served_from_packages_and_nothing_else() -> None:
+    app = build_app(RuntimeSettings(sim=False), {})
+    with TestClient(app) as client:
+        urdf = client.get(
+            "/api/robot-files/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf"
+        )
+        assert urdf.status_code == 200
+        assert "shoulder_pan_joint" in urdf.text
+        mesh = client.get(
+            "/api/robot-files/example-robot-data/robots/ur_description/meshes/ur5/visual/base.dae"
+        )
+        assert mesh.status_code == 200
+        for bad in (
+            "example-robot-data/../../../../../etc/passwd",
+            "example-robot-data/robots/ur_description/README.md",
+            "no-such-package/x.urdf",
+        ):
+            response = client.get(f"/api/robot-files/{bad}")
+            assert response.status_code == 404, bad

@@ -1,0 +1,125 @@
+"""The device manager as the jog service sees it: added devices (address, status, who
+controls them) followed live over its event socket, lease checks cached until the lease
+changes hands, and one Jogger per robot in use."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import time
+from typing import Any
+
+import websockets
+
+from runtime.interfaces.robot import RobotInfo
+from runtime.jog.jogger import Jogger
+from runtime.kinematics import Kinematics
+from runtime.kit.client import ServiceClient
+from runtime.kit.errors import DeviceError, NotFound, OpenPendantError, Unavailable
+from runtime.robot_link import RobotLink
+
+log = logging.getLogger(__name__)
+
+# A lease check is trusted this long (the device manager renews the lease on each check).
+LEASE_CACHE_SECONDS = 3.0
+
+
+class Directory:
+    def __init__(self, device_manager_url: str) -> None:
+        self.http = ServiceClient(device_manager_url, timeout=3.0, name="device manager")
+        self._ws_url = device_manager_url.replace("http://", "ws://", 1)
+        self.devices: dict[str, dict[str, Any]] = {}
+        self.joggers: dict[str, Jogger] = {}
+        self._leases: dict[tuple[str, str], float] = {}
+        self._kinematics: dict[str, Kinematics] = {}
+        self._ready = asyncio.Event()
+        self._task: asyncio.Task[None] | None = None
+        self._lock = asyncio.Lock()
+
+    async def start(self) -> None:
+        self._task = asyncio.create_task(self._follow())
+
+    async def close(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+        for jogger in self.joggers.values():
+            await jogger.close()
+        await self.http.aclose()
+
+    async def _follow(self) -> None:
+        while True:
+            try:
+                async with websockets.connect(
+                    f"{self._ws_url}/devices/ws?states=false", open_timeout=2.0, close_timeout=1.0
+                ) as ws:
+                    async for message in ws:
+                        body = json.loads(message)
+                        if body.get("type") == "devices":
+                            self._update(body["devices"])
+            except (OSError, websockets.WebSocketException, TimeoutError, ValueError) as exc:
+                log.info("device manager events dropped: %s", exc)
+            self._ready.clear()
+            await asyncio.sleep(0.2)
+
+    def _update(self, devices: list[dict[str, Any]]) -> None:
+        previous = self.devices
+        self.devices = {d["local_name"]: d for d in devices}
+        for name, device in previous.items():
+            now = self.devices.get(name)
+            if now is None or now.get("controlled_by") != device.get("controlled_by"):
+                self._leases = {k: v for k, v in self._leases.items() if k[0] != name}
+        self._ready.set()
+
+    async def device(self, name: str) -> dict[str, Any]:
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(self._ready.wait(), 3.0)
+        device = self.devices.get(name)
+        if device is None:
+            raise NotFound(f"no device named {name!r}", code="device_not_found")
+        if device["kind"] != "robot":
+            raise DeviceError(f"{name} is a {device['kind']}, not a robot", code="not_a_robot")
+        if device["status"] != "connected":
+            raise Unavailable(f"{name} is {device['status']}", code="device_disconnected")
+        return device
+
+    async def check_lease(self, name: str, token: str | None) -> None:
+        if token is None:
+            raise OpenPendantError(
+                f"take control of {name} first", code="lease_required", status=409
+            )
+        if self._leases.get((name, token), 0.0) > time.monotonic():
+            return
+        await self.http.request(
+            "POST", f"/devices/{name}/lease/check", headers={"X-Lease-Token": token}
+        )
+        self._leases[(name, token)] = time.monotonic() + LEASE_CACHE_SECONDS
+
+    async def jogger(self, name: str) -> Jogger:
+        device = await self.device(name)
+        async with self._lock:
+            jogger = self.joggers.get(name)
+            if jogger is not None and jogger.link.url == device["url"] and jogger.link.alive:
+                return jogger
+            if jogger is not None:
+                del self.joggers[name]
+                await jogger.close()
+            details = await self.http.get(f"/devices/{name}")
+            info = RobotInfo.model_validate(details["info"]["info"])
+            link = RobotLink(name, device["url"], info)
+            await link.start()
+            if not link.alive:
+                await link.close()
+                raise Unavailable(f"no state from {name}", code="device_disconnected")
+            jogger = Jogger(link, self.kinematics(info))
+            self.joggers[name] = jogger
+            return jogger
+
+    def kinematics(self, info: RobotInfo) -> Kinematics:
+        key = info.model_dump_json()
+        if key not in self._kinematics:
+            self._kinematics[key] = Kinematics(info)
+        return self._kinematics[key]

@@ -1,0 +1,162 @@
+"""One robot's jogging: runs the current action at 100 Hz over the robot's command stream.
+At most one action at a time; a new press replaces the old one."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from runtime.interfaces.robot import CommandMode, OperationalMode
+from runtime.jog.actions import Action
+from runtime.jog.velocity import MANUAL_TCP_SPEED, VelocityController
+from runtime.kinematics import Kinematics
+from runtime.kit.errors import OpenPendantError, RobotError
+from runtime.robot_link import RobotLink
+
+log = logging.getLogger(__name__)
+
+PERIOD = 0.01
+
+
+@dataclass
+class Ended:
+    press: str
+    state: str  # "done", "stopped", "halted", "refused"
+    reason: str
+
+
+Listener = Callable[[Ended], None]
+
+
+class Jogger:
+    def __init__(self, link: RobotLink, kinematics: Kinematics) -> None:
+        self.link = link
+        self.kinematics = kinematics
+        self.controller = VelocityController(
+            kinematics, np.array([j.max_velocity for j in link.info.joints])
+        )
+        self.action: Action | None = None
+        self.listener: Listener | None = None
+        self._wake = asyncio.Event()
+        self._task = asyncio.create_task(self._run(), name=f"jog:{link.name}")
+        link.on_error = self._refused
+
+    async def close(self) -> None:
+        self._task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await self._task
+        await self.link.close()
+
+    def tcp_cap(self) -> float | None:
+        state = self.link.current()
+        if state.operational_mode is OperationalMode.auto:
+            raise RobotError(
+                "jogging needs manual mode; the robot is in automatic", code="not_manual"
+            )
+        if state.operational_mode is OperationalMode.manual_full_speed:
+            return None
+        return MANUAL_TCP_SPEED
+
+    async def start(self, action: Action, listener: Listener) -> None:
+        state = self.link.current()
+        if not state.flags.ready:
+            reason = (
+                "the E-stop is engaged"
+                if state.flags.estop
+                else f"the robot has an error: {state.error_message}"
+                if state.flags.error
+                else "the robot is not enabled"
+            )
+            raise RobotError(reason, code="not_ready")
+        previous = self.action
+        self.action = None
+        if previous is not None and previous.press != action.press:
+            self._end(previous, "stopped", "replaced by a new press")
+        await self.link.ensure_mode(action.mode)
+        self.listener = listener
+        self.action = action
+        await self._tick(action)  # the first command goes out now, not at the next cycle
+        self._wake.set()
+
+    async def stop(self, press: str, reason: str, *, halt: bool) -> None:
+        """End a press: on release the robot decelerates under its limits; on a lost deadman
+        or a stop request it is halted, and nothing resumes without a new press."""
+        action = self.action
+        if halt:
+            await self.link.halt(tag=f"{press}:halt")
+        if action is None or action.press != press:
+            return
+        self.action = None
+        if not halt:
+            await self._brake(action)
+        self._end(action, "halted" if halt else "stopped", reason)
+
+    async def halt_all(self, reason: str) -> None:
+        action = self.action
+        self.action = None
+        await self.link.halt(tag="halt")
+        if action is not None:
+            self._end(action, "halted", reason)
+
+    async def _brake(self, action: Action) -> None:
+        if action.mode is CommandMode.velocity_command:
+            zero = [0.0] * len(self.link.info.joints)
+            await self.link.send(
+                {
+                    "type": "velocity_command",
+                    "velocity": zero,
+                    "timeout": 0.2,
+                    "tag": f"{action.press}:release",
+                }
+            )
+        else:
+            await self.link.halt(tag=f"{action.press}:release")
+
+    def _end(self, action: Action, state: str, reason: str) -> None:
+        if self.listener is not None:
+            self.listener(Ended(action.press, state, reason))
+
+    def _refused(self, error: dict[str, Any]) -> None:
+        action = self.action
+        if action is not None:
+            self.action = None
+            self._end(action, "refused", str(error.get("message", "the robot refused")))
+
+    async def _tick(self, action: Action) -> None:
+        command = action.tick(self.link.current(), time.monotonic())
+        await self.link.send(command)
+        if action.done and self.action is action:
+            self.action = None
+            self._end(action, "done", "arrived")
+
+    async def _run(self) -> None:
+        next_tick = time.monotonic()
+        while True:
+            if self.action is None:
+                await self._wake.wait()
+                self._wake.clear()
+                next_tick = time.monotonic() + PERIOD  # start() already sent the first
+            await asyncio.sleep(max(0.0, next_tick - time.monotonic()))
+            next_tick = max(next_tick + PERIOD, time.monotonic())  # late: no catch-up burst
+            action = self.action
+            if action is None:
+                continue
+            try:
+                await self._tick(action)
+            except OpenPendantError as exc:
+                if self.action is action:
+                    self.action = None
+                    self._end(action, "refused", exc.message)
+            except Exception:
+                log.exception("jog cycle failed; halting %s", self.link.name)
+                self.action = None
+                with contextlib.suppress(OpenPendantError):
+                    await self.link.halt(tag="error")
+                self._end(action, "halted", "internal error")

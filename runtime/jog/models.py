@@ -1,0 +1,83 @@
+"""The jog socket's messages. A press starts a jog or a move; the client repeats a heartbeat
+for that press at 20 Hz or more while the button is held; release ends it."""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from runtime.interfaces.common import Strict
+
+PressId = Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_.:-]+$")]
+RobotName = Annotated[str, Field(min_length=1, max_length=32)]
+Speed = Annotated[float, Field(gt=0, le=1)]  # fraction of the jog speed (override)
+Token = Annotated[str | None, Field(default=None, max_length=64)]
+
+CARTESIAN_AXES = ("x", "y", "z", "rx", "ry", "rz")
+MAX_LINEAR_STEP = 0.01  # m
+MAX_ANGULAR_STEP = math.radians(5)
+
+
+class JogPress(Strict):
+    type: Literal["jog"]
+    press: PressId
+    robot: RobotName
+    token: Token = None
+    kind: Literal["joint", "cartesian"]
+    axis: int | Literal["x", "y", "z", "rx", "ry", "rz"]
+    direction: Literal[-1, 1]
+    frame: Literal["base", "tool"] = "base"
+    speed: Speed = 0.25
+    step: float | None = Field(default=None, gt=0)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> JogPress:
+        if self.kind == "joint" and not isinstance(self.axis, int):
+            raise ValueError("a joint jog names its joint by number, from 0")
+        if self.kind == "cartesian" and not isinstance(self.axis, str):
+            raise ValueError("a Cartesian jog names its axis: x, y, z, rx, ry or rz")
+        if self.step is not None:
+            linear = self.kind == "cartesian" and self.axis in ("x", "y", "z")
+            limit = MAX_LINEAR_STEP if linear else MAX_ANGULAR_STEP
+            if self.step > limit:
+                raise ValueError(
+                    f"an incremental step is at most {limit:g} {'m' if linear else 'rad'}"
+                )
+        return self
+
+
+class MoveToPress(Strict):
+    type: Literal["move_to"]
+    press: PressId
+    robot: RobotName
+    token: Token = None
+    waypoint: str = Field(min_length=1, max_length=128)
+    speed: Speed = 0.25
+
+
+class Heartbeat(Strict):
+    type: Literal["heartbeat"]
+    press: PressId
+
+
+class Release(Strict):
+    type: Literal["release"]
+    press: PressId
+
+
+class HaltRequest(Strict):
+    """Stop every robot this client has moved, and `robot` too; needs no lease."""
+
+    type: Literal["halt"]
+    robot: RobotName | None = None
+
+
+class TeachRequest(Strict):
+    name: str = Field(min_length=1, max_length=128)
+    kind: Literal["joint", "pose"] = "joint"
+    frame: Literal["base", "world"] = "base"
+    tags: list[str] = Field(default_factory=list, max_length=32)
+    doc: str = Field(default="", max_length=2000)
+    overwrite: bool = False

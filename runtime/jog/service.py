@@ -1,0 +1,120 @@
+"""The jog service: /jog/ws for hold-to-run jogging and moves, REST for teaching waypoints,
+robot power commands and what the jog panel needs to know about a robot."""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import AsyncIterator
+from typing import Annotated, Any
+
+from fastapi import APIRouter, FastAPI, Header, WebSocket
+
+from runtime.interfaces.robot import RobotState
+from runtime.jog.directory import Directory
+from runtime.jog.models import TeachRequest
+from runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
+from runtime.jog.velocity import MANUAL_TCP_SPEED
+from runtime.jog.waypoints import robot_waypoints, teach
+from runtime.kit.app import create_app
+from runtime.kit.settings import RuntimeSettings
+from runtime.paths import package_roots
+from runtime.variable_storage.client import StorageClient
+from runtime.variable_storage.store import Variable
+
+LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
+
+
+def jog_router(directory: Directory, storage: StorageClient, deadman: float) -> APIRouter:
+    router = APIRouter(prefix="/jog")
+
+    @router.get("/settings")
+    async def settings() -> dict[str, Any]:
+        return {
+            "deadman_ms": round(deadman * 1000),
+            "joint_speed": JOINT_SPEED,
+            "linear_speed": LINEAR_SPEED,
+            "angular_speed": ANGULAR_SPEED,
+            "manual_tcp_speed": MANUAL_TCP_SPEED,
+            "heartbeat_ms": max(10, min(50, round(deadman * 1000 / 3))),
+        }
+
+    @router.websocket("/ws")
+    async def jog_socket(ws: WebSocket) -> None:
+        session = JogSession(directory, storage, deadman)
+        try:
+            await session.out.serve(ws, on_message=session.handle)
+        finally:
+            await session.close()
+
+    @router.get("/robots/{robot}")
+    async def robot(robot: str) -> dict[str, Any]:
+        """What the jog panel and the 3D view need: joints, limits, URDF and its packages."""
+        jogger = await directory.jogger(robot)
+        info = jogger.link.info
+        return {
+            "name": robot,
+            "info": info.model_dump(),
+            "urdf": _public_uri(info.urdf),
+            "packages": {name: f"/api/robot-files/{name}" for name in package_roots()},
+        }
+
+    @router.post("/robots/{robot}/teach", status_code=201)
+    async def teach_waypoint(robot: str, body: TeachRequest) -> Variable:
+        jogger = await directory.jogger(robot)
+        return await teach(storage, robot, jogger.link.current(), jogger.kinematics, body)
+
+    @router.get("/robots/{robot}/waypoints")
+    async def waypoints(robot: str) -> list[dict[str, Any]]:
+        jogger = await directory.jogger(robot)
+        return await robot_waypoints(storage, robot, jogger.kinematics)
+
+    @router.post("/robots/{robot}/halt")
+    async def halt(robot: str) -> RobotState:
+        """Stop always wins: any client may halt any robot, lease or not."""
+        jogger = await directory.jogger(robot)
+        await jogger.halt_all("stop requested")
+        return jogger.link.current()
+
+    for command in ("enable", "disable", "reset_errors"):
+        router.add_api_route(
+            f"/robots/{{robot}}/{command}",
+            _power(directory, command),
+            methods=["POST"],
+            response_model=None,
+        )
+    return router
+
+
+def _power(directory: Directory, command: str) -> Any:
+    async def run(robot: str, token: LeaseToken = None) -> dict[str, Any]:
+        await directory.check_lease(robot, token)
+        jogger = await directory.jogger(robot)
+        state: dict[str, Any] = await jogger.link.call("POST", f"/{command}")
+        return state
+
+    run.__name__ = command
+    return run
+
+
+def _public_uri(urdf: str) -> str | None:
+    if urdf.startswith("package://"):
+        return "/api/robot-files/" + urdf.removeprefix("package://")
+    return None
+
+
+def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
+    directory = Directory(urls["device_manager"])
+    storage = StorageClient(urls["variable_storage"])
+
+    @contextlib.asynccontextmanager
+    async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        await directory.start()
+        try:
+            yield
+        finally:
+            await directory.close()
+            await storage.aclose()
+
+    app = create_app("jog", lifespan=lifespan)
+    app.include_router(jog_router(directory, storage, settings.deadman_seconds))
+    return app

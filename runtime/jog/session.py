@@ -1,0 +1,260 @@
+"""One client's jog socket. Hold-to-run: every press needs a heartbeat at least every
+deadman window; when heartbeats stop, or the socket closes, the robot is halted, and a
+halted press never resumes (the operator must press again)."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+from collections import deque
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+from pydantic import ValidationError
+
+from runtime.interfaces.limits import FloatArray, JointLimitChecker
+from runtime.jog.actions import Action, JointVelocityJog, PlannedMoveAction, TwistJog
+from runtime.jog.directory import Directory
+from runtime.jog.jogger import Ended, Jogger
+from runtime.jog.models import (
+    CARTESIAN_AXES,
+    HaltRequest,
+    Heartbeat,
+    JogPress,
+    MoveToPress,
+    Release,
+)
+from runtime.jog.planning import plan_joint_move
+from runtime.jog.waypoints import joint_goal
+from runtime.kit.app import describe_validation_errors
+from runtime.kit.errors import InvalidValue, OpenPendantError
+from runtime.kit.websocket import Fanout
+from runtime.variable_storage.client import StorageClient
+
+JOINT_SPEED = math.radians(45)  # rad/s at 100 %
+LINEAR_SPEED = 0.25  # m/s at 100 %
+ANGULAR_SPEED = math.radians(45)  # rad/s at 100 %
+
+MESSAGES: dict[str, type[Any]] = {
+    "jog": JogPress,
+    "move_to": MoveToPress,
+    "heartbeat": Heartbeat,
+    "release": Release,
+    "halt": HaltRequest,
+}
+
+
+@dataclass
+class Held:
+    robot: str
+    timer: asyncio.TimerHandle | None  # None: a bounded step, which completes once started
+
+
+class JogSession:
+    def __init__(self, directory: Directory, storage: StorageClient, deadman: float) -> None:
+        self.directory = directory
+        self.storage = storage
+        self.deadman = deadman
+        self.out = Fanout()
+        self.held: dict[str, Held] = {}
+        self.ended: deque[str] = deque(maxlen=1000)
+        self.touched: set[str] = set()
+        self._tasks: set[asyncio.Task[None]] = set()
+
+    def send(self, message: dict[str, Any]) -> None:
+        self.out.publish_json(message)
+
+    async def handle(self, message: Any) -> None:
+        kind = message.get("type") if isinstance(message, dict) else None
+        model = MESSAGES.get(str(kind))
+        if model is None:
+            raise OpenPendantError(f"unknown message type {kind!r}", code="bad_message")
+        try:
+            request = model.model_validate(message)
+        except ValidationError as exc:
+            text, _ = describe_validation_errors(exc.errors())
+            raise OpenPendantError(text, code="invalid_request", status=422) from exc
+        if isinstance(request, JogPress | MoveToPress):
+            await self._press(request)
+        elif isinstance(request, Heartbeat):
+            self._heartbeat(request.press)
+        elif isinstance(request, Release):
+            await self._release(request.press)
+        else:
+            await self._halt(request.robot)
+
+    async def _press(self, request: JogPress | MoveToPress) -> None:
+        if request.press in self.held:
+            self._heartbeat(request.press)  # a repeated press is its own heartbeat
+            return
+        if request.press in self.ended:
+            return  # a press that ended never resumes
+        try:
+            await self.directory.check_lease(request.robot, request.token)
+            jogger = await self.directory.jogger(request.robot)
+            action = await self._action(request, jogger)
+            self.touched.add(request.robot)
+            timer = None
+            if not (isinstance(request, JogPress) and request.step is not None):
+                loop = asyncio.get_running_loop()
+                timer = loop.call_later(self.deadman, self._deadman_lapsed, request.press)
+            self.held[request.press] = Held(request.robot, timer)
+            await jogger.start(action, self._ended)
+        except OpenPendantError as exc:
+            self._forget(request.press)
+            self.send(
+                {
+                    "type": "status",
+                    "press": request.press,
+                    "robot": request.robot,
+                    "state": "refused",
+                    "reason": exc.code,
+                    "message": exc.message,
+                }
+            )
+            return
+        if request.press in self.held:
+            self.send(
+                {
+                    "type": "status",
+                    "press": request.press,
+                    "robot": request.robot,
+                    "state": "moving",
+                }
+            )
+
+    async def _action(self, request: JogPress | MoveToPress, jogger: Jogger) -> Action:
+        state = jogger.link.current()
+        cap = jogger.tcp_cap()
+        q = np.array(state.joint_position_command)
+        info = jogger.link.info
+        if isinstance(request, MoveToPress):
+            goal = await joint_goal(
+                self.storage,
+                request.robot,
+                request.waypoint,
+                jogger.kinematics,
+                JointLimitChecker(info),
+                q,
+            )
+            return self._plan(request.press, jogger, q, goal, request.speed, cap)
+        if request.step is not None:
+            goal = self._step_goal(request, jogger, q)
+            return self._plan(request.press, jogger, q, goal, request.speed, cap)
+        if request.kind == "joint":
+            assert isinstance(request.axis, int)
+            if not 0 <= request.axis < info.dof:
+                raise InvalidValue(f"the robot has joints 0 to {info.dof - 1}")
+            velocity = np.zeros(info.dof)
+            velocity[request.axis] = request.direction * JOINT_SPEED * request.speed
+            return JointVelocityJog(request.press, jogger.controller, velocity, cap)
+        twist = np.zeros(6)
+        index = CARTESIAN_AXES.index(str(request.axis))
+        twist[index] = (
+            request.direction * request.speed * (LINEAR_SPEED if index < 3 else ANGULAR_SPEED)
+        )
+        return TwistJog(
+            request.press, jogger.controller, jogger.kinematics, twist, request.frame, cap
+        )
+
+    @staticmethod
+    def _step_goal(request: JogPress, jogger: Jogger, q: FloatArray) -> FloatArray:
+        checker = JointLimitChecker(jogger.link.info)
+        step = float(request.step or 0.0) * request.direction
+        if request.kind == "joint":
+            assert isinstance(request.axis, int)
+            goal = q.copy()
+            goal[request.axis] += step
+            return checker.positions(goal.tolist(), "step target")
+        index = CARTESIAN_AXES.index(str(request.axis))
+        axis = np.eye(3)[index % 3]
+        tcp = jogger.kinematics.tcp(q)
+        if index < 3:
+            delta = pin.SE3(np.eye(3), axis * step)
+        else:
+            delta = pin.SE3(pin.exp3(axis * step), np.zeros(3))
+        if request.frame == "tool":
+            target = tcp * delta
+        else:  # base-frame axes, about the TCP point
+            target = pin.SE3(delta.rotation @ tcp.rotation, tcp.translation + delta.translation)
+        return checker.positions(jogger.kinematics.inverse(target, q).tolist(), "step target")
+
+    @staticmethod
+    def _plan(
+        press: str, jogger: Jogger, q: FloatArray, goal: FloatArray, speed: float, cap: float | None
+    ) -> PlannedMoveAction:
+        move = plan_joint_move(jogger.kinematics, jogger.link.info, q, goal, speed, cap)
+        return PlannedMoveAction(press, move)
+
+    def _heartbeat(self, press: str) -> None:
+        held = self.held.get(press)
+        if held is None or held.timer is None:
+            return
+        held.timer.cancel()
+        held.timer = asyncio.get_running_loop().call_later(
+            self.deadman, self._deadman_lapsed, press
+        )
+
+    def _deadman_lapsed(self, press: str) -> None:
+        held = self.held.get(press)
+        if held is not None:
+            window = round(self.deadman * 1000)
+            self._spawn(self._stop(held.robot, press, f"no heartbeat for {window} ms", halt=True))
+
+    async def _release(self, press: str) -> None:
+        held = self.held.get(press)
+        if held is not None and held.timer is not None:
+            await self._stop(held.robot, press, "released", halt=False)
+
+    async def _stop(self, robot: str, press: str, reason: str, *, halt: bool) -> None:
+        jogger = self.directory.joggers.get(robot)
+        if jogger is not None:
+            await jogger.stop(press, reason, halt=halt)
+        self._forget(press)
+
+    async def _halt(self, robot: str | None) -> None:
+        robots = set(self.touched) | ({robot} if robot else set())
+        for name in robots:
+            try:
+                jogger = await self.directory.jogger(name)
+            except OpenPendantError:
+                continue
+            await jogger.halt_all("stop requested")
+        for press in list(self.held):
+            self._forget(press)
+
+    def _ended(self, ended: Ended) -> None:
+        held = self.held.get(ended.press)
+        robot = held.robot if held is not None else None
+        self._forget(ended.press)
+        self.send(
+            {
+                "type": "status",
+                "press": ended.press,
+                "robot": robot,
+                "state": ended.state,
+                "reason": ended.reason,
+            }
+        )
+
+    def _forget(self, press: str) -> None:
+        held = self.held.pop(press, None)
+        if held is not None and held.timer is not None:
+            held.timer.cancel()
+        if press not in self.ended:
+            self.ended.append(press)
+
+    def _spawn(self, job: Any) -> None:
+        task = asyncio.ensure_future(job)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def close(self) -> None:
+        """The socket closed: whatever this client was moving is halted."""
+        for press, held in list(self.held.items()):
+            try:
+                await self._stop(held.robot, press, "connection closed", halt=True)
+            except OpenPendantError:
+                continue
