@@ -7,6 +7,7 @@ from abc import ABC, abstractmethod
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import CommandMode, RobotState
@@ -17,6 +18,9 @@ from runtime.kinematics import Kinematics
 # The driver halts on its own if the stream stops for this long (the deadman's backstop).
 COMMAND_TIMEOUT = 0.2
 ARRIVED = 1e-7  # rad: a planned move is done when every joint is this close to its goal
+# Cartesian jog holds its line and orientation: error fed back at this rate (1/s).
+CORRECTION_GAIN = 10.0
+RAMP = 0.15  # s from standstill to jog speed and back
 
 
 class Action(ABC):
@@ -25,7 +29,13 @@ class Action(ABC):
     def __init__(self, press: str) -> None:
         self.press = press
         self.done = False
+        self.outcome = ("done", "arrived")  # what to report when done
         self.ticks = 0
+
+    def release(self, now: float) -> bool:
+        """The button was let go. True when the action winds down by itself (it then ends
+        with `done`); False when the caller must stop the robot."""
+        return False
 
     def tag(self) -> str:
         self.ticks += 1
@@ -35,9 +45,54 @@ class Action(ABC):
     def tick(self, state: RobotState, now: float) -> dict[str, Any]: ...
 
 
-class JointVelocityJog(Action):
+class RampedJog(Action):
+    """A continuous jog whose speed ramps up after the press and down after the release,
+    so every joint changes speed together and the TCP keeps to its path."""
+
     mode = CommandMode.velocity_command
 
+    def __init__(self, press: str) -> None:
+        super().__init__(press)
+        self.began: float | None = None
+        self.released: tuple[float, float] | None = None  # (time, level then)
+        self.previous: FloatArray | None = None  # the last velocity commanded
+
+    def level(self, now: float) -> float:
+        if self.began is None:
+            self.began = now
+        rising = min(1.0, (now - self.began) / RAMP)
+        if self.released is None:
+            return rising
+        at, level = self.released
+        return max(0.0, level * (1.0 - (now - at) / RAMP))
+
+    def release(self, now: float) -> bool:
+        if self.released is None:
+            self.released = (now, self.level(now))
+        return True
+
+    def last(self, state: RobotState) -> FloatArray:
+        if self.previous is None:
+            return np.array(state.joint_velocity)
+        return self.previous
+
+    def command(self, velocity: FloatArray, now: float) -> dict[str, Any]:
+        settled = not np.any(np.abs(velocity) > 1e-6)
+        overdue = self.released is not None and now - self.released[0] > RAMP + 0.5
+        if self.released is not None and self.level(now) == 0.0 and (settled or overdue):
+            velocity = np.zeros_like(velocity)
+            self.done = True
+            self.outcome = ("stopped", "released")
+        self.previous = velocity
+        return {
+            "type": "velocity_command",
+            "velocity": velocity.tolist(),
+            "timeout": COMMAND_TIMEOUT,
+            "tag": self.tag(),
+        }
+
+
+class JointVelocityJog(RampedJog):
     def __init__(
         self,
         press: str,
@@ -52,20 +107,16 @@ class JointVelocityJog(Action):
 
     def tick(self, state: RobotState, now: float) -> dict[str, Any]:
         q = np.array(state.joint_position_command)
-        step = self.controller.from_joint_velocity(q, self.velocity, self.tcp_cap)
-        return {
-            "type": "velocity_command",
-            "velocity": step.velocity.tolist(),
-            "timeout": COMMAND_TIMEOUT,
-            "tag": self.tag(),
-        }
+        wanted = self.velocity * self.level(now)
+        step = self.controller.from_joint_velocity(q, wanted, self.tcp_cap, self.last(state))
+        return self.command(step.velocity, now)
 
 
-class TwistJog(Action):
-    """Cartesian jog: a constant twist in the base frame, or in the tool frame (turned into
-    the base frame each cycle, as the tool turns)."""
-
-    mode = CommandMode.velocity_command
+class TwistJog(RampedJog):
+    """Cartesian jog along or about one axis of the base frame, or of the tool frame as it
+    was at the press. The pose at the press is the reference: the TCP keeps to the line (or
+    the point) and the orientation it started with, in every direction not being jogged, so
+    velocity ramps and a slightly old state cannot add up to drift."""
 
     def __init__(
         self,
@@ -79,25 +130,46 @@ class TwistJog(Action):
         super().__init__(press)
         self.controller = controller
         self.kinematics = kinematics
-        self.twist = twist
+        self.local_twist = twist
         self.frame = frame
         self.tcp_cap = tcp_cap
+        self.start: pin.SE3 | None = None
+        self.twist = twist
 
-    def base_twist(self, q: FloatArray) -> FloatArray:
-        if self.frame == "base":
-            return self.twist
-        rotation = self.kinematics.tcp(q).rotation
-        return np.concatenate((rotation @ self.twist[:3], rotation @ self.twist[3:]))
+    def _begin(self, q: FloatArray) -> None:
+        self.start = self.kinematics.tcp(q)
+        if self.frame == "tool":
+            rotation = self.start.rotation
+            self.twist = np.concatenate(
+                (rotation @ self.local_twist[:3], rotation @ self.local_twist[3:])
+            )
+
+    def correction(self, current: pin.SE3) -> FloatArray:
+        assert self.start is not None
+        start = self.start
+        linear, angular = self.twist[:3], self.twist[3:]
+        if np.any(linear):
+            axis = linear / np.linalg.norm(linear)
+            along = start.translation + axis * float(
+                axis @ (current.translation - start.translation)
+            )
+            position_error = along - current.translation
+            rotation_error = pin.log3(start.rotation @ current.rotation.T)
+        else:
+            axis = angular / np.linalg.norm(angular)
+            position_error = start.translation - current.translation
+            turned = float(axis @ pin.log3(current.rotation @ start.rotation.T))
+            intended = pin.exp3(axis * turned) @ start.rotation
+            rotation_error = pin.log3(intended @ current.rotation.T)
+        return CORRECTION_GAIN * np.concatenate((position_error, rotation_error))
 
     def tick(self, state: RobotState, now: float) -> dict[str, Any]:
         q = np.array(state.joint_position_command)
-        step = self.controller.from_twist(q, self.base_twist(q), self.tcp_cap)
-        return {
-            "type": "velocity_command",
-            "velocity": step.velocity.tolist(),
-            "timeout": COMMAND_TIMEOUT,
-            "tag": self.tag(),
-        }
+        if self.start is None:
+            self._begin(q)
+        twist = self.twist * self.level(now) + self.correction(self.kinematics.tcp(q))
+        step = self.controller.from_twist(q, twist, self.tcp_cap, self.last(state))
+        return self.command(step.velocity, now)
 
 
 class PlannedMoveAction(Action):

@@ -17,7 +17,7 @@ from runtime.interfaces.robot import RobotInfo
 from runtime.jog.jogger import Jogger
 from runtime.kinematics import Kinematics
 from runtime.kit.client import ServiceClient
-from runtime.kit.errors import DeviceError, NotFound, OpenPendantError, Unavailable
+from runtime.kit.errors import DeviceError, OpenPendantError, Unavailable
 from runtime.robot_link import RobotLink
 
 log = logging.getLogger(__name__)
@@ -78,8 +78,10 @@ class Directory:
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(self._ready.wait(), 3.0)
         device = self.devices.get(name)
-        if device is None:
-            raise NotFound(f"no device named {name!r}", code="device_not_found")
+        if device is None or device["status"] != "connected":
+            # The live view can trail the device manager by a moment (a device added just
+            # now): ask it directly before saying no.
+            device = await self.http.get(f"/devices/{name}")
         if device["kind"] != "robot":
             raise DeviceError(f"{name} is a {device['kind']}, not a robot", code="not_a_robot")
         if device["status"] != "connected":

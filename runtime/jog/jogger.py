@@ -39,8 +39,12 @@ class Jogger:
     def __init__(self, link: RobotLink, kinematics: Kinematics) -> None:
         self.link = link
         self.kinematics = kinematics
+        joints = link.info.joints
         self.controller = VelocityController(
-            kinematics, np.array([j.max_velocity for j in link.info.joints])
+            kinematics,
+            np.array([j.max_velocity for j in joints]),
+            np.array([j.max_acceleration for j in joints]),
+            PERIOD,
         )
         self.action: Action | None = None
         self.listener: Listener | None = None
@@ -93,9 +97,11 @@ class Jogger:
             await self.link.halt(tag=f"{press}:halt")
         if action is None or action.press != press:
             return
+        if not halt and action.release(time.monotonic()):
+            return  # it ramps down along its path and reports when stopped
         self.action = None
         if not halt:
-            await self._brake(action)
+            await self.link.halt(tag=f"{action.press}:release")
         self._end(action, "halted" if halt else "stopped", reason)
 
     async def halt_all(self, reason: str) -> None:
@@ -134,7 +140,7 @@ class Jogger:
         await self.link.send(command)
         if action.done and self.action is action:
             self.action = None
-            self._end(action, "done", "arrived")
+            self._end(action, *action.outcome)
 
     async def _run(self) -> None:
         next_tick = time.monotonic()

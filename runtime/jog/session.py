@@ -5,7 +5,9 @@ halted press never resumes (the operator must press again)."""
 from __future__ import annotations
 
 import asyncio
+import logging
 import math
+import time
 from collections import deque
 from dataclasses import dataclass
 from typing import Any
@@ -33,6 +35,8 @@ from runtime.kit.errors import InvalidValue, OpenPendantError
 from runtime.kit.websocket import Fanout
 from runtime.variable_storage.client import StorageClient
 
+log = logging.getLogger(__name__)
+
 JOINT_SPEED = math.radians(45)  # rad/s at 100 %
 LINEAR_SPEED = 0.25  # m/s at 100 %
 ANGULAR_SPEED = math.radians(45)  # rad/s at 100 %
@@ -50,6 +54,7 @@ MESSAGES: dict[str, type[Any]] = {
 class Held:
     robot: str
     timer: asyncio.TimerHandle | None  # None: a bounded step, which completes once started
+    last_beat: float = 0.0
 
 
 class JogSession:
@@ -100,7 +105,7 @@ class JogSession:
             if not (isinstance(request, JogPress) and request.step is not None):
                 loop = asyncio.get_running_loop()
                 timer = loop.call_later(self.deadman, self._deadman_lapsed, request.press)
-            self.held[request.press] = Held(request.robot, timer)
+            self.held[request.press] = Held(request.robot, timer, time.monotonic())
             await jogger.start(action, self._ended)
         except OpenPendantError as exc:
             self._forget(request.press)
@@ -201,6 +206,14 @@ class JogSession:
         held = self.held.get(press)
         if held is not None:
             window = round(self.deadman * 1000)
+            silent = (time.monotonic() - held.last_beat) * 1000
+            log.warning(
+                "deadman: halting %s (press %s): no heartbeat for %.0f ms",
+                held.robot,
+                press,
+                silent,
+                extra={"press": press, "silent_ms": silent},
+            )
             self._spawn(self._stop(held.robot, press, f"no heartbeat for {window} ms", halt=True))
 
     async def _release(self, press: str) -> None:

@@ -5,6 +5,8 @@ Cartesian jog solves a small QP each cycle:
 
     minimise  ‖W (J q̇ − ν)‖² + ρ ‖q̇‖²
     subject to  joint velocity limits, joint position limits within a short horizon,
+                a change from the previous command the joints can make in one period
+                (so the robot follows each command and its TCP speed is what was asked),
                 and any extra constraints G q̇ ≤ h (the seam for collision avoidance),
 
 with ρ growing near a singularity so the robot slows down there instead of jumping. In
@@ -45,17 +47,30 @@ class VelocityStep:
 class VelocityController:
     kinematics: Kinematics
     max_velocity: FloatArray
+    max_acceleration: FloatArray
+    period: float
     constraints: list[Constraint] = field(default_factory=list)
 
-    def _bounds(self, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+    def _bounds(self, q: FloatArray, previous: FloatArray | None) -> tuple[FloatArray, FloatArray]:
         k = self.kinematics
-        lower = np.maximum(-self.max_velocity, (k.lower - q) / HORIZON)
-        upper = np.minimum(self.max_velocity, (k.upper - q) / HORIZON)
-        return np.minimum(lower, 0.0), np.maximum(upper, 0.0)
+        lower = np.minimum(np.maximum(-self.max_velocity, (k.lower - q) / HORIZON), 0.0)
+        upper = np.maximum(np.minimum(self.max_velocity, (k.upper - q) / HORIZON), 0.0)
+        if previous is not None:
+            reach = self.max_acceleration * self.period
+            lower = np.maximum(lower, previous - reach)
+            upper = np.minimum(upper, previous + reach)
+            lower = np.minimum(lower, upper)  # braking for a limit wins over smoothness
+        return lower, upper
 
-    def from_twist(self, q: FloatArray, twist: FloatArray, tcp_cap: float | None) -> VelocityStep:
+    def from_twist(
+        self,
+        q: FloatArray,
+        twist: FloatArray,
+        tcp_cap: float | None,
+        previous: FloatArray | None = None,
+    ) -> VelocityStep:
         """Joint velocities that best give `twist` ([vx, vy, vz, wx, wy, wz] in the base
-        frame, at the TCP) within every limit."""
+        frame, at the TCP) within every limit, starting from the `previous` command."""
         jacobian = self.kinematics.jacobian(q)
         weights = np.array([1.0, 1.0, 1.0, ANGULAR_WEIGHT, ANGULAR_WEIGHT, ANGULAR_WEIGHT])
         weighted = weights[:, None] * jacobian
@@ -64,7 +79,7 @@ class VelocityController:
         damping = 1e-6 + MAX_DAMPING * closeness**2
         hessian = weighted.T @ weighted + damping * np.eye(q.size)
         gradient = -weighted.T @ (weights * twist)
-        lower, upper = self._bounds(q)
+        lower, upper = self._bounds(q, previous)
         rows = [c(q, jacobian) for c in self.constraints]
         active = [r for r in rows if r is not None]
         g = np.vstack([r[0] for r in active]) if active else None
@@ -76,10 +91,14 @@ class VelocityController:
         return step
 
     def from_joint_velocity(
-        self, q: FloatArray, velocity: FloatArray, tcp_cap: float | None
+        self,
+        q: FloatArray,
+        velocity: FloatArray,
+        tcp_cap: float | None,
+        previous: FloatArray | None = None,
     ) -> VelocityStep:
         """A commanded joint velocity, slowed for the joint limits and the TCP speed cap."""
-        lower, upper = self._bounds(q)
+        lower, upper = self._bounds(q, previous)
         return self._cap(self.kinematics.jacobian(q), np.clip(velocity, lower, upper), tcp_cap)
 
     @staticmethod

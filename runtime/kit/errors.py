@@ -35,16 +35,18 @@ class OpenPendantError(Exception):
 
     @classmethod
     def from_body(cls, status: int, body: Any) -> OpenPendantError:
-        """Rebuild an error received from another service."""
+        """Rebuild an error received from another service, as the class its status means,
+        so callers can catch NotFound or Conflict whichever service raised it."""
+        kind = BY_STATUS.get(status, cls)
         if isinstance(body, dict) and isinstance(body.get("error"), dict):
             err = body["error"]
-            return cls(
+            return kind(
                 str(err.get("message", "")),
                 code=str(err.get("code", "error")),
                 status=status,
                 details=err.get("details") if isinstance(err.get("details"), dict) else None,
             )
-        return cls(f"unexpected response (HTTP {status})", code="bad_response", status=status)
+        return kind(f"unexpected response (HTTP {status})", code="bad_response", status=status)
 
 
 class NotFound(OpenPendantError):
@@ -82,3 +84,11 @@ class StorageError(OpenPendantError):
 class DeviceError(OpenPendantError):
     status = 400
     code = "device_error"
+
+
+BY_STATUS: dict[int, type[OpenPendantError]] = {
+    404: NotFound,
+    409: Conflict,
+    422: InvalidValue,
+    503: Unavailable,
+}

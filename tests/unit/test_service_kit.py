@@ -87,3 +87,20 @@ def test_a_subscriber_that_falls_far_behind_is_dropped() -> None:
     except OutboxOverflow:
         return
     raise AssertionError("an overflowing subscriber must be dropped")
+
+
+def test_errors_from_other_services_keep_their_kind() -> None:
+    from runtime.kit.errors import InvalidValue, NotFound, OpenPendantError
+
+    missing = OpenPendantError.from_body(
+        404, {"error": {"code": "variable_not_found", "message": "no variable"}}
+    )
+    assert isinstance(missing, NotFound)
+    assert (missing.code, missing.message, missing.status) == (
+        "variable_not_found",
+        "no variable",
+        404,
+    )
+    assert isinstance(OpenPendantError.from_body(409, {"error": {}}), Conflict)
+    assert isinstance(OpenPendantError.from_body(422, None), InvalidValue)
+    assert type(OpenPendantError.from_body(418, None)) is OpenPendantError

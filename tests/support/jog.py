@@ -1,0 +1,170 @@
+"""A jog-socket client for tests and benchmarks, as the UI uses the socket."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import time
+from typing import Any
+
+import httpx
+import numpy as np
+from websockets.sync.client import ClientConnection, connect
+
+from tests.support.processes import Runtime, wait_for
+
+_presses = itertools.count(1)
+
+
+class JogClient:
+    def __init__(self, runtime: Runtime, robot: str = "robot", token: str | None = None) -> None:
+        self.runtime = runtime
+        self.robot = robot
+        self.token = token
+        self._socket = connect(runtime.url.replace("http", "ws") + "/api/jog/ws")
+        self.ws: ClientConnection = self._socket.__enter__()
+        self.messages: list[dict[str, Any]] = []
+
+    def close(self) -> None:
+        self._socket.__exit__(None, None, None)
+
+    def send(self, message: dict[str, Any]) -> None:
+        self.ws.send(json.dumps(message))
+
+    def press(self, **fields: Any) -> str:
+        press = f"t{next(_presses)}"
+        message = {"type": "jog", "press": press, "robot": self.robot, "token": self.token}
+        message.update(fields)
+        self.send(message)
+        return press
+
+    def drain(self, timeout: float = 0.0) -> list[dict[str, Any]]:
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                self.messages.append(
+                    json.loads(self.ws.recv(timeout=max(0.0, deadline - time.monotonic())))
+                )
+            except TimeoutError:
+                return self.messages
+
+    def status(self, press: str, states: tuple[str, ...], timeout: float = 5.0) -> dict[str, Any]:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            for m in self.messages:
+                if m.get("press") == press and m.get("state") in states:
+                    return m
+            self.drain(0.02)
+        raise TimeoutError(f"press {press} never reached {states}: {self.messages[-5:]}")
+
+    def hold(self, seconds: float, period: float = 0.03, **fields: Any) -> str:
+        """Press and hold with heartbeats, then release."""
+        press = self.press(**fields)
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.send({"type": "heartbeat", "press": press})
+            self.drain(period)
+        self.send({"type": "release", "press": press})
+        return press
+
+    def move_to(self, waypoint: str, speed: float = 1.0, timeout: float = 20.0) -> dict[str, Any]:
+        press = f"t{next(_presses)}"
+        self.send(
+            {
+                "type": "move_to",
+                "press": press,
+                "robot": self.robot,
+                "token": self.token,
+                "waypoint": waypoint,
+                "speed": speed,
+            }
+        )
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            self.send({"type": "heartbeat", "press": press})
+            self.drain(0.03)
+            for m in self.messages:
+                if m.get("press") == press and m.get("state") not in (None, "moving"):
+                    return m
+        raise TimeoutError(f"move to {waypoint} did not finish")
+
+
+class RobotView:
+    """The robot as its driver sees it: state, every setpoint, the command log."""
+
+    def __init__(self, runtime: Runtime, name: str = "robot") -> None:
+        self.runtime = runtime
+        self.name = name
+        self.url = runtime.api("GET", f"/devices/{name}").json()["url"]
+        self.http = httpx.Client(base_url=self.url, timeout=5)
+
+    def state(self) -> dict[str, Any]:
+        return self.http.get("/state").json()  # type: ignore[no-any-return]
+
+    def q(self) -> np.ndarray[Any, Any]:
+        return np.array(self.state()["joint_position"])
+
+    def stopped(self) -> bool:
+        return bool(np.allclose(self.state()["joint_velocity"], 0.0))
+
+    def wait_stopped(self, timeout: float = 5.0) -> None:
+        wait_for(self.stopped, timeout, what="robot at rest")
+
+    def setpoints(self, after: int) -> dict[str, Any]:
+        return self.http.get("/sim/setpoints", params={"after": after}).json()  # type: ignore[no-any-return]
+
+    def commands(self, after: int = 0) -> list[dict[str, Any]]:
+        return self.http.get("/command_log", params={"after": after}).json()  # type: ignore[no-any-return]
+
+    def last_command_seq(self) -> int:
+        log = self.commands()
+        return int(log[-1]["seq"]) if log else 0
+
+
+_places = itertools.count(1)
+
+
+class Cell:
+    def __init__(self, runtime: Runtime) -> None:
+        self.runtime = runtime
+        sim = wait_for(lambda: runtime.api("GET", "/devices/detected").json(), 10)[0]
+        runtime.api("POST", "/devices", json={"uuid": sim["uuid"], "local_name": "robot"})
+        wait_for(lambda: runtime.api("GET", "/devices").json()[0]["status"] == "connected", 10)
+        self.token = runtime.api("POST", "/devices/robot/lease", json={"holder": "tests"}).json()[
+            "token"
+        ]
+        self.robot = RobotView(runtime)
+
+    def headers(self) -> dict[str, str]:
+        return {"X-Lease-Token": self.token}
+
+    def ready(self) -> None:
+        """Enabled, no error, lease renewed."""
+        self.robot.http.post("/sim/estop", json={"engaged": False})
+        self.runtime.api(
+            "POST", "/devices/robot/lease", json={"holder": "tests"}, headers=self.headers()
+        )
+        self.runtime.api("POST", "/jog/robots/robot/reset_errors", headers=self.headers())
+        response = self.runtime.api("POST", "/jog/robots/robot/enable", headers=self.headers())
+        assert response.status_code == 200, response.text
+
+    def place(self, joints: list[float] | np.ndarray[Any, Any]) -> None:
+        name = f"place{next(_places)}"
+        self.runtime.api(
+            "PUT",
+            f"/variables/{name}",
+            json={
+                "type": "joint_waypoint",
+                "value": {"joints": list(map(float, joints)), "robot": "robot"},
+            },
+        )
+        jog = JogClient(self.runtime, token=self.token)
+        try:
+            for _ in range(5):  # halted by a stall of the host: press again, as a person would
+                if jog.move_to(name)["state"] == "done":
+                    break
+            else:
+                raise AssertionError(f"could not move to {list(joints)}")
+        finally:
+            jog.close()
+        self.robot.wait_stopped()
