@@ -13,7 +13,9 @@ from pathlib import Path
 
 from device_drivers.sim_robot.driver import SimRobot
 from device_drivers.sim_robot.routes import sim_router
+from runtime.drivers.command_log import CommandLog
 from runtime.drivers.host import serve_driver
+from runtime.drivers.robot_routes import robot_router
 from runtime.interfaces.device import DeviceIdentity
 from runtime.kit.errors import OpenPendantError
 from runtime.kit.logs import setup_logging
@@ -72,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
         port=args.port,
         interfaces=settings.zeroconf_interfaces(),
         state_rate_hz=settings.state_rate_hz,
-        extra_routers=[sim_router(robot)],
+        routers=[robot_router(robot, CommandLog()), sim_router(robot)],
     )
     return 0
 

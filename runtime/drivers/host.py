@@ -9,13 +9,12 @@ import logging
 import socket
 import sys
 from collections.abc import AsyncIterator, Sequence
+from typing import Any
 
-from fastapi import APIRouter, FastAPI
+from fastapi import APIRouter, FastAPI, WebSocket
 
-from runtime.drivers.command_log import CommandLog
-from runtime.drivers.robot_routes import robot_router
 from runtime.drivers.state_stream import StateStream
-from runtime.interfaces.robot_driver import RobotDriver
+from runtime.interfaces.device import DeviceDriver
 from runtime.kit.app import create_app
 from runtime.kit.discovery import Advertisement, Advertiser, Interfaces
 from runtime.kit.serve import listening_socket, run_app
@@ -35,13 +34,32 @@ def advertised_host(host: str) -> str:
     return host
 
 
+def device_router(driver: DeviceDriver, stream: StateStream) -> APIRouter:
+    """What every driver serves, whatever its kind."""
+    router = APIRouter()
+
+    @router.get("/info")
+    async def info() -> Any:
+        return driver.describe()
+
+    @router.get("/state")
+    async def state() -> Any:
+        return driver.state()
+
+    @router.websocket("/state/ws")
+    async def state_ws(ws: WebSocket, max_rate: float | None = None) -> None:
+        await stream.fanout.serve(ws, max_rate_hz=max_rate)
+
+    return router
+
+
 def build_driver_app(
-    driver: RobotDriver,
+    driver: DeviceDriver,
     *,
     advertisement: Advertisement | None,
     interfaces: Interfaces,
     state_rate_hz: float,
-    extra_routers: Sequence[APIRouter] = (),
+    routers: Sequence[APIRouter] = (),
 ) -> FastAPI:
     stream = StateStream(driver.state, state_rate_hz)
 
@@ -74,20 +92,20 @@ def build_driver_app(
 
     name = f"{driver.kind}-driver:{driver.identity.name}"
     app = create_app(name, lifespan=lifespan)
-    app.include_router(robot_router(driver, stream, CommandLog()))
-    for router in extra_routers:
+    app.include_router(device_router(driver, stream))
+    for router in routers:
         app.include_router(router)
     return app
 
 
 def serve_driver(
-    driver: RobotDriver,
+    driver: DeviceDriver,
     *,
     host: str,
     port: int,
     interfaces: Interfaces,
     state_rate_hz: float,
-    extra_routers: Sequence[APIRouter] = (),
+    routers: Sequence[APIRouter] = (),
 ) -> None:
     sock = listening_socket(host, port)
     actual_port = int(sock.getsockname()[1])
@@ -105,7 +123,7 @@ def serve_driver(
         advertisement=advertisement,
         interfaces=interfaces,
         state_rate_hz=state_rate_hz,
-        extra_routers=extra_routers,
+        routers=routers,
     )
     log.info("serving %s on port %d", ident.name, actual_port)
     sys.stdout.flush()

@@ -8,13 +8,11 @@ from fastapi import APIRouter, Response, WebSocket
 from pydantic import ValidationError
 
 from runtime.drivers.command_log import CommandLog, LoggedCommand
-from runtime.drivers.state_stream import StateStream
 from runtime.interfaces.robot import (
     CommandModeRequest,
     JogJointCommand,
     JointTrajectory,
     PositionCommand,
-    RobotDescription,
     RobotState,
     SpeedRatioRequest,
     TrajectoryAccepted,
@@ -27,25 +25,14 @@ from runtime.kit.errors import OpenPendantError
 from runtime.kit.websocket import Fanout
 
 
-def robot_router(driver: RobotDriver, stream: StateStream, log: CommandLog) -> APIRouter:
+def robot_router(driver: RobotDriver, log: CommandLog) -> APIRouter:
+    """The robot's commands (GET /info, /state and /state/ws are the host's)."""
     router = APIRouter()
 
     @router.get("/command_log")
     async def command_log(after: int = 0) -> list[LoggedCommand]:
         """Commands this driver accepted, newest last (the last 2000)."""
         return log.since(after)
-
-    @router.get("/info")
-    async def info() -> RobotDescription:
-        return driver.describe()
-
-    @router.get("/state")
-    async def state() -> RobotState:
-        return driver.state()
-
-    @router.websocket("/state/ws")
-    async def state_ws(ws: WebSocket, max_rate: float | None = None) -> None:
-        await stream.fanout.serve(ws, max_rate_hz=max_rate)
 
     @router.post("/enable")
     async def enable() -> RobotState:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from typing import Literal
 
 from pydantic import BaseModel, Field
@@ -17,3 +18,28 @@ class DeviceIdentity(BaseModel):
     model: str = Field(max_length=64)
     name: str = Field(max_length=64)
     api: str = API_VERSION
+
+
+class DeviceDriver(ABC):
+    """What every driver has: an identity, a description, a state to stream."""
+
+    def __init__(self, identity: DeviceIdentity) -> None:
+        self.identity = identity
+
+    @property
+    def kind(self) -> str:
+        return self.identity.kind
+
+    @abstractmethod
+    def describe(self) -> BaseModel:
+        """Identity and the kind's static information (served as GET /info)."""
+
+    @abstractmethod
+    def state(self) -> BaseModel:
+        """The latest state; cheap enough to call at the streaming rate."""
+
+    async def start(self) -> None:
+        """Connect to the device (or start the simulation)."""
+
+    async def close(self) -> None:
+        """Leave the device safe and release it."""

@@ -3,9 +3,9 @@ driver's protected hooks, so a driver can only ever receive a command that passe
 
 from __future__ import annotations
 
-from abc import ABC, abstractmethod
+from abc import abstractmethod
 
-from runtime.interfaces.device import DeviceIdentity
+from runtime.interfaces.device import DeviceDriver, DeviceIdentity
 from runtime.interfaces.limits import CheckedTrajectory, FloatArray, JointLimitChecker
 from runtime.interfaces.robot import (
     CommandMode,
@@ -22,21 +22,16 @@ from runtime.interfaces.robot import (
 from runtime.kit.errors import RobotError
 
 
-class RobotDriver(ABC):
-    kind = "robot"
-
+class RobotDriver(DeviceDriver):
     def __init__(self, identity: DeviceIdentity, info: RobotInfo) -> None:
         if identity.kind != "robot":
             raise ValueError("a robot driver needs a robot identity")
-        self.identity = identity
+        super().__init__(identity)
         self.info = info
         self.limits = JointLimitChecker(info)
 
     def describe(self) -> RobotDescription:
         return RobotDescription(identity=self.identity, info=self.info)
-
-    async def start(self) -> None:
-        """Connect to the robot (or start the simulation)."""
 
     async def close(self) -> None:
         """Halt and release the robot."""
