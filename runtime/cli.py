@@ -43,6 +43,12 @@ def _sim_robot(rest: list[str]) -> int:
     return main(rest)
 
 
+def _spacemouse(rest: list[str]) -> int:
+    from device_drivers.spacemouse.__main__ import main
+
+    return main(rest)
+
+
 def _bench(args: argparse.Namespace) -> int:
     from runtime.paths import REPO_ROOT
 
@@ -74,6 +80,7 @@ def parser() -> argparse.ArgumentParser:
     sub.add_parser(
         "sim-robot", help="start one more simulated robot (see sim-robot --help)", add_help=False
     )
+    sub.add_parser("spacemouse", help="serve a 3D mouse (see spacemouse --help)", add_help=False)
 
     service = sub.add_parser("service", help="run one service (the launcher does this)")
     from runtime.services import ALL_SERVICES
@@ -102,6 +109,8 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if argv[:1] == ["sim-robot"]:
         return _sim_robot(argv[1:])
+    if argv[:1] == ["spacemouse"]:
+        return _spacemouse(argv[1:])
     args = parser().parse_args(argv)
     return int(args.handler(args))
 

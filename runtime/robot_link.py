@@ -15,6 +15,7 @@ import websockets
 from runtime.interfaces.robot import CommandMode, RobotInfo, RobotState
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import OpenPendantError, RobotError, Unavailable
+from runtime.state_feed import StateFeed
 
 log = logging.getLogger(__name__)
 
@@ -27,23 +28,21 @@ class RobotLink:
         self.url = url.rstrip("/")
         self.info = info
         self.http = ServiceClient(self.url, timeout=3.0, name=f"robot {name}")
-        self.state: RobotState | None = None
+        self.feed = StateFeed(self.url, RobotState, name)
         self.on_error: ErrorHandler | None = None
         self._ws_url = self.url.replace("http://", "ws://", 1)
         self._commands: websockets.ClientConnection | None = None
         self._command_lock = asyncio.Lock()
         self._tasks: list[asyncio.Task[None]] = []
-        self._state_ready = asyncio.Event()
         # The mode this link last set. Right after a halt the cached state can still show
         # the old mode, so the state alone cannot say whether a switch is needed.
         self._mode: CommandMode | None = None
 
     async def start(self) -> None:
-        self._tasks.append(asyncio.create_task(self._follow_state(), name=f"state:{self.name}"))
-        with contextlib.suppress(TimeoutError):
-            await asyncio.wait_for(self._state_ready.wait(), 2.0)
+        await self.feed.start()
 
     async def close(self) -> None:
+        await self.feed.close()
         for task in self._tasks:
             task.cancel()
         for task in self._tasks:
@@ -55,32 +54,20 @@ class RobotLink:
 
     @property
     def alive(self) -> bool:
-        return self._state_ready.is_set()
+        return self.feed.alive
 
     def current(self) -> RobotState:
-        if self.state is None:
+        state = self.feed.state
+        if state is None:
             raise Unavailable(f"no state from {self.name} yet", code="device_disconnected")
-        return self.state
-
-    async def _follow_state(self) -> None:
-        while True:
-            try:
-                async with websockets.connect(
-                    f"{self._ws_url}/state/ws", open_timeout=2.0, close_timeout=1.0, max_size=2**22
-                ) as ws:
-                    async for message in ws:
-                        self.state = RobotState.model_validate_json(message)
-                        self._state_ready.set()
-            except (OSError, websockets.WebSocketException, TimeoutError, ValueError) as exc:
-                log.info("state stream of %s dropped: %s", self.name, exc)
-            self.state = None
-            self._state_ready.clear()
-            await asyncio.sleep(0.2)
+        return state
 
     # Commands -------------------------------------------------------------------------------
 
     async def send(self, command: dict[str, Any]) -> None:
         """One streamed command; refusals come back through `on_error`."""
+        if command.get("type") == "halt":
+            self._mode = None
         async with self._command_lock:
             if self._commands is None:
                 try:

@@ -48,7 +48,7 @@ def device_router(driver: DeviceDriver, stream: StateStream) -> APIRouter:
 
     @router.websocket("/state/ws")
     async def state_ws(ws: WebSocket, max_rate: float | None = None) -> None:
-        await stream.fanout.serve(ws, max_rate_hz=max_rate)
+        await stream.fanout.serve(ws, [stream.current()], max_rate_hz=max_rate)
 
     return router
 

@@ -10,6 +10,9 @@ from pydantic import BaseModel
 
 from runtime.kit.websocket import Fanout
 
+# An unchanged state is repeated this often, so a quiet device is not taken for a dead one.
+KEEPALIVE = 0.25
+
 
 class StateStream:
     def __init__(self, snapshot: Callable[[], BaseModel], rate_hz: float) -> None:
@@ -17,16 +20,20 @@ class StateStream:
         self.period = 1.0 / rate_hz
         self.fanout = Fanout()
 
+    def current(self) -> str:
+        """For a new subscriber: the state now, before the next change."""
+        return self.snapshot().model_dump_json()
+
     async def run(self) -> None:
         next_tick = time.monotonic()
-        last = ""
+        last, sent = "", 0.0
         while True:
             if self.fanout.subscribers:
                 text = self.snapshot().model_dump_json()
-                # A state that has not changed since the last tick is not news.
-                if text != last:
+                now = time.monotonic()
+                if text != last or now - sent >= KEEPALIVE:
                     self.fanout.publish(text, key="state")
-                    last = text
+                    last, sent = text, now
             next_tick += self.period
             delay = next_tick - time.monotonic()
             if delay < -self.period:

@@ -4,16 +4,19 @@ state into the next streamed command."""
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
+from runtime.interfaces.input import InputState
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import CommandMode, RobotState
 from runtime.jog.planning import PlannedMove
 from runtime.jog.velocity import VelocityController
 from runtime.kinematics import Kinematics
+from runtime.state_feed import StateFeed
 
 # The driver halts on its own if the stream stops for this long (the deadman's backstop).
 COMMAND_TIMEOUT = 0.2
@@ -42,7 +45,8 @@ class Action(ABC):
         return f"{self.press}#{self.ticks}"
 
     @abstractmethod
-    def tick(self, state: RobotState, now: float) -> dict[str, Any]: ...
+    def tick(self, state: RobotState, now: float) -> dict[str, Any] | None:
+        """The next command, or None to send nothing this cycle."""
 
 
 class RampedJog(Action):
@@ -196,6 +200,93 @@ class PlannedMoveAction(Action):
             "type": "position_command",
             "position": position.tolist(),
             "velocity": velocity.tolist(),
+            "timeout": COMMAND_TIMEOUT,
+            "tag": self.tag(),
+        }
+
+
+class MouseJog(Action):
+    """Jogging with a 3D mouse: its deflection is the hold-to-run. The robot halts, and the
+    binding ends, when the mouse disconnects, or stops reporting while deflected (a mouse
+    reports continuously while deflected, so silence means stuck or gone)."""
+
+    mode = CommandMode.velocity_command
+
+    def __init__(
+        self,
+        press: str,
+        controller: VelocityController,
+        kinematics: Kinematics,
+        feed: StateFeed[InputState],
+        *,
+        cartesian: bool,
+        frame: str,
+        joints: list[int],
+        speeds: FloatArray,
+        tcp_cap: float | None,
+        window: float,
+        on_button: Callable[[int], None],
+    ) -> None:
+        super().__init__(press)
+        self.controller = controller
+        self.kinematics = kinematics
+        self.feed = feed
+        self.cartesian = cartesian
+        self.frame = frame
+        self.joints = joints
+        self.speeds = speeds
+        self.tcp_cap = tcp_cap
+        self.window = window
+        self.on_button = on_button
+        self.previous: FloatArray | None = None
+        self.last_report: tuple[int, float] | None = None  # (seqno, when it arrived here)
+        self.buttons: set[int] = set()
+        self.idle = False
+
+    def _halt(self, reason: str) -> dict[str, Any]:
+        self.done = True
+        self.outcome = ("halted", reason)
+        return {"type": "halt", "tag": f"{self.press}:halt"}
+
+    def tick(self, state: RobotState, now: float) -> dict[str, Any] | None:
+        device = self.feed.state
+        if device is None or not device.connected:
+            return self._halt("the 3D mouse is disconnected")
+        if self.last_report is None or device.seqno != self.last_report[0]:
+            self.last_report = (device.seqno, now)
+        axes = np.array(device.axes)
+        deflected = bool(np.any(axes != 0.0))
+        if deflected and now - self.last_report[1] > self.window:
+            silent = round((now - self.last_report[1]) * 1000)
+            return self._halt(f"the 3D mouse stopped reporting for {silent} ms while deflected")
+        for button in sorted(set(device.buttons) - self.buttons):
+            self.on_button(button)
+        self.buttons = set(device.buttons)
+        q = np.array(state.joint_position_command)
+        previous = np.array(state.joint_velocity) if self.previous is None else self.previous
+        if self.cartesian:
+            twist = axes * self.speeds
+            if self.frame == "tool":
+                rotation = self.kinematics.tcp(q).rotation
+                twist = np.concatenate((rotation @ twist[:3], rotation @ twist[3:]))
+            step = self.controller.from_twist(q, twist, self.tcp_cap, previous)
+        else:
+            wanted = np.zeros(q.size)
+            for axis, joint in enumerate(self.joints):
+                wanted[joint] = axes[axis] * self.speeds[axis]
+            step = self.controller.from_joint_velocity(q, wanted, self.tcp_cap, previous)
+        still = not np.any(np.abs(step.velocity) > 1e-6)
+        if still and not deflected:
+            if self.idle:
+                return None  # at rest: the driver holds; nothing to stream
+            self.idle = True
+            step.velocity = np.zeros(q.size)
+        else:
+            self.idle = False
+        self.previous = step.velocity
+        return {
+            "type": "velocity_command",
+            "velocity": step.velocity.tolist(),
             "timeout": COMMAND_TIMEOUT,
             "tag": self.tag(),
         }

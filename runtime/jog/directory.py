@@ -13,12 +13,14 @@ from typing import Any
 
 import websockets
 
+from runtime.interfaces.input import InputState
 from runtime.interfaces.robot import RobotInfo
 from runtime.jog.jogger import Jogger
 from runtime.kinematics import Kinematics
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import DeviceError, OpenPendantError, Unavailable
 from runtime.robot_link import RobotLink
+from runtime.state_feed import StateFeed
 
 log = logging.getLogger(__name__)
 
@@ -34,6 +36,7 @@ class Directory:
         self.joggers: dict[str, Jogger] = {}
         self._leases: dict[tuple[str, str], float] = {}
         self._kinematics: dict[str, Kinematics] = {}
+        self.inputs: dict[str, StateFeed[InputState]] = {}
         self._ready = asyncio.Event()
         self._task: asyncio.Task[None] | None = None
         self._lock = asyncio.Lock()
@@ -48,6 +51,8 @@ class Directory:
                 await self._task
         for jogger in self.joggers.values():
             await jogger.close()
+        for feed in self.inputs.values():
+            await feed.close()
         await self.http.aclose()
 
     async def _follow(self) -> None:
@@ -74,7 +79,23 @@ class Directory:
                 self._leases = {k: v for k, v in self._leases.items() if k[0] != name}
         self._ready.set()
 
-    async def device(self, name: str) -> dict[str, Any]:
+    async def input_feed(self, name: str) -> StateFeed[InputState]:
+        """The live state of an added input device (a 3D mouse)."""
+        device = await self.device(name, kind="input")
+        feed = self.inputs.get(name)
+        if feed is not None and feed.url.startswith(device["url"].replace("http", "ws", 1)):
+            return feed
+        if feed is not None:
+            await feed.close()
+        feed = StateFeed(device["url"], InputState, name)
+        await feed.start()
+        if not feed.alive:
+            await feed.close()
+            raise Unavailable(f"no state from {name}", code="device_disconnected")
+        self.inputs[name] = feed
+        return feed
+
+    async def device(self, name: str, kind: str = "robot") -> dict[str, Any]:
         with contextlib.suppress(TimeoutError):
             await asyncio.wait_for(self._ready.wait(), 3.0)
         device = self.devices.get(name)
@@ -82,8 +103,8 @@ class Directory:
             # The live view can trail the device manager by a moment (a device added just
             # now): ask it directly before saying no.
             device = await self.http.get(f"/devices/{name}")
-        if device["kind"] != "robot":
-            raise DeviceError(f"{name} is a {device['kind']}, not a robot", code="not_a_robot")
+        if device["kind"] != kind:
+            raise DeviceError(f"{name} is a {device['kind']}, not a {kind}", code=f"not_a_{kind}")
         if device["status"] != "connected":
             raise Unavailable(f"{name} is {device['status']}", code="device_disconnected")
         return device

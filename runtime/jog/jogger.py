@@ -137,7 +137,8 @@ class Jogger:
 
     async def _tick(self, action: Action) -> None:
         command = action.tick(self.link.current(), time.monotonic())
-        await self.link.send(command)
+        if command is not None:
+            await self.link.send(command)
         if action.done and self.action is action:
             self.action = None
             self._end(action, *action.outcome)

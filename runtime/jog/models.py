@@ -74,6 +74,23 @@ class HaltRequest(Strict):
     robot: RobotName | None = None
 
 
+class MouseBinding(Strict):
+    """Drive `robot` from the 3D mouse `device` (enabled), or stop doing so."""
+
+    type: Literal["mouse"]
+    robot: RobotName
+    token: Token = None
+    device: str = Field(min_length=1, max_length=32)
+    enabled: bool
+    mode: Literal["cartesian", "joint"] = "cartesian"
+    frame: Literal["base", "tool"] = "base"
+    speed: Speed = 0.25
+    joints: list[int] = Field(
+        default_factory=lambda: [0, 1, 2, 3, 4, 5], min_length=1, max_length=6
+    )
+    buttons: dict[str, Literal["teach", "toggle_frame"]] = Field(default_factory=dict)
+
+
 class TeachRequest(Strict):
     name: str = Field(min_length=1, max_length=128)
     kind: Literal["joint", "pose"] = "joint"

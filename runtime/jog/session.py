@@ -17,7 +17,13 @@ import pinocchio as pin
 from pydantic import ValidationError
 
 from runtime.interfaces.limits import FloatArray, JointLimitChecker
-from runtime.jog.actions import Action, JointVelocityJog, PlannedMoveAction, TwistJog
+from runtime.jog.actions import (
+    Action,
+    JointVelocityJog,
+    MouseJog,
+    PlannedMoveAction,
+    TwistJog,
+)
 from runtime.jog.directory import Directory
 from runtime.jog.jogger import Ended, Jogger
 from runtime.jog.models import (
@@ -25,11 +31,13 @@ from runtime.jog.models import (
     HaltRequest,
     Heartbeat,
     JogPress,
+    MouseBinding,
     MoveToPress,
     Release,
+    TeachRequest,
 )
 from runtime.jog.planning import plan_joint_move
-from runtime.jog.waypoints import joint_goal
+from runtime.jog.waypoints import joint_goal, teach
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue, OpenPendantError
 from runtime.kit.websocket import Fanout
@@ -47,6 +55,7 @@ MESSAGES: dict[str, type[Any]] = {
     "heartbeat": Heartbeat,
     "release": Release,
     "halt": HaltRequest,
+    "mouse": MouseBinding,
 }
 
 
@@ -87,8 +96,95 @@ class JogSession:
             self._heartbeat(request.press)
         elif isinstance(request, Release):
             await self._release(request.press)
+        elif isinstance(request, MouseBinding):
+            await self._mouse(request)
         else:
             await self._halt(request.robot)
+
+    async def _mouse(self, request: MouseBinding) -> None:
+        press = f"mouse:{request.device}"
+        if not request.enabled:
+            held = self.held.get(press)
+            if held is not None:
+                await self._stop(held.robot, press, "3D mouse disabled", halt=True)
+            return
+        if press in self.held:
+            return
+        try:
+            await self.directory.check_lease(request.robot, request.token)
+            jogger = await self.directory.jogger(request.robot)
+            feed = await self.directory.input_feed(request.device)
+            if any(j >= jogger.link.info.dof or j < 0 for j in request.joints):
+                raise InvalidValue(f"the robot has joints 0 to {jogger.link.info.dof - 1}")
+            linear, angular = (
+                (LINEAR_SPEED, ANGULAR_SPEED)
+                if request.mode == "cartesian"
+                else (JOINT_SPEED, JOINT_SPEED)
+            )
+            speeds = np.array([linear] * 3 + [angular] * 3) * request.speed
+            action = MouseJog(
+                press,
+                jogger.controller,
+                jogger.kinematics,
+                feed,
+                cartesian=request.mode == "cartesian",
+                frame=request.frame,
+                joints=request.joints,
+                speeds=speeds,
+                tcp_cap=jogger.tcp_cap(),
+                window=self.deadman,
+                on_button=lambda b: self._mouse_button(request, b),
+            )
+            self.ended = deque((p for p in self.ended if p != press), maxlen=1000)
+            self.touched.add(request.robot)
+            self.held[press] = Held(request.robot, None, time.monotonic())
+            await jogger.start(action, self._ended)
+        except OpenPendantError as exc:
+            self._forget(press)
+            self.send(
+                {
+                    "type": "status",
+                    "press": press,
+                    "robot": request.robot,
+                    "state": "refused",
+                    "reason": exc.code,
+                    "message": exc.message,
+                }
+            )
+            return
+        if press in self.held:
+            self.send({"type": "status", "press": press, "robot": request.robot, "state": "moving"})
+
+    def _mouse_button(self, request: MouseBinding, button: int) -> None:
+        action = request.buttons.get(str(button))
+        if action == "toggle_frame":
+            jogger = self.directory.joggers.get(request.robot)
+            current = jogger.action if jogger is not None else None
+            if isinstance(current, MouseJog):
+                current.frame = "tool" if current.frame == "base" else "base"
+                self.send({"type": "mouse_frame", "device": request.device, "frame": current.frame})
+        elif action == "teach":
+            self._spawn(self._teach_from_mouse(request.robot))
+
+    async def _teach_from_mouse(self, robot: str) -> None:
+        jogger = await self.directory.jogger(robot)
+        for number in range(1, 1000):
+            name = f"mouse_wp_{number:03d}"
+            try:
+                await teach(
+                    self.storage,
+                    robot,
+                    jogger.link.current(),
+                    jogger.kinematics,
+                    TeachRequest(name=name, tags=["3d-mouse"]),
+                )
+            except OpenPendantError as exc:
+                if exc.code == "exists":
+                    continue
+                self.send({"type": "error", "error": exc.body()["error"]})
+                return
+            self.send({"type": "taught", "robot": robot, "name": name})
+            return
 
     async def _press(self, request: JogPress | MoveToPress) -> None:
         if request.press in self.held:

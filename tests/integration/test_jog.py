@@ -4,10 +4,14 @@ and the deadman."""
 
 from __future__ import annotations
 
+import json
 import math
+import struct
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
+import httpx
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -15,7 +19,7 @@ import pytest
 from runtime.kinematics import Kinematics
 from runtime.robot_info import load_robot_info
 from tests.support.jog import Cell, JogClient
-from tests.support.processes import Runtime, child_env
+from tests.support.processes import Runtime, SpaceMouseProc, child_env, wait_for
 
 INFO = load_robot_info("ur5")
 KINEMATICS = Kinematics(INFO)
@@ -220,3 +224,115 @@ def test_move_to_stops_when_the_button_is_let_go(cell: Cell, jog: JogClient) -> 
     assert np.abs(cell.robot.q() - far).max() > 0.3  # it did not get there on its own
     assert jog.move_to("far_away")["state"] == "done"
     assert np.abs(cell.robot.q() - far).max() < 1e-6
+
+
+# 3D mouse -------------------------------------------------------------------------------------
+
+
+def mouse_recording(path: Path, phases: list[tuple[float, list[int], int]], end: str) -> Path:
+    """Reports every 16 ms, as a SpaceMouse sends while deflected: (seconds, raw axes x y z
+    rx ry rz, buttons mask) per phase; then silence ("stuck") or an unplug."""
+    lines, t = [], 0.0
+    for seconds, raw, mask in phases:
+        for _ in range(max(1, round(seconds / 0.016))):
+            lines.append({"t": t, "report": (b"\x01" + struct.pack("<3h", *raw[:3])).hex()})
+            lines.append({"t": t, "report": (b"\x02" + struct.pack("<3h", *raw[3:])).hex()})
+            lines.append({"t": t, "report": (b"\x03" + mask.to_bytes(2, "little")).hex()})
+            t += 0.016
+    if end == "unplug":
+        lines.append({"t": t, "event": "unplug"})
+    path.write_text("\n".join(json.dumps(line) for line in lines))
+    return path
+
+
+def add_mouse(cell: Cell, home: Path, name: str, recording: Path) -> SpaceMouseProc:
+    mouse = SpaceMouseProc(home, name, recording)
+    mouse.wait_ready()
+    wait_for(lambda: cell.runtime.is_detected(mouse.uuid), 10, what="mouse detected")
+    added = cell.runtime.api("POST", "/devices", json={"uuid": mouse.uuid, "local_name": name})
+    assert added.status_code == 201, added.text
+    wait_for(
+        lambda: cell.runtime.api("GET", f"/devices/{name}").json()["status"] == "connected",
+        10,
+        what="mouse connected",
+    )
+    return mouse
+
+
+def bind_mouse(jog: JogClient, device: str, **fields: Any) -> str:
+    jog.send(
+        {
+            "type": "mouse",
+            "robot": "robot",
+            "token": jog.token,
+            "device": device,
+            "enabled": True,
+            **fields,
+        }
+    )
+    press = f"mouse:{device}"
+    status = jog.status(press, ("moving", "refused"))
+    assert status["state"] == "moving", status.get("message")
+    return press
+
+
+def test_the_3d_mouse_jogs_and_a_stuck_mouse_stops_the_robot(
+    cell: Cell, jog: JogClient, tmp_path: Path
+) -> None:
+    # Pushed to the right (+x) for a second, then the reports stop while it is deflected.
+    recording = mouse_recording(
+        tmp_path / "stuck.jsonl", [(1.0, [300, 0, 0, 0, 0, 0], 0)], end="stuck"
+    )
+    mouse = add_mouse(cell, tmp_path, "mouse", recording)
+    try:
+        before = tcp(cell.robot.q())
+        after_seq = cell.robot.last_command_seq()
+        press = bind_mouse(jog, "mouse", frame="base", speed=0.5)
+        mouse_http = httpx.post(f"{mouse.url}/replay/start", timeout=5)
+        assert mouse_http.status_code == 204
+        halted = jog.status(press, ("halted",), timeout=10)
+        assert "stopped reporting" in halted["reason"]
+        cell.robot.wait_stopped(3)
+        moved = tcp(cell.robot.q()).translation - before.translation
+        assert moved[0] > 0.005  # to the right, as pushed
+        assert np.abs(moved[1:]).max() < 0.1 * moved[0]
+        assert any(
+            e["type"] == "halt" and e["tag"] == f"{press}:halt"
+            for e in cell.robot.commands(after_seq)
+        )
+    finally:
+        mouse.stop()
+        cell.runtime.api("DELETE", "/devices/mouse")
+
+
+def test_an_unplugged_mouse_stops_the_robot_and_buttons_teach(
+    cell: Cell, jog: JogClient, tmp_path: Path
+) -> None:
+    recording = mouse_recording(
+        tmp_path / "unplug.jsonl",
+        [
+            (0.3, [0, 0, 0, 0, 0, 0], 1),  # button 0 pressed: teach a waypoint
+            (0.3, [0, 0, 0, 0, 0, 0], 0),
+            (0.6, [0, 0, -300, 0, 0, 0], 0),  # lifted (+z), then the cable is pulled
+        ],
+        end="unplug",
+    )
+    mouse = add_mouse(cell, tmp_path, "mouse2", recording)
+    try:
+        before = tcp(cell.robot.q())
+        press = bind_mouse(jog, "mouse2", frame="tool", speed=0.5, buttons={"0": "teach"})
+        httpx.post(f"{mouse.url}/replay/start", timeout=5)
+        halted = jog.status(press, ("halted",), timeout=10)
+        assert "disconnected" in halted["reason"]
+        cell.robot.wait_stopped(3)
+        taught = [m for m in jog.messages if m.get("type") == "taught"]
+        assert len(taught) == 1
+        waypoint = cell.runtime.api("GET", f"/variables/{taught[0]['name']}").json()
+        assert waypoint["type"] == "joint_waypoint"
+        assert np.allclose(waypoint["value"]["joints"], INFO.home, atol=1e-6)
+        moved = tcp(cell.robot.q()).translation - before.translation
+        tool_z = before.rotation[:, 2]  # pointing down at home: "up" in the tool frame is -z
+        assert float(moved @ tool_z) > 0.005
+    finally:
+        mouse.stop()
+        cell.runtime.api("DELETE", "/devices/mouse2")

@@ -209,6 +209,28 @@ class SimRobotProc(Proc):
         return str(self.url)
 
 
+class SpaceMouseProc(SimRobotProc):
+    """`openpendant spacemouse` playing a recording, on request."""
+
+    def __init__(self, home: Path, name: str, recording: Path) -> None:
+        argv = [
+            sys.executable,
+            "-m",
+            "runtime.cli",
+            "spacemouse",
+            "--source",
+            "replay",
+            "--replay",
+            str(recording),
+            "--replay-wait",
+            "--name",
+            name,
+        ]
+        Proc.__init__(self, argv, child_env(home), home / "logs" / f"mouse-{name}.log")
+        self.url = ""
+        self.uuid = ""
+
+
 @contextlib.contextmanager
 def running(proc: Proc) -> Iterator[Proc]:
     try:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
@@ -104,3 +105,31 @@ def test_errors_from_other_services_keep_their_kind() -> None:
     assert isinstance(OpenPendantError.from_body(409, {"error": {}}), Conflict)
     assert isinstance(OpenPendantError.from_body(422, None), InvalidValue)
     assert type(OpenPendantError.from_body(418, None)) is OpenPendantError
+
+
+def test_state_stream_repeats_a_quiet_state_and_skips_duplicates() -> None:
+    from pydantic import BaseModel
+
+    from runtime.drivers.state_stream import KEEPALIVE, StateStream
+    from runtime.kit.websocket import Subscriber
+
+    class Quiet(BaseModel):
+        value: int = 1
+
+    async def scenario() -> list[str]:
+        stream = StateStream(Quiet, rate_hz=100)
+        sub = Subscriber()
+        stream.fanout.subscribers.add(sub)
+        task = asyncio.create_task(stream.run())
+        received: list[str] = []
+        deadline = asyncio.get_running_loop().time() + KEEPALIVE * 2.5
+        while asyncio.get_running_loop().time() < deadline:
+            with contextlib.suppress(TimeoutError):
+                received += await asyncio.wait_for(sub.next_batch(), 0.05)
+        task.cancel()
+        assert stream.current() == Quiet().model_dump_json()
+        return received
+
+    received = asyncio.run(scenario())
+    # 100 Hz for 0.625 s, but the state never changed: the first send and two keep-alives.
+    assert 2 <= len(received) <= 4
