@@ -30,6 +30,10 @@ class PutVariable(Strict):
     expected_version: int | None = Field(default=None, ge=0)
 
 
+class RenameVariable(Strict):
+    to: str
+
+
 def variables_router(store: VariableStore, changes: Fanout) -> APIRouter:
     router = APIRouter(prefix="/variables")
 
@@ -104,6 +108,13 @@ def variables_router(store: VariableStore, changes: Fanout) -> APIRouter:
         )
         notify("changed", variable)
         return variable
+
+    @router.post("/{name}/rename")
+    async def rename(name: str, body: RenameVariable) -> Variable:
+        old, new = await asyncio.to_thread(store.rename, name, body.to)
+        notify("deleted", old)
+        notify("changed", new)
+        return new
 
     @router.delete("/{name}")
     async def delete_variable(name: str, expected_version: int | None = None) -> Variable:

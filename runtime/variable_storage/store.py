@@ -221,22 +221,40 @@ class VariableStore:
             if current is None:
                 raise NotFound(f"no variable named {name!r}", code="variable_not_found")
             self._check_version(current, expected_version)
-            now = time.time()
-            self._db.execute("DELETE FROM variables WHERE name = ?", (name,))
-            self._db.execute(
-                "INSERT INTO history (name, version, type, value, tags, doc, updated, deleted) "
-                "VALUES (?, ?, ?, NULL, ?, ?, ?, 1)",
-                (
-                    name,
-                    current.version + 1,
-                    current.type,
-                    json.dumps(current.tags),
-                    current.doc,
-                    now,
-                ),
-            )
-            self._prune(name)
+            self._delete_locked(current)
             return current
+
+    def rename(self, name: str, to: str) -> tuple[Variable, Variable]:
+        """Move a variable to a new name in one transaction (the old name's history records
+        the move as a deletion). Returns (old, new)."""
+        check_name(to)
+        with self._write():
+            current = self._current(name)
+            if current is None:
+                raise NotFound(f"no variable named {name!r}", code="variable_not_found")
+            if self._current(to) is not None:
+                raise Conflict(f"a variable named {to!r} exists already", code="exists")
+            moved = self._put_locked(
+                to, current.type, current.value, current.tags, current.doc, expected_version=None
+            )
+            self._delete_locked(current)
+            return current, moved
+
+    def _delete_locked(self, current: Variable) -> None:
+        self._db.execute("DELETE FROM variables WHERE name = ?", (current.name,))
+        self._db.execute(
+            "INSERT INTO history (name, version, type, value, tags, doc, updated, deleted) "
+            "VALUES (?, ?, ?, NULL, ?, ?, ?, 1)",
+            (
+                current.name,
+                self._next_version(current.name),
+                current.type,
+                json.dumps(current.tags),
+                current.doc,
+                time.time(),
+            ),
+        )
+        self._prune(current.name)
 
     def _put_locked(
         self,

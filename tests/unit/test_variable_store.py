@@ -192,3 +192,19 @@ def test_database_is_wal_with_full_sync(store: VariableStore) -> None:
     assert db.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
     assert store._db.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL
     assert store.integrity_check() == "ok"
+
+
+def test_rename_moves_value_tags_and_doc_in_one_step(store: VariableStore) -> None:
+    store.put("wp_old", "joint_waypoint", ROUND_TRIP["joint_waypoint"], tags=["cell"], doc="d")
+    store.put("taken", "number", 1)
+    with pytest.raises(Conflict):
+        store.rename("wp_old", "taken")
+    with pytest.raises(InvalidValue):
+        store.rename("wp_old", "bad name")
+    with pytest.raises(NotFound):
+        store.rename("nothing", "x")
+    old, new = store.rename("wp_old", "wp_new")
+    assert (new.name, new.value, new.tags, new.doc) == ("wp_new", old.value, ["cell"], "d")
+    with pytest.raises(NotFound):
+        store.get("wp_old")
+    assert store.history("wp_old")[0].deleted
