@@ -25,6 +25,8 @@ export interface AddedDevice {
   last_error: string;
   connected_since: number | null;
   detected: boolean;
+  controlled_by: string | null;
+  control_expires: number | null;
 }
 
 export interface Pose {

@@ -2,6 +2,7 @@
 import { html, type SVGTemplateResult, type TemplateResult } from "lit";
 import { icons } from "../icons";
 import "./devices-panel";
+import "./jog-panel";
 import "./system-panel";
 
 export interface Panel {
@@ -12,6 +13,12 @@ export interface Panel {
 }
 
 export const panels: Panel[] = [
+  {
+    id: "jog",
+    title: "Jog",
+    icon: icons.jog,
+    render: () => html`<op-jog-panel></op-jog-panel>`,
+  },
   {
     id: "devices",
     title: "Devices",

@@ -1,0 +1,87 @@
+import { LitElement, css, html } from "lit";
+import { shared } from "../styles";
+import "./modal";
+
+const NAME = /^[A-Za-z][A-Za-z0-9_.-]{0,127}$/;
+
+// Ask for a variable name (teach, rename); shows a server error such as "exists" in place.
+export class OpNameDialog extends LitElement {
+  static properties = {
+    heading: { type: String },
+    value: { type: String },
+    confirmLabel: { type: String },
+    error: { type: String },
+    busy: { type: Boolean },
+  };
+  declare heading: string;
+  declare value: string;
+  declare confirmLabel: string;
+  declare error: string;
+  declare busy: boolean;
+
+  static styles = [
+    shared,
+    css`
+      .actions {
+        display: flex;
+        gap: 12px;
+        justify-content: flex-end;
+        margin-top: 16px;
+      }
+      .hint {
+        font-size: 15px;
+        margin-top: 6px;
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    this.heading = "";
+    this.value = "";
+    this.confirmLabel = "Save";
+    this.error = "";
+    this.busy = false;
+  }
+
+  firstUpdated(): void {
+    const input = this.renderRoot.querySelector("input");
+    input?.focus();
+    input?.select();
+  }
+
+  private submit(e: Event) {
+    e.preventDefault();
+    if (!NAME.test(this.value) || this.busy) return;
+    this.dispatchEvent(new CustomEvent("confirm", { detail: { name: this.value } }));
+  }
+
+  render() {
+    const valid = NAME.test(this.value);
+    return html`<op-modal heading=${this.heading}>
+      <form @submit=${this.submit}>
+        <input
+          data-testid="name-input"
+          aria-label="Name"
+          autocapitalize="none"
+          spellcheck="false"
+          .value=${this.value}
+          @input=${(e: InputEvent) => (this.value = (e.target as HTMLInputElement).value.trim())}
+        />
+        <div class="hint ${valid ? "muted" : "error"}">
+          Starts with a letter; letters, digits, _ . - only.
+        </div>
+        ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
+        <div class="actions">
+          <button type="button" @click=${() => this.dispatchEvent(new CustomEvent("close"))}>
+            Cancel
+          </button>
+          <button class="primary" type="submit" data-testid="name-confirm"
+            ?disabled=${!valid || this.busy}>${this.confirmLabel}</button>
+        </div>
+      </form>
+    </op-modal>`;
+  }
+}
+
+customElements.define("op-name-dialog", OpNameDialog);

@@ -1,0 +1,112 @@
+import { LitElement, css, html } from "lit";
+import { shared } from "../styles";
+import type { Marker, RobotScene } from "../three/scene";
+
+export interface RobotModel {
+  urdf: string | null;
+  packages: Record<string, string>;
+  info: { base_link: string; joints: { name: string }[] };
+}
+
+// The live 3D view. three.js and the URDF loader load only when a view is first shown.
+export class OpRobotView extends LitElement {
+  static properties = {
+    model: { attribute: false },
+    joints: { attribute: false },
+    markers: { attribute: false },
+    status: { state: true },
+    progress: { state: true },
+  };
+  declare model: RobotModel | null;
+  declare joints: number[] | null;
+  declare markers: Marker[];
+  declare status: "loading" | "ready" | "error";
+  declare progress: string;
+  private scene: RobotScene | null = null;
+  private observer = new ResizeObserver(() => this.scene?.resize());
+  private loadedUrdf = "";
+
+  static styles = [
+    shared,
+    css`
+      :host {
+        display: block;
+        position: relative;
+        min-height: 260px;
+        border-radius: 14px;
+        overflow: hidden;
+        background: #0b1015;
+        border: 1px solid var(--line);
+      }
+      .canvas,
+      .canvas canvas {
+        width: 100%;
+        height: 100%;
+        display: block;
+        touch-action: none;
+      }
+      .overlay {
+        position: absolute;
+        inset: auto 10px 10px 10px;
+        pointer-events: none;
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    this.model = null;
+    this.joints = null;
+    this.markers = [];
+    this.status = "loading";
+    this.progress = "";
+  }
+
+  disconnectedCallback(): void {
+    this.observer.disconnect();
+    this.scene?.dispose();
+    this.scene = null;
+    this.loadedUrdf = "";
+    super.disconnectedCallback();
+  }
+
+  protected async updated(changed: Map<string, unknown>): Promise<void> {
+    if (changed.has("model")) await this.load();
+    if (!this.scene || this.status !== "ready") return;
+    if (changed.has("joints") && this.joints && this.model) {
+      this.scene.setJoints(this.model.info.joints.map((j) => j.name), this.joints);
+    }
+    if (changed.has("markers")) this.scene.setMarkers(this.markers);
+  }
+
+  private async load(): Promise<void> {
+    const model = this.model;
+    if (!model?.urdf || model.urdf === this.loadedUrdf) return;
+    this.loadedUrdf = model.urdf;
+    this.status = "loading";
+    try {
+      const { RobotScene } = await import("../three/scene");
+      const host = this.renderRoot.querySelector(".canvas") as HTMLElement;
+      this.scene?.dispose();
+      this.scene = new RobotScene(host);
+      this.observer.observe(host);
+      await this.scene.load(model.urdf, model.packages, model.info.base_link, (done, total) => {
+        this.progress = `Loading 3D model… ${done} of ${total} files`;
+      });
+      this.status = "ready";
+      this.progress = "";
+      if (this.joints) this.scene.setJoints(model.info.joints.map((j) => j.name), this.joints);
+      this.scene.setMarkers(this.markers);
+    } catch (err) {
+      this.status = "error";
+      this.progress = `3D view unavailable: ${err instanceof Error ? err.message : String(err)}`;
+    }
+  }
+
+  render() {
+    return html`<div class="canvas" data-testid="robot-view" data-status=${this.status}></div>
+      ${this.progress ? html`<div class="overlay muted">${this.progress}</div>` : ""}`;
+  }
+}
+
+customElements.define("op-robot-view", OpRobotView);

@@ -1,0 +1,82 @@
+// Control leases as this browser tab holds them: one holder name per device (kept across
+// reloads), one token per robot (kept for this tab only), renewed while held.
+
+import { api, ApiError } from "./api";
+
+const RENEW_EVERY_MS = 5000;
+
+interface Granted {
+  device: string;
+  holder: string;
+  token: string;
+  expires: number;
+}
+
+function holderName(): string {
+  let name = localStorage.getItem("op.holder");
+  if (!name) {
+    name = `Pendant ${Math.random().toString(16).slice(2, 6).toUpperCase()}`;
+    localStorage.setItem("op.holder", name);
+  }
+  return name;
+}
+
+export class Control extends EventTarget {
+  readonly holder = holderName();
+  private timers = new Map<string, number>();
+
+  token(robot: string): string | null {
+    return sessionStorage.getItem(`op.lease.${robot}`);
+  }
+
+  holds(robot: string): boolean {
+    return this.token(robot) !== null;
+  }
+
+  async take(robot: string): Promise<void> {
+    const token = this.token(robot);
+    const granted = await api<Granted>(
+      "POST",
+      `/api/devices/${encodeURIComponent(robot)}/lease`,
+      { holder: this.holder },
+      token ? { "X-Lease-Token": token } : {},
+    );
+    sessionStorage.setItem(`op.lease.${robot}`, granted.token);
+    this.keepAlive(robot);
+    this.dispatchEvent(new Event("change"));
+  }
+
+  async release(robot: string): Promise<void> {
+    const token = this.token(robot);
+    this.forget(robot);
+    if (token) {
+      await api("DELETE", `/api/devices/${encodeURIComponent(robot)}/lease`, undefined, {
+        "X-Lease-Token": token,
+      }).catch(() => undefined);
+    }
+  }
+
+  /** The server no longer honours our token (it lapsed, or the robot was removed). */
+  forget(robot: string): void {
+    sessionStorage.removeItem(`op.lease.${robot}`);
+    window.clearInterval(this.timers.get(robot));
+    this.timers.delete(robot);
+    this.dispatchEvent(new Event("change"));
+  }
+
+  resume(robot: string): void {
+    if (this.holds(robot) && !this.timers.has(robot)) this.keepAlive(robot);
+  }
+
+  private keepAlive(robot: string): void {
+    window.clearInterval(this.timers.get(robot));
+    const timer = window.setInterval(() => {
+      this.take(robot).catch((err: unknown) => {
+        if (err instanceof ApiError && err.status !== 0) this.forget(robot);
+      });
+    }, RENEW_EVERY_MS);
+    this.timers.set(robot, timer);
+  }
+}
+
+export const control = new Control();

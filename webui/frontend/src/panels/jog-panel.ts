@@ -1,0 +1,645 @@
+import { LitElement, css, html } from "lit";
+import { api, ApiError, errorText } from "../api";
+import { control } from "../control";
+import { deg, mm } from "../format";
+import { JogSocket, type JogMessage, type JogStatus } from "../jog-socket";
+import { FeedController, feed } from "../live";
+import { quaternionToRpy } from "../math";
+import { shared } from "../styles";
+import type { Marker } from "../three/scene";
+import type { RobotState } from "../types";
+import "../components/jog-pad";
+import "../components/name-dialog";
+import "../components/robot-view";
+import "../components/waypoint-list";
+import type { JogAxis } from "../components/jog-pad";
+import type { RobotModel } from "../components/robot-view";
+import type { Waypoint } from "../components/waypoint-list";
+
+type Mode = "joint" | "base" | "tool";
+type Stepping = "continuous" | "fine" | "coarse";
+const CARTESIAN = ["x", "y", "z", "rx", "ry", "rz"];
+const RAD = Math.PI / 180;
+// Incremental steps: fine = 0.1 mm / 0.1°, coarse = 1 mm / 1°.
+const STEP = { fine: { linear: 0.0001, angular: 0.1 * RAD }, coarse: { linear: 0.001, angular: RAD } };
+
+type Dialog =
+  | { kind: "teach"; type: "joint" | "pose"; frame: "base" | "world"; name: string;
+      error: string; overwrite: boolean }
+  | { kind: "rename"; from: string; name: string; error: string }
+  | { kind: "delete"; name: string }
+  | null;
+
+// Jogging and teaching: hold-to-run buttons, the live 3D view, waypoints, the 3D mouse.
+export class OpJogPanel extends LitElement {
+  static properties = {
+    robot: { state: true },
+    model: { state: true },
+    mode: { state: true },
+    stepping: { state: true },
+    speed: { state: true },
+    status: { state: true },
+    message: { state: true },
+    waypoints: { state: true },
+    selected: { state: true },
+    dialog: { state: true },
+    mouse: { state: true },
+    mouseOn: { state: true },
+  };
+  declare robot: string;
+  declare model: RobotModel | null;
+  declare mode: Mode;
+  declare stepping: Stepping;
+  declare speed: number;
+  declare status: JogStatus | null;
+  declare message: string;
+  declare waypoints: Waypoint[];
+  declare selected: string;
+  declare dialog: Dialog;
+  declare mouse: string;
+  declare mouseOn: boolean;
+  private socket = new JogSocket();
+  private press = "";
+  private onVisibility = () => document.hidden && this.socket.releaseAll();
+  private onBlur = () => this.socket.releaseAll();
+  private onControl = () => this.requestUpdate();
+
+  static styles = [
+    shared,
+    css`
+      .top {
+        display: flex;
+        gap: 10px;
+        flex-wrap: wrap;
+        align-items: center;
+        margin-bottom: 12px;
+      }
+      .top .spacer {
+        flex: 1;
+      }
+      .stop {
+        background: #c62828;
+        border-color: #ff8a80;
+        color: white;
+        font-size: 22px;
+        min-width: 140px;
+        min-height: 64px;
+      }
+      .layout {
+        display: grid;
+        grid-template-columns: minmax(0, 1fr) minmax(0, 1fr);
+        grid-template-areas: "view controls" "waypoints controls";
+        grid-template-rows: auto 1fr;
+        gap: 14px;
+      }
+      .view {
+        grid-area: view;
+      }
+      .controls {
+        grid-area: controls;
+      }
+      .waypoints {
+        grid-area: waypoints;
+        align-self: start;
+      }
+      @media (max-width: 1000px) {
+        .layout {
+          grid-template-columns: minmax(0, 1fr);
+          grid-template-areas: "view" "controls" "waypoints";
+        }
+      }
+      op-robot-view {
+        height: 380px;
+      }
+      @media (max-width: 700px) {
+        op-robot-view {
+          height: 260px;
+        }
+      }
+      .readout {
+        display: grid;
+        grid-template-columns: repeat(3, 1fr);
+        gap: 6px;
+        margin-top: 10px;
+        font-variant-numeric: tabular-nums;
+      }
+      .readout div {
+        background: var(--panel);
+        border-radius: 8px;
+        padding: 6px 10px;
+      }
+      .readout small {
+        display: block;
+        color: var(--muted);
+        font-size: 13px;
+      }
+      .segmented {
+        display: flex;
+        gap: 6px;
+        flex-wrap: wrap;
+        margin-bottom: 10px;
+      }
+      .segmented button[aria-pressed="true"] {
+        border-color: var(--accent);
+        color: var(--accent);
+      }
+      .deadman {
+        padding: 10px 14px;
+        border-radius: 10px;
+        margin-bottom: 10px;
+        font-weight: 600;
+      }
+      .speed {
+        display: flex;
+        gap: 10px;
+        align-items: center;
+        margin-bottom: 10px;
+      }
+      .speed input[type="range"] {
+        flex: 1;
+        min-height: 48px;
+        accent-color: var(--accent);
+      }
+      section.card {
+        margin-bottom: 14px;
+      }
+      select {
+        min-height: 56px;
+        font: inherit;
+        background: var(--bg);
+        color: var(--text);
+        border: 2px solid var(--line);
+        border-radius: 10px;
+        padding: 0 12px;
+      }
+      .row {
+        display: flex;
+        gap: 8px;
+        flex-wrap: wrap;
+        align-items: center;
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    new FeedController(this);
+    this.robot = localStorage.getItem("op.robot") ?? "";
+    this.model = null;
+    this.mode = "joint";
+    this.stepping = "continuous";
+    this.speed = 25;
+    this.status = null;
+    this.message = "";
+    this.waypoints = [];
+    this.selected = "";
+    this.dialog = null;
+    this.mouse = "";
+    this.mouseOn = false;
+    this.socket.addEventListener("message", (e) => this.onMessage((e as CustomEvent<JogMessage>).detail));
+    this.socket.addEventListener("change", () => this.requestUpdate());
+  }
+
+  async connectedCallback(): Promise<void> {
+    super.connectedCallback();
+    this.socket.connect();
+    document.addEventListener("visibilitychange", this.onVisibility);
+    window.addEventListener("blur", this.onBlur);
+    control.addEventListener("change", this.onControl);
+    try {
+      const settings = await api<{ heartbeat_ms: number }>("GET", "/api/jog/settings");
+      this.socket.heartbeatMs = settings.heartbeat_ms;
+    } catch {
+      // keep the default heartbeat period
+    }
+  }
+
+  disconnectedCallback(): void {
+    this.socket.releaseAll();
+    this.socket.close(); // the server halts anything this page was moving
+    document.removeEventListener("visibilitychange", this.onVisibility);
+    window.removeEventListener("blur", this.onBlur);
+    control.removeEventListener("change", this.onControl);
+    super.disconnectedCallback();
+  }
+
+  // Robot selection and its model --------------------------------------------------------------
+
+  private robots() {
+    return feed.devices.filter((d) => d.kind === "robot");
+  }
+
+  protected willUpdate(): void {
+    const robots = this.robots();
+    if (robots.length && !robots.some((r) => r.local_name === this.robot)) {
+      this.robot = robots[0].local_name;
+    }
+  }
+
+  protected updated(changed: Map<string, unknown>): void {
+    if (changed.has("robot") && this.robot) {
+      localStorage.setItem("op.robot", this.robot);
+      control.resume(this.robot);
+      void this.loadRobot();
+    }
+  }
+
+  private async loadRobot(): Promise<void> {
+    const robot = this.robot;
+    this.model = null;
+    try {
+      const model = await api<RobotModel>("GET", `/api/jog/robots/${encodeURIComponent(robot)}`);
+      if (robot === this.robot) this.model = model;
+      await this.loadWaypoints();
+    } catch (err) {
+      this.message = errorText(err);
+    }
+  }
+
+  private async loadWaypoints(): Promise<void> {
+    try {
+      this.waypoints = await api<Waypoint[]>(
+        "GET",
+        `/api/jog/robots/${encodeURIComponent(this.robot)}/waypoints`,
+      );
+    } catch (err) {
+      this.message = errorText(err);
+    }
+  }
+
+  // Control and power ----------------------------------------------------------------------
+
+  private async toggleControl(): Promise<void> {
+    this.message = "";
+    try {
+      if (control.holds(this.robot)) await control.release(this.robot);
+      else await control.take(this.robot);
+    } catch (err) {
+      this.message = errorText(err);
+    }
+  }
+
+  private async power(command: "enable" | "disable" | "reset_errors"): Promise<void> {
+    this.message = "";
+    try {
+      await api("POST", `/api/jog/robots/${encodeURIComponent(this.robot)}/${command}`, undefined, {
+        "X-Lease-Token": control.token(this.robot) ?? "",
+      });
+    } catch (err) {
+      if (err instanceof ApiError && err.code === "lease_held") control.forget(this.robot);
+      this.message = errorText(err);
+    }
+  }
+
+  private async stop(): Promise<void> {
+    // Stop always wins: over the socket when it is up, and over HTTP regardless.
+    this.socket.releaseAll();
+    this.socket.send({ type: "halt", robot: this.robot });
+    try {
+      await api("POST", `/api/jog/robots/${encodeURIComponent(this.robot)}/halt`);
+    } catch (err) {
+      this.message = errorText(err);
+    }
+  }
+
+  // Jogging --------------------------------------------------------------------------------
+
+  private base(): Record<string, unknown> {
+    return { robot: this.robot, token: control.token(this.robot), speed: this.speed / 100 };
+  }
+
+  private hold(axis: string, direction: number): void {
+    this.message = "";
+    if (!control.holds(this.robot)) {
+      this.message = "Take control of the robot first.";
+      return;
+    }
+    const joint = this.mode === "joint";
+    const linear = !joint && ["x", "y", "z"].includes(axis);
+    let step: number | undefined;
+    if (this.stepping !== "continuous") {
+      const size = STEP[this.stepping];
+      step = joint ? size.angular : linear ? size.linear : size.angular;
+    }
+    this.press = this.socket.press(
+      {
+        type: "jog",
+        ...this.base(),
+        kind: joint ? "joint" : "cartesian",
+        axis: joint ? Number(axis) : axis,
+        direction,
+        frame: this.mode === "tool" ? "tool" : "base",
+        ...(step === undefined ? {} : { step }),
+      },
+      step === undefined,
+    );
+  }
+
+  private release(): void {
+    if (this.press) this.socket.release(this.press);
+    this.press = "";
+  }
+
+  private holdWaypoint(name: string): void {
+    this.message = "";
+    if (!control.holds(this.robot)) {
+      this.message = "Take control of the robot first.";
+      return;
+    }
+    this.selected = name;
+    this.press = this.socket.press({ type: "move_to", ...this.base(), waypoint: name });
+  }
+
+  private onMessage(message: JogMessage): void {
+    if (message.type === "status") {
+      this.status = message;
+      if (message.state === "refused" && message.reason === "lease_held") control.forget(this.robot);
+      if (message.press.startsWith("mouse:") && message.state !== "moving") this.mouseOn = false;
+    } else if (message.type === "taught") {
+      this.message = `Saved waypoint ${message.name} (3D mouse button).`;
+      void this.loadWaypoints();
+    } else if (message.type === "mouse_frame") {
+      this.mode = message.frame === "tool" ? "tool" : "base";
+    } else if (message.type === "error") {
+      this.message = message.error.message;
+    }
+  }
+
+  // 3D mouse -------------------------------------------------------------------------------
+
+  private mice() {
+    return feed.devices.filter((d) => d.kind === "input" && d.status === "connected");
+  }
+
+  private setMouse(on: boolean): void {
+    const device = this.mouse || this.mice()[0]?.local_name;
+    if (!device) return;
+    this.mouse = device;
+    if (on && !control.holds(this.robot)) {
+      this.message = "Take control of the robot first.";
+      return;
+    }
+    this.mouseOn = on;
+    this.socket.send({
+      type: "mouse",
+      ...this.base(),
+      device,
+      enabled: on,
+      mode: this.mode === "joint" ? "joint" : "cartesian",
+      frame: this.mode === "tool" ? "tool" : "base",
+      buttons: { "0": "teach", "1": "toggle_frame" },
+    });
+  }
+
+  // Teaching -------------------------------------------------------------------------------
+
+  private nextName(): string {
+    const taken = new Set(this.waypoints.map((w) => w.name));
+    for (let i = 1; ; i++) {
+      const name = `wp_${String(i).padStart(3, "0")}`;
+      if (!taken.has(name)) return name;
+    }
+  }
+
+  private async teach(): Promise<void> {
+    const d = this.dialog;
+    if (d?.kind !== "teach") return;
+    try {
+      await api("POST", `/api/jog/robots/${encodeURIComponent(this.robot)}/teach`, {
+        name: d.name,
+        kind: d.type,
+        frame: d.frame,
+        overwrite: d.overwrite,
+      });
+      this.dialog = null;
+      this.selected = d.name;
+      this.message = `Saved ${d.name}.`;
+      await this.loadWaypoints();
+    } catch (err) {
+      const exists = err instanceof ApiError && err.code === "exists";
+      this.dialog = { ...d, overwrite: exists, error: exists
+        ? `${d.name} exists. Save again to overwrite it.` : errorText(err) };
+    }
+  }
+
+  private async rename(): Promise<void> {
+    const d = this.dialog;
+    if (d?.kind !== "rename") return;
+    try {
+      await api("POST", `/api/variables/${encodeURIComponent(d.from)}/rename`, { to: d.name });
+      this.dialog = null;
+      await this.loadWaypoints();
+    } catch (err) {
+      this.dialog = { ...d, error: errorText(err) };
+    }
+  }
+
+  private async deleteWaypoint(name: string): Promise<void> {
+    try {
+      await api("DELETE", `/api/variables/${encodeURIComponent(name)}`);
+    } catch (err) {
+      this.message = errorText(err);
+    }
+    this.dialog = null;
+    await this.loadWaypoints();
+  }
+
+  private reteach(name: string): void {
+    const waypoint = this.waypoints.find((w) => w.name === name);
+    if (!waypoint) return;
+    this.dialog = { kind: "teach", type: waypoint.type === "joint_waypoint" ? "joint" : "pose",
+      frame: "base", name, error: `Overwrite ${name} with the robot's position now?`,
+      overwrite: true };
+  }
+
+  // Rendering ------------------------------------------------------------------------------
+
+  private axes(state: RobotState | undefined): JogAxis[] {
+    if (this.mode === "joint") {
+      const joints = this.model?.info.joints ?? [];
+      return joints.map((_, i) => ({
+        key: String(i),
+        label: `J${i + 1}`,
+        value: state ? `${deg(state.joint_position[i])}°` : "–",
+      }));
+    }
+    const [x, y, z] = state?.tcp_pose.position ?? [0, 0, 0];
+    const rpy = state ? quaternionToRpy(state.tcp_pose.orientation) : [0, 0, 0];
+    const values = [`${mm(x)} mm`, `${mm(y)} mm`, `${mm(z)} mm`,
+      ...rpy.map((a) => `${a.toFixed(1)}°`)];
+    return CARTESIAN.map((a, i) => ({ key: a, label: a.toUpperCase(),
+      value: state ? values[i] : "–" }));
+  }
+
+  private deadman() {
+    const s = this.status;
+    if (!this.socket.online) {
+      return html`<div class="deadman chip bad" data-testid="deadman">Jog link down — reconnecting</div>`;
+    }
+    if (!s) return html`<div class="deadman chip" data-testid="deadman">Ready: hold a button to jog</div>`;
+    const cls = s.state === "moving" ? "ok" : s.state === "halted" || s.state === "refused" ? "bad" : "";
+    const text = s.state === "moving" ? "Moving — hold to continue"
+      : s.state === "halted" ? `Halted: ${s.reason ?? ""}`
+      : s.state === "refused" ? `Refused: ${s.message ?? s.reason ?? ""}`
+      : s.state === "done" ? "Arrived" : "Stopped";
+    return html`<div class="deadman chip ${cls}" data-testid="deadman">${text}</div>`;
+  }
+
+  private renderDialog() {
+    const d = this.dialog;
+    if (!d) return "";
+    const close = () => (this.dialog = null);
+    if (d.kind === "teach") {
+      return html`<op-name-dialog heading=${`Save ${d.type} waypoint${d.type === "pose" ? ` (${d.frame})` : ""}`}
+        .value=${d.name} .error=${d.error} confirmLabel=${d.overwrite ? "Overwrite" : "Save"}
+        @close=${close}
+        @confirm=${(e: CustomEvent<{ name: string }>) => {
+          this.dialog = { ...d, name: e.detail.name, overwrite: d.overwrite && e.detail.name === d.name };
+          void this.teach();
+        }}></op-name-dialog>`;
+    }
+    if (d.kind === "rename") {
+      return html`<op-name-dialog heading=${`Rename ${d.from}`} .value=${d.name} .error=${d.error}
+        confirmLabel="Rename" @close=${close}
+        @confirm=${(e: CustomEvent<{ name: string }>) => {
+          this.dialog = { ...d, name: e.detail.name };
+          void this.rename();
+        }}></op-name-dialog>`;
+    }
+    return html`<op-modal heading=${`Delete ${d.name}?`} @close=${close}>
+      <p>The waypoint's history is kept in the variable storage.</p>
+      <div class="row" style="justify-content:flex-end">
+        <button @click=${close}>Cancel</button>
+        <button class="danger" data-testid="confirm-delete" @click=${() => this.deleteWaypoint(d.name)}>
+          Delete</button>
+      </div>
+    </op-modal>`;
+  }
+
+  render() {
+    const robots = this.robots();
+    if (!robots.length) {
+      return html`<div class="card">
+        <h2>No robot yet</h2>
+        <p>Add a robot in the Devices panel, then come back here to jog and teach.</p>
+        <button class="primary" @click=${() => (location.hash = "#/devices")}>Go to Devices</button>
+      </div>`;
+    }
+    const state = feed.states.get(this.robot);
+    const device = robots.find((r) => r.local_name === this.robot);
+    const mine = control.holds(this.robot);
+    const controlledBy = device?.controlled_by;
+    const canMove = mine && !!state?.flags.ready;
+    const rpy = state ? quaternionToRpy(state.tcp_pose.orientation) : [0, 0, 0];
+    const markers: Marker[] = this.waypoints.map((w) => ({
+      name: w.name, position: w.tcp_position, selected: w.name === this.selected }));
+    const mice = this.mice();
+    return html`
+      <div class="top">
+        ${robots.length > 1
+          ? html`<select aria-label="Robot" data-testid="robot-select" .value=${this.robot}
+              @change=${(e: Event) => (this.robot = (e.target as HTMLSelectElement).value)}>
+              ${robots.map((r) => html`<option value=${r.local_name}>${r.local_name}</option>`)}
+            </select>`
+          : html`<h2 style="margin:0">${this.robot}</h2>`}
+        <button data-testid="control" class=${mine ? "" : "primary"} @click=${this.toggleControl}>
+          ${mine ? "Release control" : "Take control"}</button>
+        <span class="chip ${mine ? "ok" : controlledBy ? "warn" : ""}" data-testid="lease">
+          ${mine ? `You have control (${control.holder})`
+            : controlledBy ? `Controlled by ${controlledBy}` : "Nobody has control"}</span>
+        ${state?.flags.enabled
+          ? html`<button data-testid="disable" ?disabled=${!mine} @click=${() => this.power("disable")}>
+              Disable</button>`
+          : html`<button data-testid="enable" ?disabled=${!mine} @click=${() => this.power("enable")}>
+              Enable</button>`}
+        ${state?.flags.error
+          ? html`<button ?disabled=${!mine} @click=${() => this.power("reset_errors")}>Reset error</button>`
+          : ""}
+        <span class="spacer"></span>
+        <button class="stop" data-testid="stop" @click=${this.stop}>STOP</button>
+      </div>
+      ${this.message ? html`<p class="error" role="alert" data-testid="jog-message">${this.message}</p>` : ""}
+      <div class="layout">
+        <div class="view">
+          <op-robot-view .model=${this.model} .joints=${state?.joint_position ?? null}
+            .markers=${markers}></op-robot-view>
+          <div class="readout" data-testid="tcp-readout">
+            <div><small>X mm</small>${state ? mm(state.tcp_pose.position[0]) : "–"}</div>
+            <div><small>Y mm</small>${state ? mm(state.tcp_pose.position[1]) : "–"}</div>
+            <div><small>Z mm</small>${state ? mm(state.tcp_pose.position[2]) : "–"}</div>
+            <div><small>Roll °</small>${rpy[0].toFixed(1)}</div>
+            <div><small>Pitch °</small>${rpy[1].toFixed(1)}</div>
+            <div><small>Yaw °</small>${rpy[2].toFixed(1)}</div>
+          </div>
+        </div>
+        <section class="card waypoints">
+            <h2>Waypoints</h2>
+            <div class="row" style="margin-bottom:8px">
+              <button data-testid="teach-joint" ?disabled=${!state}
+                @click=${() => (this.dialog = { kind: "teach", type: "joint", frame: "base",
+                  name: this.nextName(), error: "", overwrite: false })}>Save joints</button>
+              <button data-testid="teach-pose" ?disabled=${!state}
+                @click=${() => (this.dialog = { kind: "teach", type: "pose", frame: "base",
+                  name: this.nextName(), error: "", overwrite: false })}>Save pose (base)</button>
+              <button ?disabled=${!state}
+                @click=${() => (this.dialog = { kind: "teach", type: "pose", frame: "world",
+                  name: this.nextName(), error: "", overwrite: false })}>Save pose (world)</button>
+            </div>
+            <op-waypoint-list .waypoints=${this.waypoints} ?disabled=${!canMove}
+              selected=${this.selected}
+              @waypoint-hold=${(e: CustomEvent) => this.holdWaypoint(e.detail.name)}
+              @waypoint-release=${() => this.release()}
+              @waypoint-rename=${(e: CustomEvent) => (this.dialog = { kind: "rename",
+                from: e.detail.name, name: e.detail.name, error: "" })}
+              @waypoint-delete=${(e: CustomEvent) => (this.dialog = { kind: "delete",
+                name: e.detail.name })}
+              @waypoint-reteach=${(e: CustomEvent) => this.reteach(e.detail.name)}
+            ></op-waypoint-list>
+        </section>
+        <div class="controls">
+          ${this.deadman()}
+          <div class="segmented" role="group" aria-label="Jog frame">
+            ${(["joint", "base", "tool"] as Mode[]).map((m) => html`<button
+              data-testid="mode-${m}" aria-pressed=${this.mode === m ? "true" : "false"}
+              @click=${() => (this.mode = m)}>${m === "joint" ? "Joints" : m === "base" ? "Base" : "Tool"}</button>`)}
+          </div>
+          <div class="segmented" role="group" aria-label="Jog steps">
+            ${(["continuous", "fine", "coarse"] as Stepping[]).map((s) => html`<button
+              data-testid="step-${s}" aria-pressed=${this.stepping === s ? "true" : "false"}
+              @click=${() => (this.stepping = s)}>${s === "continuous" ? "Continuous"
+                : s === "fine" ? "Step 0.1 mm / 0.1°" : "Step 1 mm / 1°"}</button>`)}
+          </div>
+          <label class="speed">Speed
+            <input type="range" min="1" max="100" .value=${String(this.speed)}
+              data-testid="speed" aria-label="Jog speed"
+              @input=${(e: Event) => (this.speed = Number((e.target as HTMLInputElement).value))} />
+            <strong>${this.speed} %</strong>
+          </label>
+          <op-jog-pad .axes=${this.axes(state)} ?disabled=${!canMove}
+            @jog-hold=${(e: CustomEvent) => this.hold(e.detail.axis, e.detail.direction)}
+            @jog-release=${() => this.release()}></op-jog-pad>
+          ${!mine ? html`<p class="muted">Take control to jog this robot.</p>`
+            : !state?.flags.ready ? html`<p class="muted">Enable the robot to jog it.</p>` : ""}
+          <section class="card">
+            <h2>3D mouse</h2>
+            ${mice.length
+              ? html`<div class="row">
+                  <select aria-label="3D mouse" .value=${this.mouse || mice[0].local_name}
+                    @change=${(e: Event) => (this.mouse = (e.target as HTMLSelectElement).value)}>
+                    ${mice.map((m) => html`<option value=${m.local_name}>${m.local_name}</option>`)}
+                  </select>
+                  <button data-testid="mouse-toggle" class=${this.mouseOn ? "primary" : ""}
+                    ?disabled=${!canMove} @click=${() => this.setMouse(!this.mouseOn)}>
+                    ${this.mouseOn ? "3D mouse on" : "Use 3D mouse"}</button>
+                </div>
+                <p class="muted">Button 1 saves a waypoint, button 2 switches base/tool.</p>`
+              : html`<p class="muted">No 3D mouse added (Devices panel).</p>`}
+          </section>
+        </div>
+      </div>
+      ${this.renderDialog()}
+    `;
+  }
+}
+
+customElements.define("op-jog-panel", OpJogPanel);
