@@ -35,7 +35,7 @@ def jog_router(directory: Directory, storage: StorageClient, deadman: float) -> 
             "linear_speed": LINEAR_SPEED,
             "angular_speed": ANGULAR_SPEED,
             "manual_tcp_speed": MANUAL_TCP_SPEED,
-            "heartbeat_ms": max(10, min(50, round(deadman * 1000 / 3))),
+            "heartbeat_ms": max(10, min(50, round(deadman * 1000 / 4))),
         }
 
     @router.websocket("/ws")

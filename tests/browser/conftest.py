@@ -29,6 +29,9 @@ CHROMIUM_ARGS = [
     "--disable-component-update",
     "--no-first-run",
     "--disable-sync",
+    # No GPU here: WebGL (the 3D view) renders in software. Tablets use their GPU.
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
 ]
 TABLET: ViewportSize = {"width": 1280, "height": 800}
 PHONE: ViewportSize = {"width": 390, "height": 844}

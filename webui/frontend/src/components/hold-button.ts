@@ -16,8 +16,9 @@ export class OpHoldButton extends LitElement {
       button {
         width: 100%;
         height: 100%;
-        min-height: 64px;
-        font-size: 26px;
+        min-height: var(--hold-min-height, 64px);
+        font-size: var(--hold-font-size, 26px);
+        padding: 0 8px;
         touch-action: none;
         -webkit-user-select: none;
         user-select: none;

@@ -23,6 +23,8 @@ export class OpRobotView extends LitElement {
   declare status: "loading" | "ready" | "error";
   declare progress: string;
   private scene: RobotScene | null = null;
+  private shownMarkers = "";
+  private shownJoints = "";
   private observer = new ResizeObserver(() => this.scene?.resize());
   private loadedUrdf = "";
 
@@ -73,10 +75,17 @@ export class OpRobotView extends LitElement {
   protected async updated(changed: Map<string, unknown>): Promise<void> {
     if (changed.has("model")) await this.load();
     if (!this.scene || this.status !== "ready") return;
-    if (changed.has("joints") && this.joints && this.model) {
+    // The panel re-renders with every state; only real changes reach the scene.
+    const joints = JSON.stringify(this.joints);
+    if (changed.has("joints") && this.joints && this.model && joints !== this.shownJoints) {
+      this.shownJoints = joints;
       this.scene.setJoints(this.model.info.joints.map((j) => j.name), this.joints);
     }
-    if (changed.has("markers")) this.scene.setMarkers(this.markers);
+    const markers = JSON.stringify(this.markers);
+    if (changed.has("markers") && markers !== this.shownMarkers) {
+      this.shownMarkers = markers;
+      this.scene.setMarkers(this.markers);
+    }
   }
 
   private async load(): Promise<void> {
@@ -97,6 +106,8 @@ export class OpRobotView extends LitElement {
       this.progress = "";
       if (this.joints) this.scene.setJoints(model.info.joints.map((j) => j.name), this.joints);
       this.scene.setMarkers(this.markers);
+      this.shownJoints = JSON.stringify(this.joints);
+      this.shownMarkers = JSON.stringify(this.markers);
     } catch (err) {
       this.status = "error";
       this.progress = `3D view unavailable: ${err instanceof Error ? err.message : String(err)}`;

@@ -51,9 +51,11 @@ export class OpWaypointList extends LitElement {
         font-size: 16px;
       }
       op-hold-button {
-        width: 130px;
+        width: 150px;
         height: 56px;
         display: block;
+        --hold-font-size: 16px;
+        --hold-min-height: 56px;
       }
       .empty {
         padding: 12px 0;

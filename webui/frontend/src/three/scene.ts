@@ -4,6 +4,7 @@
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import URDFLoader, { type URDFRobot } from "urdf-loader";
+import { holding, onHeldChange } from "../activity";
 
 export interface Marker {
   name: string;
@@ -12,6 +13,18 @@ export interface Marker {
 }
 
 export type Progress = (loaded: number, total: number) => void;
+
+// Without a GPU (WebGL in software) a detailed model at 30 frames/s would take the page's
+// whole main thread, and with it the jog heartbeat: draw the simpler collision meshes,
+// and fewer frames.
+const SOFTWARE_FRAME_MS = 200;
+
+function isSoftware(renderer: THREE.WebGLRenderer): boolean {
+  const gl = renderer.getContext();
+  const info = gl.getExtension("WEBGL_debug_renderer_info");
+  const name = info ? String(gl.getParameter(info.UNMASKED_RENDERER_WEBGL)) : "";
+  return /swiftshader|llvmpipe|software/i.test(name);
+}
 
 export class RobotScene {
   private renderer: THREE.WebGLRenderer;
@@ -22,12 +35,18 @@ export class RobotScene {
   private base: THREE.Object3D | null = null;
   private markers = new THREE.Group();
   private frame = 0;
+  private lastFrame = 0;
+  private unsubscribe: () => void;
+  readonly software: boolean;
 
   constructor(private host: HTMLElement) {
     this.renderer = new THREE.WebGLRenderer({ antialias: true, alpha: false });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
     this.renderer.setClearColor(0x0b1015);
     host.appendChild(this.renderer.domElement);
+    this.software = isSoftware(this.renderer);
+    if (this.software) this.renderer.setPixelRatio(1);
+    this.unsubscribe = onHeldChange(() => this.requestRender());
     this.camera.up.set(0, 0, 1); // URDFs are Z-up
     this.camera.position.set(1.4, -1.2, 1.0);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
@@ -50,11 +69,24 @@ export class RobotScene {
     const done = new Promise<void>((resolve) => (manager.onLoad = () => resolve()));
     const loader = new URDFLoader(manager);
     loader.packages = packages;
+    loader.parseVisual = !this.software;
+    loader.parseCollision = this.software;
     const robot = await loader.loadAsync(urdf);
     this.robot = robot;
     this.base = robot.links[baseLink] ?? robot;
     this.scene.add(robot);
     await done; // the meshes
+    if (this.software) {
+      // Collision meshes carry no material of their own, and STL files often carry zeroed
+      // normals (which light as black).
+      const grey = new THREE.MeshPhongMaterial({ color: 0x9aa3ab });
+      robot.traverse((part) => {
+        if (part instanceof THREE.Mesh) {
+          part.material = grey;
+          part.geometry.computeVertexNormals();
+        }
+      });
+    }
     this.frameRobot(robot);
     this.requestRender();
   }
@@ -104,14 +136,25 @@ export class RobotScene {
 
   requestRender(): void {
     if (this.frame) return;
-    this.frame = requestAnimationFrame(() => {
-      this.frame = 0;
-      this.renderer.render(this.scene, this.camera);
-    });
+    // A software frame can block the page longer than a jog heartbeat may wait.
+    if (this.software && holding()) return;
+    const wait = this.software ? this.lastFrame + SOFTWARE_FRAME_MS - performance.now() : 0;
+    const draw = () => {
+      this.frame = requestAnimationFrame(() => {
+        this.frame = 0;
+        if (this.software && holding()) return; // a press began meanwhile: draw on release
+        this.lastFrame = performance.now();
+        this.renderer.render(this.scene, this.camera);
+      });
+    };
+    if (wait > 0) this.frame = window.setTimeout(draw, wait);
+    else draw();
   }
 
   dispose(): void {
     cancelAnimationFrame(this.frame);
+    window.clearTimeout(this.frame);
+    this.unsubscribe();
     this.controls.dispose();
     this.renderer.dispose();
     this.renderer.domElement.remove();

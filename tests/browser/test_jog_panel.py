@@ -1,0 +1,141 @@
+"""The Jog panel by touch: take control, enable, hold a jog button (the robot moves while the
+finger is down and stops when it lifts), teach a waypoint, move away, hold "move to" until it
+arrives, and a live 3D view of the robot."""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from playwright.sync_api import BrowserContext, CDPSession, Locator, Page, expect
+
+from tests.browser.conftest import PageErrors
+from tests.support.png import decode
+from tests.support.processes import Runtime, wait_for
+
+
+class Finger:
+    """A real touch: Chromium turns these into the same pointer events a finger makes."""
+
+    def __init__(self, page: Page) -> None:
+        self.cdp: CDPSession = page.context.new_cdp_session(page)
+
+    def down(self, target: Locator) -> None:
+        target.scroll_into_view_if_needed()
+        box = target.bounding_box()
+        assert box is not None
+        point = {"x": box["x"] + box["width"] / 2, "y": box["y"] + box["height"] / 2}
+        self.cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [point]})
+
+    def up(self) -> None:
+        self.cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+
+
+@pytest.fixture(scope="module")
+def robot(runtime: Runtime) -> str:
+    sim = wait_for(lambda: runtime.api("GET", "/devices/detected").json(), 10)[0]
+    runtime.api("POST", "/devices", json={"uuid": sim["uuid"], "local_name": "robot"})
+    wait_for(lambda: runtime.api("GET", "/devices").json()[0]["status"] == "connected", 10)
+    return "robot"
+
+
+def state(runtime: Runtime) -> dict[str, Any]:
+    return runtime.api("GET", "/devices/robot/state").json()  # type: ignore[no-any-return]
+
+
+def joints(runtime: Runtime) -> np.ndarray[Any, Any]:
+    return np.array(state(runtime)["joint_position"])
+
+
+def at_rest(runtime: Runtime) -> bool:
+    return bool(np.allclose(state(runtime)["joint_velocity"], 0.0))
+
+
+def robot_pixels(png: bytes) -> int:
+    """Neutral grey pixels: the robot's links. The background and grid are blue-grey."""
+    image = decode(png)[:, :, :3].astype(int)
+    r, g, b = image[..., 0], image[..., 1], image[..., 2]
+    return int(((abs(r - g) < 8) & (abs(g - b) < 8) & (r > 40)).sum())
+
+
+def test_jog_teach_and_move_to_by_touch(
+    runtime: Runtime, robot: str, tablet: BrowserContext, artifacts: Path
+) -> None:
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/jog")
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("You have control")
+    page.get_by_test_id("enable").tap()
+    expect(page.get_by_test_id("disable")).to_be_visible()
+
+    # The 3D view renders the robot.
+    view = page.get_by_test_id("robot-view")
+    expect(view).to_have_attribute("data-status", "ready", timeout=60_000)
+    page.wait_for_timeout(300)
+    page.screenshot(path=artifacts / "1-jog-panel.png")
+    assert robot_pixels(view.screenshot(path=artifacts / "2-robot-view.png")) > 500
+
+    finger = Finger(page)
+    j1_plus = page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus]")
+
+    # Hold J1 +: it moves while held...
+    before = joints(runtime)
+    finger.down(j1_plus)
+    try:
+        wait_for(lambda: joints(runtime)[0] > before[0] + 0.05, 5, what="J1 moving")
+        expect(page.get_by_test_id("deadman")).to_contain_text("Moving")
+    finally:
+        finger.up()
+    # ... and stops when the finger lifts.
+    wait_for(lambda: at_rest(runtime), 3, what="stopped on release")
+    stopped = joints(runtime)
+    time.sleep(0.3)
+    assert np.array_equal(joints(runtime), stopped)
+    moved = stopped - before
+    assert moved[0] > 0.05
+    assert np.abs(moved[1:]).max() < 1e-9
+
+    # Teach the position as a waypoint.
+    page.get_by_test_id("teach-joint").tap()
+    page.get_by_test_id("name-input").fill("pick_1")
+    page.get_by_test_id("name-confirm").tap()
+    waypoint = page.locator("[data-testid=waypoint][data-name=pick_1]")
+    expect(waypoint).to_be_visible()
+    taught = np.array(runtime.api("GET", "/variables/pick_1").json()["value"]["joints"])
+    assert np.allclose(taught, stopped, atol=1e-9)
+
+    # Move away (J2 −) ...
+    j2_minus = page.locator("[data-testid=jog-row][data-axis='1'] [data-testid=jog-minus]")
+    finger.down(j2_minus)
+    try:
+        wait_for(lambda: joints(runtime)[1] < stopped[1] - 0.05, 5, what="J2 moving")
+    finally:
+        finger.up()
+    wait_for(lambda: at_rest(runtime), 3)
+    assert np.abs(joints(runtime) - taught).max() > 0.05
+
+    # ... then hold "move to" until it arrives.
+    finger.down(waypoint.get_by_test_id("move-to"))
+    try:
+        expect(page.get_by_test_id("deadman")).to_contain_text("Arrived", timeout=20_000)
+    finally:
+        finger.up()
+    assert np.allclose(joints(runtime), taught, atol=1e-6)
+    page.screenshot(path=artifacts / "3-arrived.png")
+    assert errors.errors == []
+
+
+def test_without_control_the_pad_does_nothing(
+    runtime: Runtime, robot: str, phone: BrowserContext
+) -> None:
+    """Another pendant (a phone) sees who has control; its buttons are disabled."""
+    page = phone.new_page()
+    page.goto(f"{runtime.url}/#/jog")
+    expect(page.get_by_test_id("lease")).to_contain_text("Controlled by Pendant")
+    plus = page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus] button")
+    expect(plus).to_be_disabled()
+    assert page.evaluate("document.documentElement.scrollWidth <= window.innerWidth")
