@@ -106,13 +106,12 @@ class RobotLink:
             await self.http.post("/halt")
 
     async def ensure_mode(self, mode: CommandMode) -> None:
+        """Switch the driver's mode ahead of the commands that need it, on the same ordered
+        stream, without waiting for a round trip; a refusal comes back through on_error."""
         if self._mode is mode and self.current().command_mode is mode:
             return
-        await self.http.put("/command_mode", json={"mode": mode.value})
+        await self.send({"type": "command_mode", "mode": mode.value})
         self._mode = mode
-
-    def forget_mode(self) -> None:
-        self._mode = None
 
     async def call(self, method: str, path: str, body: Any = None) -> Any:
         try:

@@ -100,7 +100,9 @@ def robot_router(driver: RobotDriver, log: CommandLog) -> APIRouter:
 
     @router.websocket("/command/ws")
     async def command_ws(ws: WebSocket) -> None:
-        """Streamed commands, one JSON object per message with a `type`; errors come back."""
+        """Streamed commands, one JSON object per message with a `type` (jog_joint,
+        velocity_command, position_command, command_mode, halt); they apply in order, and
+        refusals come back on the socket."""
 
         commanded = False
 
@@ -142,6 +144,10 @@ async def dispatch_stream_command(driver: RobotDriver, message: Any, log: Comman
             await driver.halt()
             tag = fields.get("tag")
             log.record(kind, tag[:64] if isinstance(tag, str) else None)
+        elif kind == "command_mode":
+            request = CommandModeRequest.model_validate(fields)
+            await driver.set_command_mode(request.mode)
+            log.record(f"command_mode:{request.mode.value}")
         else:
             raise OpenPendantError(f"unknown command type {kind!r}", code="bad_message")
     except ValidationError as exc:

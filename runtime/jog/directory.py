@@ -24,8 +24,10 @@ from runtime.state_feed import StateFeed
 
 log = logging.getLogger(__name__)
 
-# A lease check is trusted this long (the device manager renews the lease on each check).
-LEASE_CACHE_SECONDS = 3.0
+# A successful check renews the lease to a known expiry, and any hand-over shows in the device
+# manager's events (which clear the cache), so a check is trusted until shortly before that
+# expiry; past half its life it is renewed in the background, never holding up a press.
+LEASE_MARGIN = 1.0  # s
 
 
 class Directory:
@@ -34,7 +36,8 @@ class Directory:
         self._ws_url = device_manager_url.replace("http://", "ws://", 1)
         self.devices: dict[str, dict[str, Any]] = {}
         self.joggers: dict[str, Jogger] = {}
-        self._leases: dict[tuple[str, str], float] = {}
+        self._leases: dict[tuple[str, str], tuple[float, float]] = {}  # -> (renew, trust) times
+        self._renewing: set[asyncio.Task[None]] = set()
         self._kinematics: dict[str, Kinematics] = {}
         self.inputs: dict[str, StateFeed[InputState]] = {}
         self._ready = asyncio.Event()
@@ -61,6 +64,7 @@ class Directory:
                 async with websockets.connect(
                     f"{self._ws_url}/devices/ws?states=false", open_timeout=2.0, close_timeout=1.0
                 ) as ws:
+                    self._leases.clear()  # a hand-over may have happened while away
                     async for message in ws:
                         body = json.loads(message)
                         if body.get("type") == "devices":
@@ -114,12 +118,30 @@ class Directory:
             raise OpenPendantError(
                 f"take control of {name} first", code="lease_required", status=409
             )
-        if self._leases.get((name, token), 0.0) > time.monotonic():
+        renew, trust = self._leases.get((name, token), (0.0, 0.0))
+        now = time.time()
+        if now < trust:
+            if now > renew:
+                self._leases[(name, token)] = (trust, trust)  # one renewal at a time
+                task = asyncio.create_task(self._check(name, token))
+                self._renewing.add(task)
+                task.add_done_callback(self._renewing.discard)
             return
-        await self.http.request(
-            "POST", f"/devices/{name}/lease/check", headers={"X-Lease-Token": token}
-        )
-        self._leases[(name, token)] = time.monotonic() + LEASE_CACHE_SECONDS
+        await self._check(name, token, quiet=False)
+
+    async def _check(self, name: str, token: str, quiet: bool = True) -> None:
+        try:
+            granted = await self.http.request(
+                "POST", f"/devices/{name}/lease/check", headers={"X-Lease-Token": token}
+            )
+        except OpenPendantError:
+            self._leases.pop((name, token), None)
+            if quiet:
+                return
+            raise
+        expires = float(granted["expires"])
+        now = time.time()
+        self._leases[(name, token)] = (now + (expires - now) / 2, expires - LEASE_MARGIN)
 
     async def jogger(self, name: str) -> Jogger:
         device = await self.device(name)

@@ -30,6 +30,11 @@ class Finger:
         point = {"x": box["x"] + box["width"] / 2, "y": box["y"] + box["height"] / 2}
         self.cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [point]})
 
+    def move(self, x: float, y: float) -> None:
+        self.cdp.send(
+            "Input.dispatchTouchEvent", {"type": "touchMove", "touchPoints": [{"x": x, "y": y}]}
+        )
+
     def up(self) -> None:
         self.cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
 
@@ -99,13 +104,18 @@ def test_jog_teach_and_move_to_by_touch(
     assert moved[0] > 0.05
     assert np.abs(moved[1:]).max() < 1e-9
 
-    # Teach the position as a waypoint.
+    # Teach the position as a waypoint with one tap, then name and tag it.
     page.get_by_test_id("teach-joint").tap()
+    expect(page.locator("[data-testid=waypoint][data-name=wp_001]")).to_be_visible()
+    page.locator("[data-testid=waypoint][data-name=wp_001] [data-testid=rename]").tap()
     page.get_by_test_id("name-input").fill("pick_1")
+    page.get_by_test_id("tags-input").fill("cell-2, pick")
     page.get_by_test_id("name-confirm").tap()
     waypoint = page.locator("[data-testid=waypoint][data-name=pick_1]")
     expect(waypoint).to_be_visible()
-    taught = np.array(runtime.api("GET", "/variables/pick_1").json()["value"]["joints"])
+    stored = runtime.api("GET", "/variables/pick_1").json()
+    assert stored["tags"] == ["cell-2", "pick"]
+    taught = np.array(stored["value"]["joints"])
     assert np.allclose(taught, stopped, atol=1e-9)
 
     # Move away (J2 −) ...
@@ -126,16 +136,51 @@ def test_jog_teach_and_move_to_by_touch(
         finger.up()
     assert np.allclose(joints(runtime), taught, atol=1e-6)
     page.screenshot(path=artifacts / "3-arrived.png")
+
+    # Done: hand control back, so another pendant may take it.
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+    assert runtime.api("GET", "/devices/robot/lease").json()["holder"] is None
     assert errors.errors == []
+
+
+def test_sliding_off_a_held_button_stops_the_robot(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    page = tablet.new_page()
+    page.goto(f"{runtime.url}/#/jog")
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("You have control")
+    expect(page.get_by_test_id("disable")).to_be_visible()  # still enabled from before
+    finger = Finger(page)
+    button = page.locator("[data-testid=jog-row][data-axis='5'] [data-testid=jog-plus]")
+    before = joints(runtime)
+    finger.down(button)
+    try:
+        wait_for(lambda: joints(runtime)[5] > before[5] + 0.03, 5, what="J6 moving")
+        finger.move(200, 150)  # the finger slides off the button, still on the glass
+        wait_for(lambda: at_rest(runtime), 3, what="stopped when the finger left the button")
+    finally:
+        finger.up()
+    expect(page.get_by_test_id("deadman")).to_contain_text("Stopped")
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
 
 
 def test_without_control_the_pad_does_nothing(
     runtime: Runtime, robot: str, phone: BrowserContext
 ) -> None:
     """Another pendant (a phone) sees who has control; its buttons are disabled."""
+    wait_for(
+        lambda: runtime.api("GET", "/devices/robot/lease").json()["holder"] is None,
+        20,
+        what="the earlier pendants' control released",
+    )
+    taken = runtime.api("POST", "/devices/robot/lease", json={"holder": "Pendant on the cell"})
+    assert taken.status_code == 200
     page = phone.new_page()
     page.goto(f"{runtime.url}/#/jog")
-    expect(page.get_by_test_id("lease")).to_contain_text("Controlled by Pendant")
+    expect(page.get_by_test_id("lease")).to_contain_text("Controlled by Pendant on the cell")
     plus = page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus] button")
     expect(plus).to_be_disabled()
     assert page.evaluate("document.documentElement.scrollWidth <= window.innerWidth")

@@ -9,12 +9,16 @@ export class OpNameDialog extends LitElement {
   static properties = {
     heading: { type: String },
     value: { type: String },
+    tags: { type: String },
     confirmLabel: { type: String },
     error: { type: String },
     busy: { type: Boolean },
   };
   declare heading: string;
   declare value: string;
+  // Comma-separated; null: no tags field. A string, not an array: Lit re-applies array
+  // bindings on every render of the parent, which would undo the typing.
+  declare tags: string | null;
   declare confirmLabel: string;
   declare error: string;
   declare busy: boolean;
@@ -39,6 +43,7 @@ export class OpNameDialog extends LitElement {
     super();
     this.heading = "";
     this.value = "";
+    this.tags = null;
     this.confirmLabel = "Save";
     this.error = "";
     this.busy = false;
@@ -53,7 +58,8 @@ export class OpNameDialog extends LitElement {
   private submit(e: Event) {
     e.preventDefault();
     if (!NAME.test(this.value) || this.busy) return;
-    this.dispatchEvent(new CustomEvent("confirm", { detail: { name: this.value } }));
+    const tags = (this.tags ?? "").split(",").map((t) => t.trim()).filter(Boolean);
+    this.dispatchEvent(new CustomEvent("confirm", { detail: { name: this.value, tags } }));
   }
 
   render() {
@@ -71,6 +77,17 @@ export class OpNameDialog extends LitElement {
         <div class="hint ${valid ? "muted" : "error"}">
           Starts with a letter; letters, digits, _ . - only.
         </div>
+        ${this.tags === null
+          ? ""
+          : html`<input
+              data-testid="tags-input"
+              aria-label="Tags"
+              placeholder="Tags, separated by commas"
+              autocapitalize="none"
+              style="margin-top:12px"
+              .value=${this.tags}
+              @input=${(e: InputEvent) => (this.tags = (e.target as HTMLInputElement).value)}
+            />`}
         ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
         <div class="actions">
           <button type="button" @click=${() => this.dispatchEvent(new CustomEvent("close"))}>

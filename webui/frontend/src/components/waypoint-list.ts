@@ -86,7 +86,8 @@ export class OpWaypointList extends LitElement {
       >
         <div>
           <div class="name">${w.name}</div>
-          <div class="muted">${w.type === "joint_waypoint" ? "joints" : "pose"}</div>
+          <div class="muted">${w.type === "joint_waypoint" ? "joints" : "pose"}${w.tags.length
+            ? html` · ${w.tags.join(", ")}` : ""}</div>
         </div>
         <div class="actions">
           <op-hold-button
@@ -99,7 +100,7 @@ export class OpWaypointList extends LitElement {
           <button data-testid="reteach" ?disabled=${this.disabled}
             @click=${() => this.emit("waypoint-reteach", w.name)}>Re-teach</button>
           <button data-testid="rename" @click=${() => this.emit("waypoint-rename", w.name)}>
-            Rename</button>
+            Name &amp; tags</button>
           <button class="danger" data-testid="delete"
             @click=${() => this.emit("waypoint-delete", w.name)}>Delete</button>
         </div>

@@ -26,7 +26,7 @@ const STEP = { fine: { linear: 0.0001, angular: 0.1 * RAD }, coarse: { linear: 0
 type Dialog =
   | { kind: "teach"; type: "joint" | "pose"; frame: "base" | "world"; name: string;
       error: string; overwrite: boolean }
-  | { kind: "rename"; from: string; name: string; error: string }
+  | { kind: "rename"; from: string; name: string; tags: string[]; error: string }
   | { kind: "delete"; name: string }
   | null;
 
@@ -401,6 +401,20 @@ export class OpJogPanel extends LitElement {
     }
   }
 
+  /** One tap: saved at once under the next free name (rename it from the list). */
+  private async quickTeach(type: "joint" | "pose", frame: "base" | "world"): Promise<void> {
+    const name = this.nextName();
+    try {
+      await api("POST", `/api/jog/robots/${encodeURIComponent(this.robot)}/teach`, {
+        name, kind: type, frame });
+      this.selected = name;
+      this.message = `Saved ${name}.`;
+      await this.loadWaypoints();
+    } catch (err) {
+      this.message = errorText(err);
+    }
+  }
+
   private async teach(): Promise<void> {
     const d = this.dialog;
     if (d?.kind !== "teach") return;
@@ -426,8 +440,18 @@ export class OpJogPanel extends LitElement {
     const d = this.dialog;
     if (d?.kind !== "rename") return;
     try {
-      await api("POST", `/api/variables/${encodeURIComponent(d.from)}/rename`, { to: d.name });
+      if (d.name !== d.from) {
+        await api("POST", `/api/variables/${encodeURIComponent(d.from)}/rename`, { to: d.name });
+      }
+      const path = `/api/variables/${encodeURIComponent(d.name)}`;
+      const current = await api<{ type: string; value: unknown; tags: string[]; version: number }>(
+        "GET", path);
+      if (current.tags.join(",") !== d.tags.join(",")) {
+        await api("PUT", path, { type: current.type, value: current.value, tags: d.tags,
+          expected_version: current.version });
+      }
       this.dialog = null;
+      this.selected = d.name;
       await this.loadWaypoints();
     } catch (err) {
       this.dialog = { ...d, error: errorText(err) };
@@ -499,10 +523,10 @@ export class OpJogPanel extends LitElement {
         }}></op-name-dialog>`;
     }
     if (d.kind === "rename") {
-      return html`<op-name-dialog heading=${`Rename ${d.from}`} .value=${d.name} .error=${d.error}
-        confirmLabel="Rename" @close=${close}
-        @confirm=${(e: CustomEvent<{ name: string }>) => {
-          this.dialog = { ...d, name: e.detail.name };
+      return html`<op-name-dialog heading=${`Waypoint ${d.from}`} .value=${d.name}
+        tags=${d.tags.join(", ")} .error=${d.error} confirmLabel="Save" @close=${close}
+        @confirm=${(e: CustomEvent<{ name: string; tags: string[] }>) => {
+          this.dialog = { ...d, name: e.detail.name, tags: e.detail.tags };
           void this.rename();
         }}></op-name-dialog>`;
     }
@@ -576,21 +600,20 @@ export class OpJogPanel extends LitElement {
             <h2>Waypoints</h2>
             <div class="row" style="margin-bottom:8px">
               <button data-testid="teach-joint" ?disabled=${!state}
-                @click=${() => (this.dialog = { kind: "teach", type: "joint", frame: "base",
-                  name: this.nextName(), error: "", overwrite: false })}>Save joints</button>
+                @click=${() => this.quickTeach("joint", "base")}>Save joints</button>
               <button data-testid="teach-pose" ?disabled=${!state}
-                @click=${() => (this.dialog = { kind: "teach", type: "pose", frame: "base",
-                  name: this.nextName(), error: "", overwrite: false })}>Save pose (base)</button>
+                @click=${() => this.quickTeach("pose", "base")}>Save pose (base)</button>
               <button ?disabled=${!state}
-                @click=${() => (this.dialog = { kind: "teach", type: "pose", frame: "world",
-                  name: this.nextName(), error: "", overwrite: false })}>Save pose (world)</button>
+                @click=${() => this.quickTeach("pose", "world")}>Save pose (world)</button>
             </div>
             <op-waypoint-list .waypoints=${this.waypoints} ?disabled=${!canMove}
               selected=${this.selected}
               @waypoint-hold=${(e: CustomEvent) => this.holdWaypoint(e.detail.name)}
               @waypoint-release=${() => this.release()}
               @waypoint-rename=${(e: CustomEvent) => (this.dialog = { kind: "rename",
-                from: e.detail.name, name: e.detail.name, error: "" })}
+                from: e.detail.name, name: e.detail.name,
+                tags: this.waypoints.find((w) => w.name === e.detail.name)?.tags ?? [],
+                error: "" })}
               @waypoint-delete=${(e: CustomEvent) => (this.dialog = { kind: "delete",
                 name: e.detail.name })}
               @waypoint-reteach=${(e: CustomEvent) => this.reteach(e.detail.name)}
