@@ -29,7 +29,7 @@ def test_add_the_detected_robot_by_touch_and_see_it_live(
 ) -> None:
     page = tablet.new_page()
     errors = PageErrors(page)
-    page.goto(runtime.url)
+    page.goto(f"{runtime.url}/#/devices")
     expect(page.get_by_test_id("runtime-link")).to_have_text("Runtime connected")
     card = page.get_by_test_id("detected-device").filter(has_text="sim-ur5")
     expect(card).to_be_visible(timeout=15_000)
@@ -73,7 +73,7 @@ def test_a_hostile_device_name_is_shown_as_text(
     try:
         sim.wait_ready()
         page = tablet.new_page()
-        page.goto(runtime.url)
+        page.goto(f"{runtime.url}/#/devices")
         card = page.get_by_test_id("detected-device").filter(has_text=hostile)
         expect(card).to_be_visible(timeout=15_000)
         assert page.evaluate("window.__pwned") is None
@@ -86,7 +86,7 @@ def test_phone_layout_has_big_targets_and_no_sideways_scroll(
     runtime: Runtime, phone: BrowserContext, artifacts: Path
 ) -> None:
     page = phone.new_page()
-    page.goto(runtime.url)
+    page.goto(f"{runtime.url}/#/devices")
     add = page.get_by_test_id("add-device").first
     expect(add).to_be_visible(timeout=15_000)
     box = add.bounding_box()
@@ -101,7 +101,7 @@ def test_phone_layout_has_big_targets_and_no_sideways_scroll(
 
 def test_system_panel_lists_the_services(runtime: Runtime, tablet: BrowserContext) -> None:
     page = tablet.new_page()
-    page.goto(runtime.url)
+    page.goto(f"{runtime.url}/#/devices")
     page.get_by_test_id("nav-system").tap()
     expect(page).to_have_url(re.compile(r"#/system$"))
     rows = page.get_by_test_id("service")
@@ -115,7 +115,7 @@ def test_losing_the_runtime_is_shown(tablet: BrowserContext, tmp_path: Path) -> 
     try:
         runtime.wait_ready()
         page = tablet.new_page()
-        page.goto(runtime.url)
+        page.goto(f"{runtime.url}/#/devices")
         link = page.get_by_test_id("runtime-link")
         expect(link).to_have_text("Runtime connected")
         runtime.stop()
