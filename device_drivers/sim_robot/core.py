@@ -265,6 +265,16 @@ class SimCore:
 
     # State ----------------------------------------------------------------------------------
 
+    def flags(self) -> RobotFlags:
+        return RobotFlags(
+            enabled=self.enabled,
+            ready=self.ready,
+            error=self.error,
+            estop=self.estop,
+            homed=True,
+            trajectory_running=self.trajectory is not None,
+        )
+
     def snapshot(self) -> Snapshot:
         """Copy what the state needs, cheaply, so the control lock is held only briefly."""
         t = self.tracker
@@ -273,14 +283,7 @@ class SimCore:
             ts=self.cycle_time,
             command_mode=self.mode,
             operational_mode=self.operational_mode,
-            flags=RobotFlags(
-                enabled=self.enabled,
-                ready=self.ready,
-                error=self.error,
-                estop=self.estop,
-                homed=True,
-                trajectory_running=self.trajectory is not None,
-            ),
+            flags=self.flags(),
             position=t.position.copy(),
             velocity=t.velocity.copy(),
             speed_ratio=self.speed_ratio,

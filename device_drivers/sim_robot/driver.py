@@ -19,7 +19,7 @@ from runtime.interfaces.robot import (
     RobotState,
     TrajectoryStatus,
 )
-from runtime.interfaces.robot_driver import RobotDriver
+from runtime.interfaces.robot_driver import RobotDriver, RobotStatus
 from runtime.kinematics import Kinematics
 
 log = logging.getLogger(__name__)
@@ -102,6 +102,13 @@ class SimRobot(RobotDriver):
         with self.lock:
             snapshot = self.core.snapshot()
         return snapshot.to_state(self.core.kinematics)
+
+    def status(self) -> RobotStatus:
+        with self.lock:
+            core = self.core
+            return RobotStatus(
+                core.flags(), core.mode, core.error_message, core.tracker.position.tolist()
+            )
 
     async def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus:
         with self.lock:

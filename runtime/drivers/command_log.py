@@ -20,11 +20,14 @@ class LoggedCommand(BaseModel):
 
 class CommandLog:
     def __init__(self, size: int = 2000) -> None:
-        self._entries: deque[LoggedCommand] = deque(maxlen=size)
+        # Plain tuples: recording runs for every command, reading only on request.
+        self._entries: deque[tuple[int, float, str, str | None]] = deque(maxlen=size)
         self._seq = itertools.count(1)
 
     def record(self, kind: str, tag: str | None = None) -> None:
-        self._entries.append(LoggedCommand(seq=next(self._seq), t=time.time(), type=kind, tag=tag))
+        self._entries.append((next(self._seq), time.time(), kind, tag))
 
     def since(self, after: int = 0) -> list[LoggedCommand]:
-        return [e for e in self._entries if e.seq > after]
+        return [
+            LoggedCommand(seq=s, t=t, type=k, tag=g) for s, t, k, g in self._entries if s > after
+        ]

@@ -4,6 +4,7 @@ driver's protected hooks, so a driver can only ever receive a command that passe
 from __future__ import annotations
 
 from abc import abstractmethod
+from dataclasses import dataclass
 
 from runtime.interfaces.device import DeviceDriver, DeviceIdentity
 from runtime.interfaces.limits import CheckedTrajectory, FloatArray, JointLimitChecker
@@ -13,6 +14,7 @@ from runtime.interfaces.robot import (
     JointTrajectory,
     PositionCommand,
     RobotDescription,
+    RobotFlags,
     RobotInfo,
     RobotState,
     TrajectoryAccepted,
@@ -20,6 +22,14 @@ from runtime.interfaces.robot import (
     VelocityCommand,
 )
 from runtime.kit.errors import RobotError
+
+
+@dataclass(frozen=True)
+class RobotStatus:
+    flags: RobotFlags
+    command_mode: CommandMode
+    error_message: str
+    joint_position_command: list[float]
 
 
 class RobotDriver(DeviceDriver):
@@ -41,6 +51,14 @@ class RobotDriver(DeviceDriver):
     def state(self) -> RobotState:
         """The latest state; cheap enough to call at the streaming rate."""
 
+    def status(self) -> RobotStatus:
+        """What the command checks need. Drivers with a cheaper way than building the whole
+        state (forward kinematics included) override this: it runs for every command."""
+        state = self.state()
+        return RobotStatus(
+            state.flags, state.command_mode, state.error_message, state.joint_position_command
+        )
+
     # Commands that are always allowed ------------------------------------------------------
 
     async def halt(self) -> None:
@@ -56,7 +74,7 @@ class RobotDriver(DeviceDriver):
         await self._reset_errors()
 
     async def enable(self) -> None:
-        flags = self.state().flags
+        flags = self.status().flags
         if flags.estop:
             raise RobotError("the E-stop is engaged; release it first", code="estop")
         if flags.error:
@@ -109,8 +127,8 @@ class RobotDriver(DeviceDriver):
 
     # Checks ---------------------------------------------------------------------------------
 
-    def _require_ready(self) -> RobotState:
-        state = self.state()
+    def _require_ready(self) -> RobotStatus:
+        state = self.status()
         flags = state.flags
         if flags.estop:
             raise RobotError("the E-stop is engaged", code="estop")
@@ -120,7 +138,7 @@ class RobotDriver(DeviceDriver):
             raise RobotError("the robot is not enabled", code="not_enabled")
         return state
 
-    def _require_mode(self, mode: CommandMode) -> RobotState:
+    def _require_mode(self, mode: CommandMode) -> RobotStatus:
         state = self._require_ready()
         if state.command_mode is not mode:
             raise RobotError(

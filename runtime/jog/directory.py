@@ -100,8 +100,9 @@ class Directory:
         return feed
 
     async def device(self, name: str, kind: str = "robot") -> dict[str, Any]:
-        with contextlib.suppress(TimeoutError):
-            await asyncio.wait_for(self._ready.wait(), 3.0)
+        if not self._ready.is_set():
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._ready.wait(), 3.0)
         device = self.devices.get(name)
         if device is None or device["status"] != "connected":
             # The live view can trail the device manager by a moment (a device added just

@@ -29,7 +29,8 @@ PERIOD = 0.01
 class Ended:
     press: str
     state: str  # "done", "stopped", "halted", "refused"
-    reason: str
+    reason: str  # short and stable: a code the UI may act on
+    message: str = ""  # for people; the reason when empty
 
 
 Listener = Callable[[Ended], None]
@@ -70,15 +71,14 @@ class Jogger:
 
     async def start(self, action: Action, listener: Listener) -> None:
         state = self.link.current()
-        if not state.flags.ready:
-            reason = (
-                "the E-stop is engaged"
-                if state.flags.estop
-                else f"the robot has an error: {state.error_message}"
-                if state.flags.error
-                else "the robot is not enabled"
-            )
-            raise RobotError(reason, code="not_ready")
+        flags = state.flags
+        if not flags.ready:
+            # The same codes the driver uses, whichever of the two notices first.
+            if flags.estop:
+                raise RobotError("the E-stop is engaged", code="estop")
+            if flags.error:
+                raise RobotError(f"the robot has an error: {state.error_message}", code="error")
+            raise RobotError("the robot is not enabled", code="not_enabled")
         previous = self.action
         self.action = None
         if previous is not None and previous.press != action.press:
@@ -125,15 +125,16 @@ class Jogger:
         else:
             await self.link.halt(tag=f"{action.press}:release")
 
-    def _end(self, action: Action, state: str, reason: str) -> None:
+    def _end(self, action: Action, state: str, reason: str, message: str = "") -> None:
         if self.listener is not None:
-            self.listener(Ended(action.press, state, reason))
+            self.listener(Ended(action.press, state, reason, message or reason))
 
     def _refused(self, error: dict[str, Any]) -> None:
         action = self.action
         if action is not None:
             self.action = None
-            self._end(action, "refused", str(error.get("message", "the robot refused")))
+            message = str(error.get("message", "the robot refused"))
+            self._end(action, "refused", str(error.get("code", "refused")), message)
 
     async def _tick(self, action: Action) -> None:
         command = action.tick(self.link.current(), time.monotonic())
@@ -160,7 +161,7 @@ class Jogger:
             except OpenPendantError as exc:
                 if self.action is action:
                     self.action = None
-                    self._end(action, "refused", exc.message)
+                    self._end(action, "refused", exc.code, exc.message)
             except Exception:
                 log.exception("jog cycle failed; halting %s", self.link.name)
                 self.action = None

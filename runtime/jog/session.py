@@ -345,6 +345,7 @@ class JogSession:
                 "robot": robot,
                 "state": ended.state,
                 "reason": ended.reason,
+                "message": ended.message,
             }
         )
 
