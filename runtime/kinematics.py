@@ -89,6 +89,19 @@ class Kinematics:
         self.lower = np.array([j.lower for j in info.joints])
         self.upper = np.array([j.upper for j in info.joints])
 
+    @property
+    def order(self) -> list[int]:
+        """Where each robot-info joint sits in the model's configuration vector."""
+        return self._order
+
+    @property
+    def tcp_frame(self) -> int:
+        return int(self._tcp)
+
+    @property
+    def base_frame(self) -> int:
+        return int(self._base)
+
     def _set(self, joints: FloatArray | list[float]) -> FloatArray:
         self._q[self._order] = joints
         return self._q
@@ -119,28 +132,71 @@ class Kinematics:
         target: pin.SE3,
         seed: FloatArray | list[float],
         *,
-        tolerance: float = 1e-9,
-        max_iterations: int = 200,
-        damping: float = 1e-8,
+        tolerance: float = 1e-10,
+        restarts: int = 40,
     ) -> FloatArray:
-        """Joint positions that put the TCP at `target` (base frame), found by damped least
-        squares from `seed` within the joint limits: the solution nearest the seed."""
-        base = self._base_placement()
-        goal = base * target
-        q_model = self._set(np.clip(np.asarray(seed, dtype=float), self.lower, self.upper)).copy()
+        """Joint positions within the limits that put the TCP at `target` (base frame): the
+        solution reached from `seed` (the current configuration) when there is one, else the
+        one nearest the seed among those found from spread-out starts."""
+        goal = self._base_placement() * target
+        seed_q = np.clip(np.asarray(seed, dtype=float), self.lower, self.upper)
+        solution = self._solve(goal, seed_q, tolerance)
+        if solution is not None:
+            return self._nearest_turn(solution, seed_q)
+        rng = np.random.default_rng(0)  # the same answer for the same question
+        found: list[FloatArray] = []
+        for _ in range(restarts):
+            start = rng.uniform(np.maximum(self.lower, -np.pi), np.minimum(self.upper, np.pi))
+            solution = self._solve(goal, start, tolerance)
+            if solution is not None:
+                found.append(self._nearest_turn(solution, seed_q))
+                if len(found) == 3:
+                    break
+        if not found:
+            raise Unreachable("no joint position reaches that pose within the joint limits")
+        return min(found, key=lambda q: float(np.sum((q - seed_q) ** 2)))
+
+    def _solve(
+        self, goal: pin.SE3, start: FloatArray, tolerance: float, max_iterations: int = 100
+    ) -> FloatArray | None:
+        """Levenberg-Marquardt on the SE(3) log error, clamped to the joint limits."""
+        q_model = self._q.copy()
+        q = start.copy()
+        damping = 1e-3
+        previous = np.inf
         for _ in range(max_iterations):
-            pin.framesForwardKinematics(self.model, self.data, q_model)
-            current = self.data.oMf[self._tcp]
-            error = pin.log6(current.actInv(goal)).vector
-            if np.linalg.norm(error) < tolerance:
-                return q_model[self._order].copy()
-            jac = pin.computeFrameJacobian(
-                self.model, self.data, q_model, self._tcp, pin.ReferenceFrame.LOCAL
-            )[:, self._order]
-            step = jac.T @ np.linalg.solve(jac @ jac.T + damping * np.eye(6), error)
-            q = np.clip(q_model[self._order] + step, self.lower, self.upper)
             q_model[self._order] = q
-        raise Unreachable("no joint position reaches that pose within the joint limits")
+            # One pass gives the joint placements and Jacobians; the TCP follows from them.
+            pin.computeJointJacobians(self.model, self.data, q_model)
+            motion = pin.updateFramePlacement(self.model, self.data, self._tcp).actInv(goal)
+            jacobian = pin.getFrameJacobian(
+                self.model, self.data, self._tcp, pin.ReferenceFrame.LOCAL
+            )[:, self._order]
+            error = pin.log6(motion).vector
+            norm = float(error @ error)
+            if norm < tolerance**2:
+                return q
+            # Damping shrinks while the error falls and grows when a step makes it worse.
+            damping = max(damping * (0.3 if norm < previous else 3.0), 1e-12)
+            previous = norm
+            jac = pin.Jlog6(motion.inverse()) @ jacobian
+            regular = (damping * norm + 1e-12) * np.eye(6)
+            step = jac.T @ np.linalg.solve(jac @ jac.T + regular, error)
+            # A joint at a limit that the step pushes further out drops out of it, so the
+            # others do the work instead of the step stalling against the clamp.
+            held = ((q <= self.lower) & (step < 0)) | ((q >= self.upper) & (step > 0))
+            if held.any():
+                jac[:, held] = 0.0
+                step = jac.T @ np.linalg.solve(jac @ jac.T + regular, error)
+            q = np.clip(q + step, self.lower, self.upper)
+        return None
+
+    def _nearest_turn(self, q: FloatArray, seed: FloatArray) -> FloatArray:
+        """Joints that can turn more than once round: the turn nearest the seed."""
+        turns = np.round((seed - q) / (2 * np.pi))
+        shifted = q + 2 * np.pi * turns
+        inside = (shifted >= self.lower) & (shifted <= self.upper)
+        return np.where(inside, shifted, q)
 
     def _base_placement(self) -> pin.SE3:
         pin.framesForwardKinematics(self.model, self.data, self._q)

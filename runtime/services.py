@@ -32,6 +32,7 @@ SERVICES: tuple[ServiceSpec, ...] = (
     ServiceSpec("variable_storage", "runtime.variable_storage.service:build_app", ("variables",)),
     ServiceSpec("device_manager", "runtime.device_manager.service:build_app", ("devices",)),
     ServiceSpec("jog", "runtime.jog.service:build_app", ("jog",)),
+    ServiceSpec("motion", "runtime.motion.service:build_app", ("motion",)),
 )
 WEBUI = ServiceSpec("webui", "webui.server:build_app")
 ALL_SERVICES = {spec.name: spec for spec in (*SERVICES, WEBUI)}

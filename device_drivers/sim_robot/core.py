@@ -250,9 +250,10 @@ class SimCore:
             self.tracker.hold()
             return
         running.t += CYCLE * self.speed_ratio
-        position, velocity = running.reference.sample(running.t)
-        self.tracker.step_position(position, velocity * self.speed_ratio)
-        if running.t >= running.reference.duration and not self.tracker.moving:
+        position, velocity, acceleration = running.reference.sample_with_acceleration(running.t)
+        ratio = self.speed_ratio
+        self.tracker.step_position(position, velocity * ratio, acceleration * ratio * ratio)
+        if running.t >= running.reference.duration and self.tracker.settled(running.reference.end):
             self._end_trajectory(TrajectoryState.finished)
 
     def _check_limits(self) -> None:

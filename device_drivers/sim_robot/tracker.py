@@ -27,6 +27,8 @@ _VELOCITY = ControlInterface.Velocity
 
 # A jogging joint this close in time to its limit aims at the limit to stop exactly there.
 LIMIT_LOOKAHEAD = 0.5  # s
+SETTLED_POSITION = 1e-7  # rad
+SETTLED_VELOCITY = 1e-6  # rad/s
 
 
 class TrackerError(RuntimeError):
@@ -71,6 +73,13 @@ class JointTracker:
     def moving(self) -> bool:
         return bool(
             np.any(np.abs(self.velocity) > 1e-9) or np.any(np.abs(self.acceleration) > 1e-9)
+        )
+
+    def settled(self, target: FloatArray) -> bool:
+        """At `target` and practically still (the tracker can creep the last nanometres)."""
+        return bool(
+            np.max(np.abs(self.position - target)) < SETTLED_POSITION
+            and np.max(np.abs(self.velocity)) < SETTLED_VELOCITY
         )
 
     def hold(self) -> None:

@@ -13,9 +13,9 @@ import pinocchio as pin
 from runtime.interfaces.input import InputState
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import CommandMode, RobotState
-from runtime.jog.planning import PlannedMove
 from runtime.jog.velocity import VelocityController
 from runtime.kinematics import Kinematics
+from runtime.motion.joint_move import PlannedMove
 from runtime.state_feed import StateFeed
 
 # The driver halts on its own if the stream stops for this long (the deadman's backstop).

@@ -12,6 +12,7 @@ from typing import Any
 from pydantic import BaseModel, Field, ValidationError
 
 from runtime.interfaces.common import JointVector, Pose, Strict, all_finite
+from runtime.interfaces.scene import SceneObject
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue
 
@@ -149,3 +150,4 @@ register("frame", "a coordinate frame: pose in a parent frame", Frame)
 register("list", "a list of JSON values", _list)
 register("json", "any JSON value", _json)
 register("device", "a device added under a local name", DeviceRecord)
+register("scene_object", "an obstacle, keep-out zone or held object of the scene", SceneObject)

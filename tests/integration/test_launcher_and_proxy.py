@@ -34,7 +34,7 @@ def health(runtime: Runtime) -> dict[str, dict[str, Any]]:
 def test_health_reports_every_service(runtime: Runtime) -> None:
     body = runtime.api("GET", "/health").json()
     assert body["status"] == "ok"
-    assert set(body["services"]) == {"webui", "variable_storage", "device_manager", "jog"}
+    assert set(body["services"]) == {"webui", "variable_storage", "device_manager", "jog", "motion"}
     assert all(s["status"] == "ok" for s in body["services"].values())
 
 

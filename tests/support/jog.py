@@ -141,9 +141,10 @@ class Cell:
     def ready(self) -> None:
         """Enabled, no error, lease renewed."""
         self.robot.http.post("/sim/estop", json={"engaged": False})
-        self.runtime.api(
+        # Renewed, or taken afresh (with a new token) when it lapsed during a long test.
+        self.token = self.runtime.api(
             "POST", "/devices/robot/lease", json={"holder": "tests"}, headers=self.headers()
-        )
+        ).json()["token"]
         self.runtime.api("POST", "/jog/robots/robot/reset_errors", headers=self.headers())
         response = self.runtime.api("POST", "/jog/robots/robot/enable", headers=self.headers())
         assert response.status_code == 200, response.text

@@ -38,6 +38,15 @@ ROUND_TRIP: dict[str, Any] = {
         "name": "sim",
         "url": "http://127.0.0.1:1234",
     },
+    "scene_object": {
+        "shape": "cylinder",
+        "size": [0.04, 0.5],
+        "mesh": None,
+        "pose": {"position": [0.5, 0.0, 0.25], "orientation": UNIT_Q},
+        "attached_to": None,
+        "keep_out": False,
+        "color": "#8a94a6",
+    },
 }
 
 # Values each type must refuse.
@@ -67,6 +76,9 @@ REJECT: list[tuple[str, Any]] = [
         "device",
         {"uuid": "x", "local_name": "Robot 2", "kind": "robot", "model": "", "name": "", "url": ""},
     ),
+    ("scene_object", {"shape": "box", "size": [0.1, 0.2]}),
+    ("scene_object", {"shape": "sphere", "size": [-0.1]}),
+    ("scene_object", {"shape": "box", "size": [0.1, 0.1, 0.1], "mesh": "package://x/y.stl"}),
     ("no_such_type", 1),
 ]
 

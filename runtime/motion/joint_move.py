@@ -1,5 +1,6 @@
-"""Planned joint moves for incremental steps and hold-to-run "move to": time-optimal and
-jerk-limited (ruckig), slowed as a whole until the TCP stays under the speed cap."""
+"""Planned joint moves (jog steps, hold-to-run "move to", the motion service's move joint):
+time-optimal, jerk-limited and synchronized across joints (ruckig), slowed as a whole until
+the TCP stays under the speed cap."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from ruckig import InputParameter, Result, Ruckig, Trajectory
+from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
 
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import RobotInfo
@@ -49,9 +50,15 @@ def plan_joint_move(
     speed: float,
     tcp_cap: float | None,
     start_velocity: FloatArray | None = None,
+    *,
+    acceleration: float | None = None,
+    fraction: float = MOVE_SPEED_FRACTION,
 ) -> PlannedMove:
+    """`speed` (and `acceleration`, which defaults to it) scale the joints' limits, times
+    `fraction`: jogging moves never use the last half of a joint's speed."""
     n = info.dof
-    scale = MOVE_SPEED_FRACTION * speed
+    scale = fraction * speed
+    accel_scale = fraction * (speed if acceleration is None else acceleration)
     for _ in range(8):
         otg = Ruckig(n)
         inp = InputParameter(n)
@@ -59,11 +66,14 @@ def plan_joint_move(
         inp.current_velocity = (np.zeros(n) if start_velocity is None else start_velocity).tolist()
         inp.current_acceleration = [0.0] * n
         inp.target_position = goal.tolist()
+        # Phase synchronization keeps a move from rest on the straight joint-space line, the
+        # path that collision checking saw.
+        inp.synchronization = Synchronization.Phase
         inp.target_velocity = [0.0] * n
         inp.target_acceleration = [0.0] * n
         inp.max_velocity = [j.max_velocity * scale for j in info.joints]
-        inp.max_acceleration = [j.max_acceleration * scale for j in info.joints]
-        inp.max_jerk = [(j.max_jerk or math.inf) * scale for j in info.joints]
+        inp.max_acceleration = [j.max_acceleration * accel_scale for j in info.joints]
+        inp.max_jerk = [(j.max_jerk or math.inf) * accel_scale for j in info.joints]
         trajectory = Trajectory(n)
         result = otg.calculate(inp, trajectory)
         if result not in (Result.Working, Result.Finished):
@@ -75,4 +85,5 @@ def plan_joint_move(
             break
         # Slower in time, same path: velocity, acceleration and jerk limits scale together.
         scale *= 0.95 * tcp_cap / peak
+        accel_scale *= 0.95 * tcp_cap / peak
     return PlannedMove(trajectory, goal.copy())

@@ -1,0 +1,1 @@
+"""The motion service: kinematics, planned moves, the collision scene and avoidance."""

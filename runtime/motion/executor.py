@@ -1,0 +1,98 @@
+"""Running a timed joint path on a robot: uploaded as one trajectory, then watched until it
+ends; stopped (halted) on cancel, on a driver fault, or when the robot stops following."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import time
+
+import numpy as np
+
+from runtime.interfaces.robot import CommandMode, RobotState, TrajectoryState
+from runtime.kit.errors import OpenPendantError, RobotError
+from runtime.motion.timing import TimedPath
+from runtime.robot_link import RobotLink
+
+WATCH_PERIOD = 0.02  # s
+# The robot's position and its setpoint this far apart means it is not following.
+MAX_TRACKING_ERROR = 0.05  # rad
+START_TOLERANCE = 1e-3  # rad: the plan must start where the robot is
+
+
+class MoveFailed(OpenPendantError):
+    status = 409
+    code = "move_failed"
+
+
+def waypoints(timed: TimedPath) -> dict[str, object]:
+    return {
+        "waypoints": [
+            {"time_from_start": float(t), "position": p.tolist(), "velocity": v.tolist()}
+            for t, p, v in zip(timed.times, timed.positions, timed.velocities, strict=True)
+        ]
+    }
+
+
+class Execution:
+    def __init__(self, link: RobotLink, timed: TimedPath) -> None:
+        self.link = link
+        self.timed = timed
+        self.progress = 0.0
+        self._cancel = asyncio.Event()
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    async def run(self) -> None:
+        """Returns when the robot has arrived; raises MoveFailed otherwise (robot halted)."""
+        state = self.link.current()
+        here = np.array(state.joint_position)
+        if np.max(np.abs(here - self.timed.positions[0])) > START_TOLERANCE:
+            raise MoveFailed("the robot moved since the move was planned; plan again")
+        if len(self.timed.times) < 2:  # already there
+            self.progress = 1.0
+            return
+        await self.link.call("PUT", "/command_mode", {"mode": CommandMode.trajectory.value})
+        accepted = await self.link.call("POST", "/trajectory", waypoints(self.timed))
+        trajectory_id = accepted["id"]
+        started = time.monotonic()
+        try:
+            await self._watch(trajectory_id, started)
+        except BaseException:
+            await self.link.halt("motion: stop")
+            raise
+
+    async def _watch(self, trajectory_id: str, started: float) -> None:
+        duration = max(self.timed.duration, 1e-3)
+        while True:
+            if self._cancel.is_set():
+                raise MoveFailed("cancelled", code="cancelled")
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._cancel.wait(), WATCH_PERIOD)
+            state = self.link.current()
+            self._check(state)
+            self.progress = min(1.0, (time.monotonic() - started) / duration)
+            running = state.trajectory
+            if running is not None and running.id == trajectory_id:
+                continue
+            status = await self.link.call("GET", f"/trajectory/{trajectory_id}")
+            if status["state"] == TrajectoryState.finished.value:
+                self.progress = 1.0
+                return
+            if status["state"] != TrajectoryState.running.value:
+                raise MoveFailed(
+                    f"the robot ended the move: {status.get('message') or status['state']}"
+                )
+
+    @staticmethod
+    def _check(state: RobotState) -> None:
+        if state.flags.estop:
+            raise RobotError("E-stop: the move is stopped", code="estop")
+        if state.flags.error:
+            raise RobotError(f"robot fault: {state.error_message}", code="robot_fault")
+        lag = np.max(
+            np.abs(np.array(state.joint_position) - np.array(state.joint_position_command))
+        )
+        if lag > MAX_TRACKING_ERROR:
+            raise MoveFailed(f"the robot is not following its setpoint ({lag:.3f} rad behind)")

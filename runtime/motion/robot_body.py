@@ -1,0 +1,162 @@
+"""A robot's collision bodies: the URDF's collision geometry on each link, plus the objects
+it carries on its TCP (tool, held part), placed for any joint configuration."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from runtime.interfaces.limits import FloatArray
+from runtime.kinematics import Kinematics
+from runtime.kit.errors import InvalidValue
+from runtime.motion import geometry
+from runtime.motion.geometry import Shape
+from runtime.paths import resolve_package_uri
+
+
+@dataclass
+class BodyPart:
+    shape: Shape
+    frame: int  # model frame the shape is fixed to
+    joint: int  # model joint that moves it (0: fixed to the base)
+
+
+def _origin(element: ET.Element | None) -> pin.SE3:
+    if element is None:
+        return pin.SE3.Identity()
+    xyz = [float(v) for v in element.get("xyz", "0 0 0").split()]
+    rpy = [float(v) for v in element.get("rpy", "0 0 0").split()]
+    return pin.SE3(pin.rpy.rpyToMatrix(*rpy), np.array(xyz))
+
+
+def _urdf_shape(name: str, element: ET.Element, urdf: Path, local: pin.SE3) -> Shape | None:
+    child = element.find("geometry")
+    if child is None or len(child) == 0:
+        return None
+    g = child[0]
+    if g.tag == "mesh":
+        scale = tuple(float(v) for v in g.get("scale", "1 1 1").split())
+        path = resolve_package_uri(g.get("filename", ""), relative_to=urdf.parent)
+        if path.suffix.lower() != ".stl":
+            raise InvalidValue(f"collision mesh {path.name}: only STL meshes are read")
+        return geometry.mesh(name, path, (scale[0], scale[1], scale[2]), local)
+    if g.tag == "box":
+        return geometry.box(name, [float(v) for v in g.get("size", "").split()], local)
+    if g.tag == "cylinder":
+        return geometry.cylinder(name, float(g.get("radius", 0)), float(g.get("length", 0)), local)
+    if g.tag == "sphere":
+        return geometry.sphere(name, float(g.get("radius", 0)), local)
+    return None
+
+
+class RobotBody:
+    """Collision bodies of one robot; placements are in the world frame given its base pose.
+    Owns its own pinocchio data, so it can run beside the robot's Kinematics."""
+
+    def __init__(self, name: str, kinematics: Kinematics, urdf: Path | None = None) -> None:
+        self.name = name
+        self.kinematics = kinematics
+        self.model = kinematics.model
+        self.data = self.model.createData()
+        self.parts: list[BodyPart] = []
+        self.carried: list[BodyPart] = []
+        path = urdf or resolve_package_uri(kinematics.info.urdf)
+        for link in ET.parse(path).getroot().iter("link"):
+            link_name = link.get("name", "")
+            if not self.model.existFrame(link_name):
+                continue
+            frame = self.model.getFrameId(link_name)
+            joint = int(self.model.frames[frame].parentJoint)
+            for k, element in enumerate(link.findall("collision")):
+                label = f"{name}/{link_name}" + (f"#{k}" if k else "")
+                shape = _urdf_shape(label, element, path, _origin(element.find("origin")))
+                if shape is not None:
+                    self.parts.append(BodyPart(shape, frame, joint))
+        self._base_inverse = pin.SE3.Identity()
+        self.world_base = pin.SE3.Identity()
+        self.q: FloatArray = np.array(kinematics.info.home, dtype=float)
+        self.place(self.q)
+
+    @property
+    def moving(self) -> list[BodyPart]:
+        """Bodies a joint moves, carried ones included (the others never move into anything)."""
+        return [p for p in self.parts if p.joint != 0] + self.carried
+
+    @property
+    def shapes(self) -> list[Shape]:
+        return [p.shape for p in (*self.parts, *self.carried)]
+
+    def carry(self, shapes: list[Shape]) -> None:
+        """Objects fixed to the TCP (their `local` placement is in the TCP frame)."""
+        self.carried = [
+            BodyPart(
+                s,
+                self.kinematics.tcp_frame,
+                int(self.model.frames[self.kinematics.tcp_frame].parentJoint),
+            )
+            for s in shapes
+        ]
+        self.place(self.q)
+
+    def set_base(self, world_base: pin.SE3) -> None:
+        self.world_base = world_base
+        self.place(self.q)
+
+    def place(self, q: FloatArray) -> None:
+        """Put every body where joint positions `q` (robot-info order) put it."""
+        self.q = np.asarray(q, dtype=float)
+        full = pin.neutral(self.model)
+        full[self.kinematics.order] = self.q
+        pin.framesForwardKinematics(self.model, self.data, full)
+        root = self.world_base * self.data.oMf[self.kinematics.base_frame].inverse()
+        self._root = root
+        for part in (*self.parts, *self.carried):
+            part.shape.place(root * self.data.oMf[part.frame])
+
+    def point_jacobian(self, part: BodyPart, point: FloatArray) -> FloatArray:
+        """3-by-n Jacobian of a world point fixed to `part`, at the last placed q, in the
+        robot's joint order and along the world axes."""
+        pin.computeJointJacobians(self.model, self.data)
+        jac = pin.getFrameJacobian(
+            self.model, self.data, part.frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+        )[:, self.kinematics.order]
+        rotation = self._root.rotation
+        origin = self._root.act(self.data.oMf[part.frame].translation)
+        linear = rotation @ jac[:3]
+        angular = rotation @ jac[3:]
+        offset = point - origin
+        jacobian: FloatArray = linear + np.cross(angular.T, offset).T
+        return jacobian
+
+    def reach_bounds(self) -> FloatArray:
+        """For each joint, a bound on the distance from its axis to any point it moves: a
+        joint step δq moves no body point further than Σ bound_j |δq_j|."""
+        model = self.model
+        order = self.kinematics.order
+        joint_of_q = {model.joints[j].idx_q: j for j in range(1, model.njoints)}
+        joints = [joint_of_q[i] for i in order]
+        bounds = np.zeros(len(joints))
+        for k, j in enumerate(joints):
+            for part in self.moving:
+                chain = self._chain_length(j, part.joint)
+                if chain is None:
+                    continue
+                placement = model.frames[part.frame].placement * part.shape.local
+                reach = np.linalg.norm(placement.act(part.shape.center)) + part.shape.radius
+                bounds[k] = max(bounds[k], chain + reach)
+        return bounds
+
+    def _chain_length(self, ancestor: int, joint: int) -> float | None:
+        """Sum of the joint offsets from `ancestor` down to `joint`, or None when `joint`
+        does not descend from it."""
+        length = 0.0
+        while joint != ancestor:
+            if joint == 0:
+                return None
+            length += float(np.linalg.norm(self.model.jointPlacements[joint].translation))
+            joint = int(self.model.parents[joint])
+        return length

@@ -1,0 +1,119 @@
+"""The robots the motion service sees: every added robot (so each can avoid the others),
+each with a live link, and the world kept in step with them and with the stored scene."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections.abc import AsyncIterator
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from runtime.interfaces.common import Pose
+from runtime.interfaces.robot import RobotInfo
+from runtime.interfaces.scene import SceneObject
+from runtime.jog.waypoints import base_in_world
+from runtime.kit.client import ServiceClient
+from runtime.kit.errors import NotFound, OpenPendantError, Unavailable
+from runtime.motion.world import World
+from runtime.robot_link import RobotLink
+from runtime.variable_storage.client import StorageClient
+
+
+class Robots:
+    def __init__(self, device_manager_url: str, storage: StorageClient) -> None:
+        self.devices = ServiceClient(device_manager_url, timeout=3.0, name="device manager")
+        self.storage = storage
+        self.links: dict[str, RobotLink] = {}
+        self._world = World()
+        self._lock = asyncio.Lock()
+
+    async def close(self) -> None:
+        for link in self.links.values():
+            await link.close()
+        await self.devices.aclose()
+
+    @contextlib.asynccontextmanager
+    async def world(self) -> AsyncIterator[World]:
+        """The world brought up to date, for the holder alone (planning runs on it)."""
+        async with self._lock:
+            yield await self._sync()
+
+    async def link(self, name: str) -> RobotLink:
+        async with self.world():
+            pass
+        return self.known_link(name)
+
+    def known_link(self, name: str) -> RobotLink:
+        link = self.links.get(name)
+        if link is None:
+            raise NotFound(f"no connected robot {name!r}", code="unknown_device")
+        return link
+
+    async def check_lease(self, name: str, token: str | None) -> None:
+        if token is None:
+            raise OpenPendantError(
+                f"take control of {name} first", code="lease_required", status=409
+            )
+        await self.devices.request(
+            "POST", f"/devices/{name}/lease/check", headers={"X-Lease-Token": token}
+        )
+
+    async def _sync(self) -> World:
+        """Bring the world up to date: robots, their bases and joints, the scene objects."""
+        devices: list[dict[str, Any]] = await self.devices.get("/devices")
+        robots = {
+            d["local_name"]: d
+            for d in devices
+            if d["kind"] == "robot" and d["status"] == "connected"
+        }
+        for name in [n for n in self.links if n not in robots]:
+            await self.links.pop(name).close()
+            self._world.remove_robot(name)
+        for name, device in robots.items():
+            await self._ensure(name, device)
+        await self._bases()
+        objects = await self.storage.query(type_name="scene_object")
+        scene = {v.name: SceneObject.model_validate(v.value) for v in objects}
+        if scene != self._world.objects:
+            self._world.set_objects(scene)
+        for name, link in self.links.items():
+            state = link.feed.state
+            if state is not None:
+                self._world.robot(name).place(np.array(state.joint_position))
+        return self._world
+
+    async def _ensure(self, name: str, device: dict[str, Any]) -> None:
+        link = self.links.get(name)
+        if link is not None and link.url == device["url"].rstrip("/") and link.alive:
+            return
+        if link is not None:
+            await link.close()
+            del self.links[name]
+        details = await self.devices.get(f"/devices/{name}")
+        info = RobotInfo.model_validate(details["info"]["info"])
+        link = RobotLink(name, device["url"], info)
+        await link.start()
+        if not link.alive:
+            await link.close()
+            raise Unavailable(f"no state from {name}", code="device_disconnected")
+        self.links[name] = link
+        known = self._world.robots.get(name)
+        if known is None or known.kinematics.info != info:
+            self._world.add_robot(name, info)
+
+    async def _bases(self) -> None:
+        """Each base as the stored frame `frames.<robot>` places it (identity without one),
+        the same frame the jog service uses for world-frame waypoints."""
+        for name in self.links:
+            base = await base_in_world(self.storage, name)
+            body = self._world.robot(name)
+            if not body.world_base.isApprox(base):
+                body.set_base(base)
+
+
+def world_pose(base: pin.SE3) -> Pose:
+    quat = pin.Quaternion(base.rotation).coeffs()
+    return Pose(position=[float(v) for v in base.translation], orientation=[float(v) for v in quat])

@@ -1,0 +1,240 @@
+"""The motion service: plan (preview) and run joint, linear, path and relative moves, each a
+cancellable operation with status; the scene and the nearest obstacle for the UI."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import itertools
+from collections.abc import AsyncIterator
+from typing import Annotated, Any
+
+import numpy as np
+from fastapi import APIRouter, FastAPI, Header
+
+from runtime.interfaces.limits import JointLimitChecker
+from runtime.interfaces.robot import OperationalMode
+from runtime.jog.velocity import MANUAL_TCP_SPEED
+from runtime.kit.app import create_app
+from runtime.kit.errors import Conflict, NotFound, OpenPendantError
+from runtime.kit.settings import RuntimeSettings
+from runtime.motion.executor import Execution
+from runtime.motion.models import MoveRequest, MoveState, MoveStatus, PlanReport, Target
+from runtime.motion.moves import MovePlanner, Plan, Refused, resolve
+from runtime.motion.robots import Robots, world_pose
+from runtime.variable_storage.client import StorageClient
+from runtime.variable_storage.types import JointWaypoint, PoseWaypoint
+
+LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
+KEEP_FINISHED = 100
+
+
+class Moves:
+    def __init__(self, robots: Robots, storage: StorageClient) -> None:
+        self.robots = robots
+        self.storage = storage
+        self.status: dict[str, MoveStatus] = {}
+        self.running: dict[str, tuple[str, Execution | None, asyncio.Task[None]]] = {}
+        self._ids = itertools.count(1)
+
+    async def plan(self, robot: str, request: MoveRequest) -> Plan:
+        targets = [
+            await self._lookup(t, robot)
+            for t in ([request.target] if request.target else request.waypoints)
+        ]
+        async with self.robots.world() as world:
+            link = self.robots.known_link(robot)
+            state = link.current()
+            start = np.array(state.joint_position)
+            body = world.robot(robot)
+            body.place(start)
+            limits = JointLimitChecker(link.info)
+            points = [resolve(t, body.world_base, limits) for t in targets]
+            manual = state.operational_mode is OperationalMode.manual_reduced_speed
+            planner = MovePlanner(world, robot, MANUAL_TCP_SPEED if manual else None)
+            # Planning is CPU work (IK along lines, distance queries, search): off the loop,
+            # with the world held so nothing moves it meanwhile.
+            return await asyncio.to_thread(planner.plan, request, start, points)
+
+    async def _lookup(self, target: Target, robot: str) -> Target:
+        if target.waypoint is None:
+            return target
+        stored = await self.storage.get(target.waypoint)
+        if stored.type == "joint_waypoint":
+            joints = JointWaypoint.model_validate(stored.value)
+            if joints.robot != robot:
+                raise Refused(f"waypoint {stored.name} was taught on {joints.robot}, not {robot}")
+            return Target(joints=joints.joints, blend=target.blend)
+        if stored.type == "pose_waypoint":
+            pose = PoseWaypoint.model_validate(stored.value)
+            if pose.frame not in ("base", "world"):
+                raise Refused(f"waypoint {stored.name} is in frame {pose.frame!r}")
+            return Target(pose=pose.pose, frame=pose.frame, blend=target.blend)
+        raise Refused(f"{stored.name} is a {stored.type}, not a waypoint")
+
+    async def start(self, robot: str, request: MoveRequest) -> MoveStatus:
+        if robot in self.running:
+            raise Conflict(f"{robot} is already moving; cancel that move first", code="busy")
+        move_id = f"move-{next(self._ids)}"
+        status = MoveStatus(id=move_id, robot=robot, state=MoveState.planning)
+        self.status[move_id] = status
+        plan = await self.plan(robot, request)
+        status.plan = plan.report
+        if not plan.report.ok or plan.timed is None:
+            status.state, status.message = MoveState.failed, plan.report.message
+            raise Refused(
+                plan.report.message, code=plan.report.code, details=plan.report.model_dump()
+            )
+        execution = Execution(await self.robots.link(robot), plan.timed)
+        task = asyncio.create_task(self._run(status, execution))
+        self.running[robot] = (move_id, execution, task)
+        status.state = MoveState.running
+        self._forget_old()
+        return status
+
+    async def _run(self, status: MoveStatus, execution: Execution) -> None:
+        try:
+            await execution.run()
+            status.state, status.progress = MoveState.finished, 1.0
+        except OpenPendantError as exc:
+            cancelled = exc.code == "cancelled"
+            status.state = MoveState.cancelled if cancelled else MoveState.failed
+            status.message = exc.message
+        except Exception as exc:  # a move must always end with a status
+            status.state, status.message = MoveState.failed, f"internal error: {exc}"
+            raise
+        finally:
+            status.progress = max(status.progress, execution.progress)
+            self.running.pop(status.robot, None)
+
+    def get(self, move_id: str) -> MoveStatus:
+        status = self.status.get(move_id)
+        if status is None:
+            raise NotFound(f"no move {move_id!r}")
+        for _, execution, _ in self.running.values():
+            if execution is not None and status.state is MoveState.running:
+                status.progress = execution.progress
+        return status
+
+    async def cancel(self, move_id: str) -> MoveStatus:
+        status = self.get(move_id)
+        entry = self.running.get(status.robot)
+        if entry is not None and entry[0] == move_id:
+            _, execution, task = entry
+            if execution is not None:
+                execution.cancel()
+            with contextlib.suppress(Exception):
+                await asyncio.wait_for(asyncio.shield(task), 2.0)
+        return status
+
+    async def stop(self, robot: str) -> None:
+        """Stop wins: halt the robot at once, whatever is running."""
+        entry = self.running.get(robot)
+        if entry is not None and entry[1] is not None:
+            entry[1].cancel()
+        link = await self.robots.link(robot)
+        await link.halt("motion: stop")
+
+    async def wait(self, move_id: str, timeout: float) -> MoveStatus:
+        status = self.get(move_id)
+        entry = self.running.get(status.robot)
+        if entry is not None and entry[0] == move_id:
+            with contextlib.suppress(TimeoutError, Exception):
+                await asyncio.wait_for(asyncio.shield(entry[2]), timeout)
+        return self.get(move_id)
+
+    def _forget_old(self) -> None:
+        ended = [
+            k
+            for k, s in self.status.items()
+            if s.state not in (MoveState.planning, MoveState.running)
+        ]
+        for key in ended[: max(0, len(ended) - KEEP_FINISHED)]:
+            del self.status[key]
+
+
+def motion_router(moves: Moves, robots: Robots) -> APIRouter:
+    router = APIRouter(prefix="/motion")
+
+    @router.get("/scene")
+    async def scene() -> dict[str, Any]:
+        async with robots.world() as world:
+            return {
+                "robots": {
+                    name: {
+                        "base": world_pose(body.world_base).model_dump(),
+                        "joints": body.q.tolist(),
+                    }
+                    for name, body in world.robots.items()
+                },
+                "objects": {name: obj.model_dump() for name, obj in world.objects.items()},
+            }
+
+    @router.post("/robots/{robot}/plan")
+    async def plan(robot: str, body: MoveRequest) -> PlanReport:
+        """Plan and check a move without running it (the scene panel's preview)."""
+        return (await moves.plan(robot, body)).report
+
+    @router.post("/robots/{robot}/moves", status_code=202)
+    async def start(
+        robot: str, body: MoveRequest, token: LeaseToken = None, wait: float = 0.0
+    ) -> MoveStatus:
+        await robots.check_lease(robot, token)
+        status = await moves.start(robot, body)
+        if wait > 0:
+            return await moves.wait(status.id, min(wait, 600.0))
+        return status
+
+    @router.post("/robots/{robot}/stop")
+    async def stop(robot: str) -> dict[str, str]:
+        await moves.stop(robot)
+        return {"robot": robot, "state": "halted"}
+
+    @router.get("/robots/{robot}/clearance")
+    async def clearance(robot: str) -> dict[str, Any]:
+        """The nearest pair of this robot's moving parts and anything else, now."""
+        async with robots.world() as world:
+            contact = world.nearest(robot)
+        if contact is None:
+            return {"robot": robot, "distance": None}
+        p = contact.proximity
+        return {
+            "robot": robot,
+            "distance": p.distance,
+            "robot_part": p.body,
+            "other": p.other,
+            "points": [p.point.tolist(), p.other_point.tolist()],
+        }
+
+    @router.get("/moves/{move_id}")
+    async def move(move_id: str, wait: float = 0.0) -> MoveStatus:
+        if wait > 0:
+            return await moves.wait(move_id, min(wait, 600.0))
+        return moves.get(move_id)
+
+    @router.post("/moves/{move_id}/cancel")
+    async def cancel(move_id: str) -> MoveStatus:
+        return await moves.cancel(move_id)
+
+    return router
+
+
+def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
+    storage = StorageClient(urls["variable_storage"])
+    robots = Robots(urls["device_manager"], storage)
+    moves = Moves(robots, storage)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        try:
+            yield
+        finally:
+            for robot in list(moves.running):
+                with contextlib.suppress(Exception):
+                    await moves.stop(robot)
+            await robots.close()
+            await storage.aclose()
+
+    app = create_app("motion", lifespan=lifespan)
+    app.include_router(motion_router(moves, robots))
+    return app

@@ -1,0 +1,149 @@
+"""The world: every robot's bodies at its base pose, and the scene's obstacles and keep-out
+zones. Answers "how close is this robot, at these joints, to anything else?"."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from runtime.interfaces.limits import FloatArray
+from runtime.interfaces.robot import RobotInfo
+from runtime.interfaces.scene import SceneObject
+from runtime.kinematics import Kinematics, pose_to_se3
+from runtime.kit.errors import NotFound
+from runtime.motion import geometry
+from runtime.motion.geometry import Proximity, Shape, proximity
+from runtime.motion.robot_body import BodyPart, RobotBody
+from runtime.paths import resolve_package_uri
+
+
+def scene_shape(name: str, obj: SceneObject) -> Shape:
+    """The collision shape of a scene object, `local` being its pose (world or TCP frame)."""
+    local = pose_to_se3(obj.pose)
+    if obj.shape == "box":
+        return geometry.box(name, obj.size, local)
+    if obj.shape == "cylinder":
+        return geometry.cylinder(name, obj.size[0], obj.size[1], local)
+    if obj.shape == "sphere":
+        return geometry.sphere(name, obj.size[0], local)
+    path = resolve_package_uri(obj.mesh or "")
+    return geometry.mesh(name, path, (obj.size[0], obj.size[1], obj.size[2]), local)
+
+
+@dataclass
+class Contact:
+    """What a robot part is nearest to (or touching, at distance ≤ 0)."""
+
+    part: BodyPart
+    proximity: Proximity
+
+
+class World:
+    def __init__(self) -> None:
+        self.robots: dict[str, RobotBody] = {}
+        self.objects: dict[str, SceneObject] = {}
+        self.obstacles: list[Shape] = []
+
+    # Contents -------------------------------------------------------------------------------
+
+    def add_robot(
+        self, name: str, info: RobotInfo, base: pin.SE3 | None = None, urdf: Path | None = None
+    ) -> RobotBody:
+        body = RobotBody(name, Kinematics(info, urdf), urdf)
+        body.set_base(base or pin.SE3.Identity())
+        self.robots[name] = body
+        self._attach()
+        return body
+
+    def remove_robot(self, name: str) -> None:
+        self.robots.pop(name, None)
+
+    def robot(self, name: str) -> RobotBody:
+        body = self.robots.get(name)
+        if body is None:
+            raise NotFound(f"robot {name!r} is not in the scene", code="unknown_robot")
+        return body
+
+    def set_objects(self, objects: dict[str, SceneObject]) -> None:
+        """Replace the scene's objects (obstacles, keep-out zones, carried objects)."""
+        self.objects = dict(objects)
+        self.obstacles = []
+        for name, obj in sorted(self.objects.items()):
+            if obj.attached_to is None:
+                shape = scene_shape(name, obj)
+                shape.place(pin.SE3.Identity())
+                self.obstacles.append(shape)
+        self._attach()
+
+    def _attach(self) -> None:
+        for robot_name, body in self.robots.items():
+            body.carry(
+                [
+                    scene_shape(name, obj)
+                    for name, obj in sorted(self.objects.items())
+                    if obj.attached_to == robot_name
+                ]
+            )
+
+    # Queries ----------------------------------------------------------------------------------
+
+    def _others(self, robot: str) -> list[Shape]:
+        shapes = list(self.obstacles)
+        for name, body in self.robots.items():
+            if name != robot:
+                shapes.extend(body.shapes)
+        return shapes
+
+    def contacts(
+        self, robot: str, q: FloatArray | None = None, within: float = np.inf
+    ) -> list[Contact]:
+        """Every (moving part, other body) pair of `robot` closer than `within`, nearest
+        points included; the robot is placed at `q` first when given."""
+        body = self.robot(robot)
+        if q is not None:
+            body.place(q)
+        parts = body.moving
+        others = self._others(robot)
+        if not parts or not others:
+            return []
+        gaps = self._sphere_gaps(parts, others)
+        found = []
+        for i, j in zip(*np.nonzero(gaps < within), strict=True):
+            near = proximity(parts[i].shape, others[j])
+            if near.distance < within:
+                found.append(Contact(parts[i], near))
+        return found
+
+    def nearest(self, robot: str, q: FloatArray | None = None) -> Contact | None:
+        """The closest pair of the robot's moving parts and anything else."""
+        body = self.robot(robot)
+        if q is not None:
+            body.place(q)
+        parts = body.moving
+        others = self._others(robot)
+        if not parts or not others:
+            return None
+        gaps = self._sphere_gaps(parts, others)
+        best: Contact | None = None
+        # Pairs in order of their lower bound; stop once no remaining pair can be nearer.
+        for flat in np.argsort(gaps, axis=None):
+            i, j = np.unravel_index(flat, gaps.shape)
+            if best is not None and gaps[i, j] >= best.proximity.distance:
+                break
+            near = proximity(parts[i].shape, others[j])
+            if best is None or near.distance < best.proximity.distance:
+                best = Contact(parts[i], near)
+        return best
+
+    @staticmethod
+    def _sphere_gaps(parts: list[BodyPart], others: list[Shape]) -> FloatArray:
+        a = np.array([p.shape.world_center for p in parts])
+        b = np.array([s.world_center for s in others])
+        ra = np.array([p.shape.radius for p in parts])
+        rb = np.array([s.radius for s in others])
+        centers = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
+        gaps: FloatArray = centers - ra[:, None] - rb[None, :]
+        return gaps

@@ -1,0 +1,255 @@
+"""Planned moves through the motion service against the simulated UR5: joint, linear, path
+and relative moves reach their targets, the setpoints the robot ran stay within its limits
+and on the line, colliding moves are refused with the pair, and a path around obstacles is
+found and run without touching them."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from runtime.interfaces.scene import SceneObject
+from runtime.kinematics import Kinematics
+from runtime.motion.world import World
+from runtime.robot_info import load_robot_info
+from tests.support.jog import Cell
+from tests.support.processes import Runtime
+
+INFO = load_robot_info("ur5")
+KINEMATICS = Kinematics(INFO)
+LEFT = [1.0, -1.0, 1.8, -2.37, -1.57, 0.0]
+RIGHT = [-1.0, -1.0, 1.8, -2.37, -1.57, 0.0]
+SCENE = {
+    "table": {"shape": "box", "size": [1.6, 1.6, 0.04], "pose": {"position": [0, 0, -0.02]}},
+    "post_a": {"shape": "cylinder", "size": [0.04, 0.5], "pose": {"position": [-0.5, 0.05, 0.25]}},
+    "post_b": {"shape": "cylinder", "size": [0.04, 0.5], "pose": {"position": [-0.4, -0.3, 0.25]}},
+}
+
+
+@pytest.fixture(scope="module")
+def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cell]:
+    home = tmp_path_factory.mktemp("motion")
+    runtime = Runtime(home)
+    runtime.wait_ready()
+    try:
+        yield Cell(runtime)
+    finally:
+        runtime.stop()
+    assert runtime.service_errors() == []
+
+
+@pytest.fixture
+def ready(cell: Cell) -> Cell:
+    cell.ready()
+    for name in SCENE:
+        cell.runtime.api("DELETE", f"/variables/{name}")
+    move(cell, {"kind": "joint", "target": {"joints": INFO.home}, "speed": 1.0})
+    return cell
+
+
+def start(cell: Cell, request: dict[str, Any]) -> dict[str, Any]:
+    response = cell.runtime.api(
+        "POST", "/motion/robots/robot/moves", json=request, headers=cell.headers()
+    )
+    assert response.status_code == 202, response.text
+    status: dict[str, Any] = response.json()
+    return status
+
+
+def move(cell: Cell, request: dict[str, Any]) -> dict[str, Any]:
+    return finish(cell, start(cell, request))
+
+
+def finish(cell: Cell, status: dict[str, Any]) -> dict[str, Any]:
+    for _ in range(60):
+        if status["state"] not in ("planning", "running"):
+            break
+        status = cell.runtime.api("GET", f"/motion/moves/{status['id']}", params={"wait": 5}).json()
+    assert status["state"] == "finished", status
+    return status
+
+
+def setpoints_during(cell: Cell, request: dict[str, Any]) -> np.ndarray[Any, Any]:
+    status = start(cell, request)
+    # The trajectory began a moment ago (planning, which can take a while, came first): the
+    # history from 0.2 s back holds all of it, and a little rest before.
+    after = int(cell.robot.state()["seqno"]) - 100
+    rows: list[list[float]] = []
+
+    def collect() -> None:
+        nonlocal after
+        while True:
+            page = cell.robot.setpoints(after)
+            if not page["seqno"]:
+                return
+            assert page["seqno"][0] == after + 1, "setpoints were dropped from the history"
+            rows.extend(page["position"])
+            after = page["seqno"][-1]
+
+    while status["state"] in ("planning", "running"):
+        collect()  # as it goes: the driver keeps only the last 10 s
+        status = cell.runtime.api("GET", f"/motion/moves/{status['id']}", params={"wait": 1}).json()
+    assert status["state"] == "finished", status
+    cell.robot.wait_stopped()
+    collect()
+    return np.array(rows)
+
+
+def within_limits(positions: np.ndarray[Any, Any], cycle: float) -> None:
+    velocity = np.diff(positions, axis=0) / cycle
+    acceleration = np.diff(velocity, axis=0) / cycle
+    v_max = np.array([j.max_velocity for j in INFO.joints])
+    a_max = np.array([j.max_acceleration for j in INFO.joints])
+    assert np.all(np.abs(velocity) <= v_max * (1 + 1e-6))
+    assert np.all(np.abs(acceleration) <= a_max * (1 + 1e-6))
+
+
+def pose_of(q: list[float] | np.ndarray[Any, Any]) -> dict[str, list[float]]:
+    m = KINEMATICS.tcp(np.array(q))
+    return {
+        "position": m.translation.tolist(),
+        "orientation": pin.Quaternion(m.rotation).coeffs().tolist(),
+    }
+
+
+def test_move_joint_reaches_its_target_within_the_limits(ready: Cell) -> None:
+    goal = [0.6, -1.2, 1.2, -1.4, -1.2, 0.5]
+    positions = setpoints_during(
+        ready, {"kind": "joint", "target": {"joints": goal}, "speed": 1.0, "acceleration": 1.0}
+    )
+    within_limits(positions, ready.robot.setpoints(0)["cycle"])
+    reached = KINEMATICS.tcp(ready.robot.q()).translation
+    assert np.linalg.norm(reached - KINEMATICS.tcp(np.array(goal)).translation) < 1e-4
+
+
+def test_move_linear_stays_on_the_line(ready: Cell) -> None:
+    start = KINEMATICS.tcp(ready.robot.q()).copy()
+    goal = pin.SE3(
+        start.rotation @ pin.rpy.rpyToMatrix(0.0, 0.0, 0.4),
+        start.translation + np.array([0.15, 0.12, -0.1]),
+    )
+    target = {
+        "position": goal.translation.tolist(),
+        "orientation": pin.Quaternion(goal.rotation).coeffs().tolist(),
+    }
+    positions = setpoints_during(
+        ready, {"kind": "linear", "target": {"pose": target}, "speed": 1.0, "acceleration": 1.0}
+    )
+    within_limits(positions, ready.robot.setpoints(0)["cycle"])
+    line = goal.translation - start.translation
+    direction = line / np.linalg.norm(line)
+    worst = max(
+        np.linalg.norm(np.cross(KINEMATICS.tcp(q).translation - start.translation, direction))
+        for q in positions
+    )
+    assert worst < 0.5e-3
+    reached = KINEMATICS.tcp(ready.robot.q())
+    assert np.linalg.norm(reached.translation - goal.translation) < 1e-4
+    assert np.linalg.norm(pin.log3(reached.rotation.T @ goal.rotation)) < 1e-4
+
+
+def test_move_through_waypoints_with_blends_reaches_the_last(ready: Cell) -> None:
+    home = np.array(INFO.home)
+    here = KINEMATICS.tcp(home)
+    corners = [here.translation + d for d in ([0.1, 0.0, 0.0], [0.1, 0.15, 0.0], [0.0, 0.15, -0.1])]
+    orientation = pin.Quaternion(here.rotation).coeffs().tolist()
+    ready.runtime.api(
+        "PUT",
+        "/variables/pick",
+        json={
+            "type": "pose_waypoint",
+            "value": {"pose": {"position": corners[2].tolist(), "orientation": orientation}},
+        },
+    )
+    waypoints: list[dict[str, Any]] = [
+        {"pose": {"position": c.tolist(), "orientation": orientation}, "blend": 0.03}
+        for c in corners[:2]
+    ]
+    waypoints.append({"waypoint": "pick"})
+    positions = setpoints_during(
+        ready, {"kind": "path", "waypoints": waypoints, "speed": 1.0, "acceleration": 1.0}
+    )
+    within_limits(positions, ready.robot.setpoints(0)["cycle"])
+    reached = KINEMATICS.tcp(ready.robot.q()).translation
+    assert np.linalg.norm(reached - corners[2]) < 1e-4
+
+
+def test_relative_moves_in_base_and_tool_frames(ready: Cell) -> None:
+    before = KINEMATICS.tcp(ready.robot.q()).copy()
+    offset = {"position": [0.0, 0.0, 0.05], "orientation": [0, 0, 0, 1]}
+    move(ready, {"kind": "relative", "offset": offset, "offset_frame": "base"})
+    after = KINEMATICS.tcp(ready.robot.q()).copy()
+    assert np.allclose(after.translation - before.translation, [0, 0, 0.05], atol=1e-4)
+    move(ready, {"kind": "relative", "offset": offset, "offset_frame": "tool"})
+    tool = KINEMATICS.tcp(ready.robot.q())
+    assert np.allclose(tool.translation - after.translation, after.rotation[:, 2] * 0.05, atol=1e-4)
+
+
+def test_a_colliding_move_is_refused_and_nothing_moves(ready: Cell) -> None:
+    move(ready, {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0})
+    for name, value in SCENE.items():
+        ready.runtime.api(
+            "PUT", f"/variables/{name}", json={"type": "scene_object", "value": value}
+        )
+    before = ready.robot.q()
+    request = {"kind": "joint", "target": {"joints": RIGHT}, "avoid_obstacles": False}
+    response = ready.runtime.api(
+        "POST", "/motion/robots/robot/moves", json=request, headers=ready.headers()
+    )
+    assert response.status_code == 422, response.text
+    error = response.json()["error"]
+    assert error["code"] == "collision"
+    assert error["details"]["collision"]["other"] in ("post_a", "post_b")
+    assert error["details"]["collision"]["robot_part"].startswith("robot/")
+    assert np.allclose(ready.robot.q(), before)
+
+
+def test_a_move_around_the_posts_never_touches_them(ready: Cell) -> None:
+    move(ready, {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0})
+    for name, value in SCENE.items():
+        ready.runtime.api(
+            "PUT", f"/variables/{name}", json={"type": "scene_object", "value": value}
+        )
+    positions = setpoints_during(
+        ready, {"kind": "joint", "target": {"joints": RIGHT}, "speed": 1.0, "acceleration": 1.0}
+    )
+    assert np.allclose(ready.robot.q(), RIGHT, atol=1e-6)
+    world = World()
+    world.add_robot("robot", INFO)
+    world.set_objects({k: SceneObject.model_validate(v) for k, v in SCENE.items()})
+    for q in positions:
+        contact = world.nearest("robot", q)
+        assert contact is not None and contact.proximity.distance > 0, contact
+
+
+def test_moving_needs_the_lease(ready: Cell) -> None:
+    response = ready.runtime.api(
+        "POST",
+        "/motion/robots/robot/moves",
+        json={"kind": "joint", "target": {"joints": LEFT}},
+        headers={"X-Lease-Token": "not-the-token"},
+    )
+    assert response.status_code in (403, 409), response.text
+    response = ready.runtime.api(
+        "POST", "/motion/robots/robot/moves", json={"kind": "joint", "target": {"joints": LEFT}}
+    )
+    assert response.json()["error"]["code"] == "lease_required"
+
+
+def test_cancel_halts_the_robot(ready: Cell) -> None:
+    response = ready.runtime.api(
+        "POST",
+        "/motion/robots/robot/moves",
+        json={"kind": "joint", "target": {"joints": LEFT}, "speed": 0.1, "acceleration": 0.1},
+        headers=ready.headers(),
+    )
+    status = response.json()
+    cancelled = ready.runtime.api("POST", f"/motion/moves/{status['id']}/cancel").json()
+    assert cancelled["state"] == "cancelled"
+    ready.robot.wait_stopped()
+    assert not np.allclose(ready.robot.q(), LEFT, atol=1e-3)
+    assert ready.robot.state()["command_mode"] == "halt"

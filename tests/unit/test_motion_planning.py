@@ -1,0 +1,126 @@
+"""The motion planner without processes: collision checking of paths (nothing passes
+through a thin obstacle unseen), refusals name the colliding pair, planning around a cluttered
+scene, straight TCP lines, and time-scaling within the joint limits."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from runtime.interfaces.scene import SceneObject
+from runtime.motion.checker import PathChecker
+from runtime.motion.models import MoveRequest
+from runtime.motion.moves import MovePlanner, Point
+from runtime.motion.paths import PathError, sample_tcp_path
+from runtime.motion.timing import time_scale
+from runtime.motion.world import World
+from runtime.robot_info import load_robot_info
+
+INFO = load_robot_info("ur5")
+# Left and right of the robot (a UR's base x axis points backwards), arm folded over the table.
+LEFT = np.array([1.0, -1.0, 1.8, -2.37, -1.57, 0.0])
+RIGHT = np.array([-1.0, -1.0, 1.8, -2.37, -1.57, 0.0])
+
+
+def cluttered() -> dict[str, SceneObject]:
+    """A table under the robot and two posts in the way of a swing from left to right."""
+    return {
+        "table": SceneObject(shape="box", size=[1.6, 1.6, 0.04], pose={"position": [0, 0, -0.02]}),
+        "post_a": SceneObject(
+            shape="cylinder", size=[0.04, 0.5], pose={"position": [-0.5, 0.05, 0.25]}
+        ),
+        "post_b": SceneObject(
+            shape="cylinder", size=[0.04, 0.5], pose={"position": [-0.4, -0.3, 0.25]}
+        ),
+    }
+
+
+def world_with(objects: dict[str, SceneObject]) -> World:
+    world = World()
+    world.add_robot("r", INFO)
+    world.set_objects(objects)
+    return world
+
+
+def joint_move(**fields: Any) -> MoveRequest:
+    return MoveRequest.model_validate(
+        {"kind": "joint", "target": {"joints": list(RIGHT)}, **fields}
+    )
+
+
+def test_a_thin_obstacle_between_two_far_samples_is_found() -> None:
+    """One segment swinging the arm by 2 rad: the 1 cm plate it crosses is still seen."""
+    plate = SceneObject(shape="box", size=[0.01, 0.6, 0.6], pose={"position": [-0.55, 0.0, 0.3]})
+    world = world_with({"plate": plate})
+    checker = PathChecker(world, "r")
+    assert checker.configuration(LEFT) is None
+    assert checker.configuration(RIGHT) is None
+    hit = checker.path(np.array([LEFT, RIGHT]))
+    assert hit is not None
+    assert hit.other == "plate"
+    assert hit.robot_part.startswith("r/")
+
+
+def test_a_colliding_move_is_refused_with_the_pair() -> None:
+    world = world_with(cluttered())
+    plan = MovePlanner(world, "r", None).plan(
+        joint_move(avoid_obstacles=False), LEFT, [Point(RIGHT, None)]
+    )
+    assert not plan.report.ok
+    assert plan.report.code == "collision"
+    assert plan.report.collision is not None
+    assert plan.report.collision.other in ("post_a", "post_b")
+    assert plan.report.collision.robot_part.startswith("r/")
+    assert plan.timed is None
+
+
+def test_the_planner_finds_a_collision_free_path_in_a_cluttered_scene() -> None:
+    world = world_with(cluttered())
+    plan = MovePlanner(world, "r", None).plan(joint_move(), LEFT, [Point(RIGHT, None)])
+    assert plan.report.ok, plan.report.message
+    assert plan.report.planned_around
+    assert plan.timed is not None
+    assert np.allclose(plan.timed.positions[-1], RIGHT)
+    # Every setpoint, and everything between them, is clear of the table and the posts.
+    for q in plan.timed.positions:
+        contact = world.nearest("r", q)
+        assert contact is not None
+        assert contact.proximity.distance > 0
+    assert PathChecker(world, "r").path(plan.timed.positions) is None
+
+
+def test_a_linear_path_stays_on_the_line_and_within_the_limits() -> None:
+    world = world_with({})
+    kinematics = world.robot("r").kinematics
+    start = np.array(INFO.home)
+    here = kinematics.tcp(start).copy()
+    goal = pin.SE3(here.rotation, here.translation + np.array([0.15, 0.1, -0.1]))
+    samples = sample_tcp_path(kinematics, start, [here, goal], [])
+    timed = time_scale(samples, INFO, speed=1.0, acceleration=1.0)
+    direction = (goal.translation - here.translation) / np.linalg.norm(
+        goal.translation - here.translation
+    )
+    for q in timed.positions:
+        offset = kinematics.tcp(q).translation - here.translation
+        assert np.linalg.norm(np.cross(offset, direction)) < 0.5e-3
+    assert np.linalg.norm(kinematics.tcp(timed.positions[-1]).translation - goal.translation) < 1e-7
+    dt = np.diff(timed.times)[:, None]
+    velocity = np.diff(timed.positions, axis=0) / dt
+    limits = np.array([j.max_velocity for j in INFO.joints])
+    assert np.all(np.abs(velocity) <= limits * (1 + 1e-9))
+    acceleration = np.diff(timed.velocities, axis=0) / dt
+    assert np.all(np.abs(acceleration) <= np.array([j.max_acceleration for j in INFO.joints]))
+
+
+def test_a_line_out_of_reach_fails_before_any_motion() -> None:
+    world = world_with({})
+    kinematics = world.robot("r").kinematics
+    start = np.array(INFO.home)
+    here = kinematics.tcp(start).copy()
+    far = pin.SE3(here.rotation, here.translation + np.array([-1.5, 0.0, 0.0]))
+    with pytest.raises(PathError) as err:
+        sample_tcp_path(kinematics, start, [here, far], [])
+    assert err.value.code in ("unreachable", "singularity")
