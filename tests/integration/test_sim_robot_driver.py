@@ -233,7 +233,9 @@ def test_state_streams_over_websocket(robot: Robot) -> None:
     with connect(f"{robot.ws_url}/state/ws") as ws:
         seqnos = [json.loads(ws.recv(timeout=2))["seqno"] for _ in range(30)]
     assert seqnos == sorted(seqnos)
-    assert len(set(seqnos)) == 30
+    # The state a subscriber gets on connecting can come again on the first tick when the
+    # host stalled the control loop meanwhile; after that every message is a new state.
+    assert len(set(seqnos[1:])) == 29
 
 
 def test_a_dropped_command_stream_halts_the_robot(robot: Robot) -> None:
