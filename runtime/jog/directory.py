@@ -13,13 +13,13 @@ from typing import Any
 
 import websockets
 
+from runtime.device_manager.client import check_lease, open_robot_link, require_token
 from runtime.interfaces.input import InputState
 from runtime.interfaces.robot import RobotInfo
 from runtime.jog.jogger import Jogger
 from runtime.kinematics import Kinematics
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import DeviceError, OpenPendantError, Unavailable
-from runtime.robot_link import RobotLink
 from runtime.state_feed import StateFeed
 
 log = logging.getLogger(__name__)
@@ -115,10 +115,7 @@ class Directory:
         return device
 
     async def check_lease(self, name: str, token: str | None) -> None:
-        if token is None:
-            raise OpenPendantError(
-                f"take control of {name} first", code="lease_required", status=409
-            )
+        token = require_token(name, token)
         renew, trust = self._leases.get((name, token), (0.0, 0.0))
         now = time.time()
         if now < trust:
@@ -132,9 +129,7 @@ class Directory:
 
     async def _check(self, name: str, token: str, quiet: bool = True) -> None:
         try:
-            granted = await self.http.request(
-                "POST", f"/devices/{name}/lease/check", headers={"X-Lease-Token": token}
-            )
+            granted = await check_lease(self.http, name, token)
         except OpenPendantError:
             self._leases.pop((name, token), None)
             if quiet:
@@ -153,14 +148,8 @@ class Directory:
             if jogger is not None:
                 del self.joggers[name]
                 await jogger.close()
-            details = await self.http.get(f"/devices/{name}")
-            info = RobotInfo.model_validate(details["info"]["info"])
-            link = RobotLink(name, device["url"], info)
-            await link.start()
-            if not link.alive:
-                await link.close()
-                raise Unavailable(f"no state from {name}", code="device_disconnected")
-            jogger = Jogger(link, self.kinematics(info))
+            link = await open_robot_link(self.http, name, device["url"])
+            jogger = Jogger(link, self.kinematics(link.info))
             self.joggers[name] = jogger
             return jogger
 

@@ -96,7 +96,7 @@ class MovePlanner:
             collision = checker.path(samples)
             if collision is not None:
                 return self._refused(collision, samples)
-            timed = self._time(samples, request, stops=self._stops(request, points))
+            timed = self._time(samples, request, self._stops_at_corners(request, points))
         # The trajectory interpolates between its points: check what will actually run.
         collision = checker.path(timed.positions)
         if collision is not None:
@@ -150,16 +150,14 @@ class MovePlanner:
         return sample_joint_polyline(np.array(vertices), radii)
 
     @staticmethod
-    def _stops(request: MoveRequest, points: list[Point]) -> list[int]:
-        """Waypoints the path stops at (those without a blend), as indices into `points`."""
-        if request.kind is not MoveKind.path:
-            return []
-        return [k for k, p in enumerate(points[:-1]) if p.blend <= 0.0]
+    def _stops_at_corners(request: MoveRequest, points: list[Point]) -> bool:
+        """Whether the path stops at some waypoint on the way (one without a blend)."""
+        return request.kind is MoveKind.path and any(p.blend <= 0.0 for p in points[:-1])
 
     # Timing -----------------------------------------------------------------------------------
 
-    def _time(self, samples: FloatArray, request: MoveRequest, stops: list[int]) -> TimedPath:
-        """Rest to rest, stopping wherever the path has an unblended corner."""
+    def _time(self, samples: FloatArray, request: MoveRequest, stops: bool) -> TimedPath:
+        """Rest to rest, stopping at the path's unblended corners when it has any."""
         pieces = _split_at_corners(samples) if stops else [samples]
         timed = at_rest(samples[0])
         for piece in pieces:
@@ -180,7 +178,9 @@ class MovePlanner:
         that was checked."""
         timed = at_rest(vertices[0])
         for a, b in itertools.pairwise(vertices):
-            timed = timed.then(self._time(sample_joint_polyline(np.array([a, b]), []), request, []))
+            timed = timed.then(
+                self._time(sample_joint_polyline(np.array([a, b]), []), request, stops=False)
+            )
         return timed
 
     def _joint_segments(self, vertices: FloatArray, request: MoveRequest) -> TimedPath:

@@ -119,15 +119,12 @@ def sample_tcp_path(
 
     q = np.asarray(start, dtype=float)
     rows = [q.copy()]
-    pure_rotation = not path.pieces
     pieces = path.pieces or [Piece(positions[0], positions[-1])]
     spans = path.spans or [((0, 0.0), (len(poses) - 2, 1.0))]
     for piece, (span_a, span_b) in zip(pieces, spans, strict=True):
         qa, qb = orientation(span_a), orientation(span_b)
         angle = qa.angularDistance(qb)
         count = int(np.ceil(max(piece.length() / LINEAR_STEP, angle / ANGULAR_STEP)))
-        if pure_rotation:
-            count = int(np.ceil(angle / ANGULAR_STEP))
         for u in np.linspace(0, 1, max(count, 1) + 1)[1:]:
             target = pin.SE3(_slerp(qa, qb, u).toRotationMatrix(), piece.at(u))
             try:

@@ -76,7 +76,8 @@ class RobotBody:
                 shape = _urdf_shape(label, element, path, _origin(element.find("origin")))
                 if shape is not None:
                     self.parts.append(BodyPart(shape, frame, joint))
-        self._base_inverse = pin.SE3.Identity()
+        self._root = pin.SE3.Identity()  # the model's root in the world, at the last place
+        self._jacobians_current = False
         self.world_base = pin.SE3.Identity()
         self.q: FloatArray = np.array(kinematics.info.home, dtype=float)
         self.place(self.q)
@@ -114,13 +115,16 @@ class RobotBody:
         pin.framesForwardKinematics(self.model, self.data, full)
         root = self.world_base * self.data.oMf[self.kinematics.base_frame].inverse()
         self._root = root
+        self._jacobians_current = False
         for part in (*self.parts, *self.carried):
             part.shape.place(root * self.data.oMf[part.frame])
 
     def point_jacobian(self, part: BodyPart, point: FloatArray) -> FloatArray:
         """3-by-n Jacobian of a world point fixed to `part`, at the last placed q, in the
         robot's joint order and along the world axes."""
-        pin.computeJointJacobians(self.model, self.data)
+        if not self._jacobians_current:  # once per placement, however many contacts
+            pin.computeJointJacobians(self.model, self.data)
+            self._jacobians_current = True
         jac = pin.getFrameJacobian(
             self.model, self.data, part.frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         )[:, self.kinematics.order]

@@ -11,12 +11,12 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from runtime.device_manager.client import check_lease, open_robot_link, require_token
 from runtime.interfaces.common import Pose
-from runtime.interfaces.robot import RobotInfo
 from runtime.interfaces.scene import SceneObject
 from runtime.jog.waypoints import base_in_world
 from runtime.kit.client import ServiceClient
-from runtime.kit.errors import NotFound, OpenPendantError, Unavailable
+from runtime.kit.errors import NotFound
 from runtime.motion.world import World
 from runtime.robot_link import RobotLink
 from runtime.variable_storage.client import StorageClient
@@ -42,8 +42,10 @@ class Robots:
             yield await self._sync()
 
     async def link(self, name: str) -> RobotLink:
-        async with self.world():
-            pass
+        """The robot's link; the world is refreshed only for a robot not known yet."""
+        if name not in self.links:
+            async with self.world():
+                pass
         return self.known_link(name)
 
     def known_link(self, name: str) -> RobotLink:
@@ -53,13 +55,7 @@ class Robots:
         return link
 
     async def check_lease(self, name: str, token: str | None) -> None:
-        if token is None:
-            raise OpenPendantError(
-                f"take control of {name} first", code="lease_required", status=409
-            )
-        await self.devices.request(
-            "POST", f"/devices/{name}/lease/check", headers={"X-Lease-Token": token}
-        )
+        await check_lease(self.devices, name, require_token(name, token))
 
     async def _sync(self) -> World:
         """Bring the world up to date: robots, their bases and joints, the scene objects."""
@@ -92,17 +88,11 @@ class Robots:
         if link is not None:
             await link.close()
             del self.links[name]
-        details = await self.devices.get(f"/devices/{name}")
-        info = RobotInfo.model_validate(details["info"]["info"])
-        link = RobotLink(name, device["url"], info)
-        await link.start()
-        if not link.alive:
-            await link.close()
-            raise Unavailable(f"no state from {name}", code="device_disconnected")
+        link = await open_robot_link(self.devices, name, device["url"])
         self.links[name] = link
         known = self._world.robots.get(name)
-        if known is None or known.kinematics.info != info:
-            self._world.add_robot(name, info)
+        if known is None or known.kinematics.info != link.info:
+            self._world.add_robot(name, link.info)
 
     async def _bases(self) -> None:
         """Each base as the stored frame `frames.<robot>` places it (identity without one),

@@ -34,7 +34,8 @@ class Moves:
         self.robots = robots
         self.storage = storage
         self.status: dict[str, MoveStatus] = {}
-        self.running: dict[str, tuple[str, Execution | None, asyncio.Task[None]]] = {}
+        # Per robot: the move running on it, its execution and the task watching it.
+        self.running: dict[str, tuple[str, Execution, asyncio.Task[None]]] = {}
         self._ids = itertools.count(1)
 
     async def plan(self, robot: str, request: MoveRequest) -> Plan:
@@ -85,7 +86,7 @@ class Moves:
             raise Refused(
                 plan.report.message, code=plan.report.code, details=plan.report.model_dump()
             )
-        execution = Execution(await self.robots.link(robot), plan.timed)
+        execution = Execution(self.robots.known_link(robot), plan.timed)
         task = asyncio.create_task(self._run(status, execution))
         self.running[robot] = (move_id, execution, task)
         status.state = MoveState.running
@@ -111,9 +112,9 @@ class Moves:
         status = self.status.get(move_id)
         if status is None:
             raise NotFound(f"no move {move_id!r}")
-        for _, execution, _ in self.running.values():
-            if execution is not None and status.state is MoveState.running:
-                status.progress = execution.progress
+        entry = self.running.get(status.robot)
+        if entry is not None and entry[0] == move_id:
+            status.progress = entry[1].progress
         return status
 
     async def cancel(self, move_id: str) -> MoveStatus:
@@ -121,8 +122,7 @@ class Moves:
         entry = self.running.get(status.robot)
         if entry is not None and entry[0] == move_id:
             _, execution, task = entry
-            if execution is not None:
-                execution.cancel()
+            execution.cancel()
             with contextlib.suppress(Exception):
                 await asyncio.wait_for(asyncio.shield(task), 2.0)
         return status
@@ -130,7 +130,7 @@ class Moves:
     async def stop(self, robot: str) -> None:
         """Stop wins: halt the robot at once, whatever is running."""
         entry = self.running.get(robot)
-        if entry is not None and entry[1] is not None:
+        if entry is not None:
             entry[1].cancel()
         link = await self.robots.link(robot)
         await link.halt("motion: stop")

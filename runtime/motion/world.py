@@ -102,14 +102,7 @@ class World:
     ) -> list[Contact]:
         """Every (moving part, other body) pair of `robot` closer than `within`, nearest
         points included; the robot is placed at `q` first when given."""
-        body = self.robot(robot)
-        if q is not None:
-            body.place(q)
-        parts = body.moving
-        others = self._others(robot)
-        if not parts or not others:
-            return []
-        gaps = self._sphere_gaps(parts, others)
+        parts, others, gaps = self._pairs(robot, q)
         found = []
         for i, j in zip(*np.nonzero(gaps < within), strict=True):
             near = proximity(parts[i].shape, others[j])
@@ -119,14 +112,7 @@ class World:
 
     def nearest(self, robot: str, q: FloatArray | None = None) -> Contact | None:
         """The closest pair of the robot's moving parts and anything else."""
-        body = self.robot(robot)
-        if q is not None:
-            body.place(q)
-        parts = body.moving
-        others = self._others(robot)
-        if not parts or not others:
-            return None
-        gaps = self._sphere_gaps(parts, others)
+        parts, others, gaps = self._pairs(robot, q)
         best: Contact | None = None
         # Pairs in order of their lower bound; stop once no remaining pair can be nearer.
         for flat in np.argsort(gaps, axis=None):
@@ -137,6 +123,20 @@ class World:
             if best is None or near.distance < best.proximity.distance:
                 best = Contact(parts[i], near)
         return best
+
+    def _pairs(
+        self, robot: str, q: FloatArray | None
+    ) -> tuple[list[BodyPart], list[Shape], FloatArray]:
+        """The robot's moving parts (placed at `q` when given), every other body, and the
+        lower bound of each pair's distance (an empty array when either list is empty)."""
+        body = self.robot(robot)
+        if q is not None:
+            body.place(q)
+        parts = body.moving
+        others = self._others(robot)
+        if not parts or not others:
+            return parts, others, np.zeros((len(parts), len(others)))
+        return parts, others, self._sphere_gaps(parts, others)
 
     @staticmethod
     def _sphere_gaps(parts: list[BodyPart], others: list[Shape]) -> FloatArray:

@@ -1,0 +1,39 @@
+"""What other services ask the device manager: is this lease token in control, and a live
+link to an added robot."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from runtime.interfaces.robot import RobotInfo
+from runtime.kit.client import ServiceClient
+from runtime.kit.errors import OpenPendantError, Unavailable
+from runtime.robot_link import RobotLink
+
+
+def require_token(name: str, token: str | None) -> str:
+    if token is None:
+        raise OpenPendantError(f"take control of {name} first", code="lease_required", status=409)
+    return token
+
+
+async def check_lease(devices: ServiceClient, name: str, token: str) -> dict[str, Any]:
+    """The device manager's answer for a holder's token (which renews the lease), or its
+    refusal raised."""
+    granted: dict[str, Any] = await devices.request(
+        "POST", f"/devices/{name}/lease/check", headers={"X-Lease-Token": token}
+    )
+    return granted
+
+
+async def open_robot_link(devices: ServiceClient, name: str, url: str) -> RobotLink:
+    """A started link to an added robot, its info from the device manager; fails unless the
+    robot's state is streaming."""
+    details = await devices.get(f"/devices/{name}")
+    info = RobotInfo.model_validate(details["info"]["info"])
+    link = RobotLink(name, url, info)
+    await link.start()
+    if not link.alive:
+        await link.close()
+        raise Unavailable(f"no state from {name}", code="device_disconnected")
+    return link
