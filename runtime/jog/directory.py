@@ -9,6 +9,7 @@ import contextlib
 import json
 import logging
 import time
+from collections.abc import Callable
 from typing import Any
 
 import websockets
@@ -17,6 +18,7 @@ from runtime.device_manager.client import check_lease, open_robot_link, require_
 from runtime.interfaces.input import InputState
 from runtime.interfaces.robot import RobotInfo
 from runtime.jog.jogger import Jogger
+from runtime.jog.velocity import Constraint
 from runtime.kinematics import Kinematics
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import DeviceError, OpenPendantError, Unavailable
@@ -31,8 +33,11 @@ LEASE_MARGIN = 1.0  # s
 
 
 class Directory:
-    def __init__(self, device_manager_url: str) -> None:
+    def __init__(
+        self, device_manager_url: str, avoidance: Callable[[str], Constraint] | None = None
+    ) -> None:
         self.http = ServiceClient(device_manager_url, timeout=3.0, name="device manager")
+        self.avoidance = avoidance  # a robot's collision constraints for Cartesian jog
         self._ws_url = device_manager_url.replace("http://", "ws://", 1)
         self.devices: dict[str, dict[str, Any]] = {}
         self.joggers: dict[str, Jogger] = {}
@@ -149,7 +154,8 @@ class Directory:
                 del self.joggers[name]
                 await jogger.close()
             link = await open_robot_link(self.http, name, device["url"])
-            jogger = Jogger(link, self.kinematics(link.info))
+            constraints = [self.avoidance(name)] if self.avoidance is not None else []
+            jogger = Jogger(link, self.kinematics(link.info), constraints)
             self.joggers[name] = jogger
             return jogger
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from runtime.interfaces.robot import CommandMode, OperationalMode
 from runtime.jog.actions import Action
-from runtime.jog.velocity import MANUAL_TCP_SPEED, VelocityController
+from runtime.jog.velocity import MANUAL_TCP_SPEED, Constraint, VelocityController
 from runtime.kinematics import Kinematics
 from runtime.kit.errors import OpenPendantError, RobotError
 from runtime.robot_link import RobotLink
@@ -37,7 +37,9 @@ Listener = Callable[[Ended], None]
 
 
 class Jogger:
-    def __init__(self, link: RobotLink, kinematics: Kinematics) -> None:
+    def __init__(
+        self, link: RobotLink, kinematics: Kinematics, constraints: list[Constraint] | None = None
+    ) -> None:
         self.link = link
         self.kinematics = kinematics
         joints = link.info.joints
@@ -46,6 +48,7 @@ class Jogger:
             np.array([j.max_velocity for j in joints]),
             np.array([j.max_acceleration for j in joints]),
             PERIOD,
+            constraints or [],
         )
         self.action: Action | None = None
         self.listener: Listener | None = None

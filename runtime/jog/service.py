@@ -16,7 +16,9 @@ from runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSes
 from runtime.jog.velocity import MANUAL_TCP_SPEED
 from runtime.jog.waypoints import robot_waypoints, teach
 from runtime.kit.app import create_app
+from runtime.kit.client import ServiceClient
 from runtime.kit.settings import RuntimeSettings
+from runtime.motion.mirror import WorldMirror
 from runtime.paths import package_roots
 from runtime.variable_storage.client import StorageClient
 from runtime.variable_storage.store import Variable
@@ -96,6 +98,21 @@ def _power(directory: Directory, command: str) -> Any:
     return run
 
 
+def avoidance_router(mirror: WorldMirror) -> APIRouter:
+    router = APIRouter(prefix="/jog")
+
+    @router.get("/avoidance")
+    async def avoidance() -> dict[str, Any]:
+        """What Cartesian jogging keeps clear of: the robots and scene objects it knows."""
+        return {
+            "ready": mirror.refreshed.is_set(),
+            "robots": sorted(mirror.world.robots),
+            "objects": sorted(mirror.world.objects),
+        }
+
+    return router
+
+
 def _public_uri(urdf: str) -> str | None:
     if urdf.startswith("package://"):
         return "/api/robot-files/" + urdf.removeprefix("package://")
@@ -103,18 +120,24 @@ def _public_uri(urdf: str) -> str | None:
 
 
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
-    directory = Directory(urls["device_manager"])
     storage = StorageClient(urls["variable_storage"])
+    devices = ServiceClient(urls["device_manager"], timeout=3.0, name="device manager")
+    mirror = WorldMirror(devices, storage)
+    directory = Directory(urls["device_manager"], avoidance=mirror.constraint)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
         await directory.start()
+        await mirror.start()
         try:
             yield
         finally:
             await directory.close()
+            await mirror.close()
+            await devices.aclose()
             await storage.aclose()
 
     app = create_app("jog", lifespan=lifespan)
     app.include_router(jog_router(directory, storage, settings.deadman_seconds))
+    app.include_router(avoidance_router(mirror))
     return app

@@ -79,16 +79,37 @@ class VelocityController:
         damping = 1e-6 + MAX_DAMPING * closeness**2
         hessian = weighted.T @ weighted + damping * np.eye(q.size)
         gradient = -weighted.T @ (weights * twist)
-        lower, upper = self._bounds(q, previous)
-        rows = [c(q, jacobian) for c in self.constraints]
-        active = [r for r in rows if r is not None]
-        g = np.vstack([r[0] for r in active]) if active else None
-        h = np.concatenate([r[1] for r in active]) if active else None
-        solution = solve_qp(hessian, gradient, G=g, h=h, lb=lower, ub=upper, solver="proxqp")
-        velocity = np.zeros(q.size) if solution is None else np.asarray(solution, dtype=float)
+        g, h = self._extra(q, jacobian)
+        velocity = self._solve(q, hessian, gradient, g, h, previous)
         step = self._cap(jacobian, velocity, tcp_cap)
         step.smallest_singular_value = sigma
         return step
+
+    def _solve(
+        self,
+        q: FloatArray,
+        hessian: FloatArray,
+        gradient: FloatArray,
+        g: FloatArray | None,
+        h: FloatArray | None,
+        previous: FloatArray | None,
+    ) -> FloatArray:
+        lower, upper = self._bounds(q, previous)
+        solution = solve_qp(hessian, gradient, G=g, h=h, lb=lower, ub=upper, solver="proxqp")
+        if solution is None and g is not None:
+            # Keeping clear wins over smoothness: the driver still limits acceleration.
+            lower, upper = self._bounds(q, None)
+            solution = solve_qp(hessian, gradient, G=g, h=h, lb=lower, ub=upper, solver="proxqp")
+        return np.zeros(q.size) if solution is None else np.asarray(solution, dtype=float)
+
+    def _extra(
+        self, q: FloatArray, jacobian: FloatArray
+    ) -> tuple[FloatArray | None, FloatArray | None]:
+        rows = [c(q, jacobian) for c in self.constraints]
+        active = [r for r in rows if r is not None]
+        if not active:
+            return None, None
+        return np.vstack([r[0] for r in active]), np.concatenate([r[1] for r in active])
 
     def from_joint_velocity(
         self,
@@ -97,9 +118,20 @@ class VelocityController:
         tcp_cap: float | None,
         previous: FloatArray | None = None,
     ) -> VelocityStep:
-        """A commanded joint velocity, slowed for the joint limits and the TCP speed cap."""
+        """A commanded joint velocity, slowed for the joint limits, the TCP speed cap and,
+        near an obstacle, as much as keeping clear needs. Only slowed, never turned: a
+        technician jogging one joint expects no other joint to move."""
+        jacobian = self.kinematics.jacobian(q)
         lower, upper = self._bounds(q, previous)
-        return self._cap(self.kinematics.jacobian(q), np.clip(velocity, lower, upper), tcp_cap)
+        wanted = np.clip(velocity, lower, upper)
+        g, h = self._extra(q, jacobian)
+        if g is not None and h is not None:
+            approach = g @ wanted
+            closing = approach > 1e-12
+            if np.any(closing):
+                # Braking harder than one cycle allows is left to the driver's limits.
+                wanted = wanted * float(np.clip(np.min(h[closing] / approach[closing]), 0, 1))
+        return self._cap(jacobian, wanted, tcp_cap)
 
     @staticmethod
     def _cap(jacobian: FloatArray, velocity: FloatArray, tcp_cap: float | None) -> VelocityStep:

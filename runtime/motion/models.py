@@ -37,6 +37,9 @@ class MoveKind(StrEnum):
     linear = "linear"  # to a target, the TCP on a straight line
     path = "path"  # through waypoints, TCP lines (linear) or joint-interpolated, blended
     relative = "relative"  # by an offset of the TCP, in the base or tool frame
+    # To a target with no plan: steered each cycle, keeping clear of obstacles and of the
+    # other robots as they move (real-time avoidance); stops where it is blocked.
+    reactive = "reactive"
 
 
 class MoveRequest(Strict):
@@ -54,7 +57,9 @@ class MoveRequest(Strict):
 
     @model_validator(mode="after")
     def _complete(self) -> MoveRequest:
-        if self.kind in (MoveKind.joint, MoveKind.linear) and self.target is None:
+        if self.kind in (MoveKind.joint, MoveKind.linear, MoveKind.reactive) and (
+            self.target is None
+        ):
             raise ValueError(f"a {self.kind} move needs a target")
         if self.kind is MoveKind.path and not self.waypoints:
             raise ValueError("a path move needs waypoints")
@@ -97,6 +102,7 @@ class MoveStatus(BaseModel):
     id: str
     robot: str
     state: MoveState
+    code: str = ""  # why it failed, for programs: e.g. "blocked", "cancelled", "estop"
     message: str = ""
     progress: float = 0.0
     plan: PlanReport | None = None

@@ -14,13 +14,23 @@ from fastapi import APIRouter, FastAPI, Header
 
 from runtime.interfaces.limits import JointLimitChecker
 from runtime.interfaces.robot import OperationalMode
-from runtime.jog.velocity import MANUAL_TCP_SPEED
+from runtime.jog.velocity import MANUAL_TCP_SPEED, VelocityController
 from runtime.kit.app import create_app
 from runtime.kit.errors import Conflict, NotFound, OpenPendantError
 from runtime.kit.settings import RuntimeSettings
 from runtime.motion.executor import Execution
-from runtime.motion.models import MoveRequest, MoveState, MoveStatus, PlanReport, Target
+from runtime.motion.mirror import WorldMirror
+from runtime.motion.models import (
+    MoveKind,
+    MoveRequest,
+    MoveState,
+    MoveStatus,
+    PlanReport,
+    Target,
+)
 from runtime.motion.moves import MovePlanner, Plan, Refused, resolve
+from runtime.motion.reactive import PERIOD as REACTIVE_PERIOD
+from runtime.motion.reactive import ReactiveExecution
 from runtime.motion.robots import Robots, world_pose
 from runtime.variable_storage.client import StorageClient
 from runtime.variable_storage.types import JointWaypoint, PoseWaypoint
@@ -30,12 +40,13 @@ KEEP_FINISHED = 100
 
 
 class Moves:
-    def __init__(self, robots: Robots, storage: StorageClient) -> None:
+    def __init__(self, robots: Robots, storage: StorageClient, mirror: WorldMirror) -> None:
         self.robots = robots
         self.storage = storage
         self.status: dict[str, MoveStatus] = {}
+        self.mirror = mirror
         # Per robot: the move running on it, its execution and the task watching it.
-        self.running: dict[str, tuple[str, Execution, asyncio.Task[None]]] = {}
+        self.running: dict[str, tuple[str, Execution | ReactiveExecution, asyncio.Task[None]]] = {}
         self._ids = itertools.count(1)
 
     async def plan(self, robot: str, request: MoveRequest) -> Plan:
@@ -79,6 +90,8 @@ class Moves:
         move_id = f"move-{next(self._ids)}"
         status = MoveStatus(id=move_id, robot=robot, state=MoveState.planning)
         self.status[move_id] = status
+        if request.kind is MoveKind.reactive:
+            return self._launch(status, await self._reactive(robot, request))
         plan = await self.plan(robot, request)
         status.plan = plan.report
         if not plan.report.ok or plan.timed is None:
@@ -86,21 +99,50 @@ class Moves:
             raise Refused(
                 plan.report.message, code=plan.report.code, details=plan.report.model_dump()
             )
-        execution = Execution(self.robots.known_link(robot), plan.timed)
+        return self._launch(status, Execution(self.robots.known_link(robot), plan.timed))
+
+    def _launch(self, status: MoveStatus, execution: Execution | ReactiveExecution) -> MoveStatus:
         task = asyncio.create_task(self._run(status, execution))
-        self.running[robot] = (move_id, execution, task)
+        self.running[status.robot] = (status.id, execution, task)
         status.state = MoveState.running
         self._forget_old()
         return status
 
-    async def _run(self, status: MoveStatus, execution: Execution) -> None:
+    async def _reactive(self, robot: str, request: MoveRequest) -> ReactiveExecution:
+        assert request.target is not None  # the request's validation made sure
+        target = await self._lookup(request.target, robot)
+        link = await self.robots.link(robot)
+        if robot not in self.mirror.world.robots:
+            await self.mirror.refresh()  # a robot added a moment ago
+        body = self.mirror.world.robot(robot)
+        point = resolve(target, body.world_base, JointLimitChecker(link.info))
+        kinematics = body.kinematics
+        if point.pose is not None:
+            goal = point.pose
+        else:
+            assert point.joints is not None
+            goal = kinematics.tcp(point.joints)
+        joints = link.info.joints
+        controller = VelocityController(
+            kinematics,
+            np.array([j.max_velocity for j in joints]) * request.speed,
+            np.array([j.max_acceleration for j in joints]) * request.acceleration,
+            REACTIVE_PERIOD,
+        )
+        avoidance = self.mirror.constraint(robot)
+        controller.constraints.append(avoidance)
+        manual = link.current().operational_mode is OperationalMode.manual_reduced_speed
+        cap = MANUAL_TCP_SPEED if manual else None
+        return ReactiveExecution(link, controller, avoidance, goal, request.speed, cap)
+
+    async def _run(self, status: MoveStatus, execution: Execution | ReactiveExecution) -> None:
         try:
             await execution.run()
             status.state, status.progress = MoveState.finished, 1.0
         except OpenPendantError as exc:
             cancelled = exc.code == "cancelled"
             status.state = MoveState.cancelled if cancelled else MoveState.failed
-            status.message = exc.message
+            status.code, status.message = exc.code, exc.message
         except Exception as exc:  # a move must always end with a status
             status.state, status.message = MoveState.failed, f"internal error: {exc}"
             raise
@@ -222,13 +264,16 @@ def motion_router(moves: Moves, robots: Robots) -> APIRouter:
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
     robots = Robots(urls["device_manager"], storage)
-    moves = Moves(robots, storage)
+    mirror = WorldMirror(robots.devices, storage)
+    moves = Moves(robots, storage, mirror)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        await mirror.start()
         try:
             yield
         finally:
+            await mirror.close()
             for robot in list(moves.running):
                 with contextlib.suppress(Exception):
                     await moves.stop(robot)

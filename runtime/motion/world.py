@@ -54,12 +54,16 @@ class World:
     ) -> RobotBody:
         body = RobotBody(name, Kinematics(info, urdf), urdf)
         body.set_base(base or pin.SE3.Identity())
-        self.robots[name] = body
-        self._attach()
+        self.insert_robot(body)
         return body
 
+    def insert_robot(self, body: RobotBody) -> None:
+        """A robot body built elsewhere (off the event loop), replacing one of its name."""
+        self.robots = {**self.robots, body.name: body}
+        self._attach()
+
     def remove_robot(self, name: str) -> None:
-        self.robots.pop(name, None)
+        self.robots = {k: v for k, v in self.robots.items() if k != name}
 
     def robot(self, name: str) -> RobotBody:
         body = self.robots.get(name)
@@ -69,13 +73,14 @@ class World:
 
     def set_objects(self, objects: dict[str, SceneObject]) -> None:
         """Replace the scene's objects (obstacles, keep-out zones, carried objects)."""
-        self.objects = dict(objects)
-        self.obstacles = []
-        for name, obj in sorted(self.objects.items()):
+        # Built first and swapped in whole: readers on another thread never see half a scene.
+        obstacles = []
+        for name, obj in sorted(objects.items()):
             if obj.attached_to is None:
                 shape = scene_shape(name, obj)
                 shape.place(pin.SE3.Identity())
-                self.obstacles.append(shape)
+                obstacles.append(shape)
+        self.objects, self.obstacles = dict(objects), obstacles
         self._attach()
 
     def _attach(self) -> None:

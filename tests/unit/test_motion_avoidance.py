@@ -84,3 +84,28 @@ def test_two_robots_driven_at_the_same_point_keep_apart() -> None:
         assert contact is not None
         closest = min(closest, contact.proximity.distance)
     assert closest >= SAFETY * 0.9
+
+
+def test_a_joint_jog_at_an_obstacle_slows_to_a_stop_and_moves_no_other_joint() -> None:
+    world = World()
+    world.add_robot("r", INFO)
+    q = np.array(INFO.home)
+    tcp = world.robot("r").kinematics.tcp(q).translation
+    # A post beside the wrist, in the way of J1 turning positive.
+    post = SceneObject(shape="cylinder", size=[0.04, 0.8], pose={"position": [0.0, 0.0, 0.4]})
+    turned = pin.exp3(np.array([0.0, 0.0, 0.5])) @ tcp
+    post.pose.position = [float(turned[0]), float(turned[1]), 0.4]
+    world.set_objects({"post": post})
+    velocity, _ = controller(world, "r")
+    wanted = np.array([0.5, 0.0, 0.0, 0.0, 0.0, 0.0])
+    previous = np.zeros(INFO.dof)
+    start = q.copy()
+    for _ in range(400):
+        step = velocity.from_joint_velocity(q, wanted, 0.25, previous)
+        assert np.all(step.velocity[1:] == 0.0)
+        q = q + step.velocity * PERIOD
+        previous = step.velocity
+    contact = world.nearest("r", q)
+    assert contact is not None and contact.proximity.other == "post"
+    assert SAFETY * 0.9 <= contact.proximity.distance < SAFETY * 2
+    assert q[0] > start[0] + 0.2  # it went most of the way first

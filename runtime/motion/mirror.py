@@ -1,0 +1,135 @@
+"""A world kept in step in the background, for control loops that cannot wait for a sync:
+the added robots, their bases and the scene's objects are refreshed every REFRESH seconds,
+and every robot's joints come from its live state stream. Jogging and reactive moves build
+their collision-avoidance constraints on it."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from typing import Any
+
+import numpy as np
+
+from runtime.interfaces.limits import FloatArray
+from runtime.interfaces.robot import RobotInfo, RobotState
+from runtime.interfaces.scene import SceneObject
+from runtime.jog.waypoints import base_in_world
+from runtime.kinematics import Kinematics
+from runtime.kit.client import ServiceClient
+from runtime.kit.errors import OpenPendantError
+from runtime.motion.avoidance import AvoidanceConstraint
+from runtime.motion.robot_body import RobotBody
+from runtime.motion.world import Contact, World
+from runtime.state_feed import StateFeed
+from runtime.variable_storage.client import StorageClient
+
+log = logging.getLogger(__name__)
+
+REFRESH = 0.5  # s: how late a scene edit or a moved base may reach the constraints
+
+
+async def scene_objects(storage: StorageClient) -> dict[str, SceneObject]:
+    objects = await storage.query(type_name="scene_object")
+    return {v.name: SceneObject.model_validate(v.value) for v in objects}
+
+
+class WorldMirror:
+    def __init__(self, devices: ServiceClient, storage: StorageClient) -> None:
+        self.devices = devices
+        self.storage = storage
+        self.world = World()
+        self.feeds: dict[str, StateFeed[RobotState]] = {}
+        self.refreshed = asyncio.Event()
+        self._task: asyncio.Task[None] | None = None
+
+    async def start(self) -> None:
+        self._task = asyncio.create_task(self._follow(), name="world mirror")
+
+    async def close(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+        for feed in self.feeds.values():
+            await feed.close()
+
+    async def _follow(self) -> None:
+        while True:
+            try:
+                await self.refresh()
+                self.refreshed.set()
+            except (OpenPendantError, OSError, ValueError) as exc:
+                log.info("world mirror not refreshed: %s", exc)
+            await asyncio.sleep(REFRESH)
+
+    async def refresh(self) -> None:
+        devices: list[dict[str, Any]] = await self.devices.get("/devices")
+        robots = {
+            d["local_name"]: d
+            for d in devices
+            if d["kind"] == "robot" and d["status"] == "connected"
+        }
+        for name in [n for n in self.feeds if n not in robots]:
+            await self.feeds.pop(name).close()
+            self.world.remove_robot(name)
+        for name, device in robots.items():
+            await self._ensure(name, device)
+        for name, body in self.world.robots.items():
+            base = await base_in_world(self.storage, name)
+            if not body.world_base.isApprox(base):
+                body.set_base(base)
+        scene = await scene_objects(self.storage)
+        if scene != self.world.objects:
+            # Mesh hulls take a while: built off the loop, swapped in whole.
+            await asyncio.to_thread(self.world.set_objects, scene)
+
+    async def _ensure(self, name: str, device: dict[str, Any]) -> None:
+        feed = self.feeds.get(name)
+        if feed is not None and feed.url.startswith(device["url"].replace("http", "ws", 1)):
+            return
+        if feed is not None:
+            await self.feeds.pop(name).close()
+        details = await self.devices.get(f"/devices/{name}")
+        info = RobotInfo.model_validate(details["info"]["info"])
+        known = self.world.robots.get(name)
+        if known is None or known.kinematics.info != info:
+            body = await asyncio.to_thread(RobotBody, name, Kinematics(info))
+            self.world.insert_robot(body)
+        feed = StateFeed(device["url"], RobotState, name)
+        await feed.start(wait=1.0)
+        self.feeds[name] = feed
+
+    def place_others(self, robot: str) -> None:
+        """Every other robot at its latest reported joints."""
+        for name, body in self.world.robots.items():
+            if name == robot:
+                continue
+            feed = self.feeds.get(name)
+            state = feed.state if feed is not None else None
+            if state is not None:
+                body.place(np.array(state.joint_position))
+
+    def constraint(self, robot: str) -> MirrorConstraint:
+        return MirrorConstraint(self, robot)
+
+
+class MirrorConstraint:
+    """The velocity QP's collision constraints for one robot against everything else in the
+    mirrored world; none while the robot is not in it yet."""
+
+    def __init__(self, mirror: WorldMirror, robot: str) -> None:
+        self.mirror = mirror
+        self.robot = robot
+        self.avoidance = AvoidanceConstraint(mirror.world, robot)
+
+    @property
+    def nearest(self) -> Contact | None:
+        return self.avoidance.nearest
+
+    def __call__(self, q: FloatArray, jacobian: FloatArray) -> tuple[FloatArray, FloatArray] | None:
+        if self.robot not in self.mirror.world.robots:
+            return None
+        self.mirror.place_others(self.robot)
+        return self.avoidance(q, jacobian)

@@ -1,0 +1,133 @@
+"""A reactive move ("move with avoidance"): no plan; each cycle the TCP is steered toward the
+goal pose and the velocity QP keeps every part clear of obstacles and of the other robots
+as they move now. It arrives, or it stops where it cannot get nearer (blocked)."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import time
+
+import numpy as np
+import pinocchio as pin
+
+from runtime.interfaces.robot import CommandMode, RobotState
+from runtime.jog.velocity import VelocityController
+from runtime.kit.errors import RobotError
+from runtime.motion.executor import MoveFailed
+from runtime.motion.mirror import MirrorConstraint
+from runtime.robot_link import RobotLink
+
+PERIOD = 0.01  # s
+GAIN = 3.0  # 1/s: how fast the remaining error is closed near the goal
+LINEAR_SPEED = 0.5  # m/s at speed 1.0
+ANGULAR_SPEED = 1.0  # rad/s at speed 1.0
+ARRIVED = (1e-4, 1e-3)  # m, rad
+SETTLED = 1e-3  # rad/s: joints slower than this have stopped
+PROGRESS = 1e-3  # m: getting nearer by less than this ...
+BLOCKED_AFTER = 1.5  # s: ... for this long means blocked
+COMMAND_TIMEOUT = 0.1  # s: the driver stops by itself if the commands stop
+
+
+class ReactiveExecution:
+    def __init__(
+        self,
+        link: RobotLink,
+        controller: VelocityController,
+        avoidance: MirrorConstraint,
+        goal: pin.SE3,
+        speed: float,
+        tcp_cap: float | None,
+    ) -> None:
+        self.link = link
+        self.controller = controller
+        self.avoidance = avoidance
+        self.goal = goal
+        self.speed = speed
+        self.tcp_cap = tcp_cap
+        self.progress = 0.0
+        self._cancel = asyncio.Event()
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    async def run(self) -> None:
+        await self.link.ensure_mode(CommandMode.velocity_command)
+        try:
+            await self._steer()
+        except BaseException:
+            await self.link.halt("motion: stop")
+            raise
+        await self._send(np.zeros(len(self.link.info.joints)))
+
+    async def _steer(self) -> None:
+        kinematics = self.controller.kinematics
+        start = self._error(kinematics.tcp(np.array(self.link.current().joint_position)))
+        first = max(float(np.linalg.norm(start[:3])), 1e-9)
+        best, best_at = np.inf, time.monotonic()
+        previous: np.ndarray | None = None
+        next_tick = time.monotonic()
+        while True:
+            if self._cancel.is_set():
+                raise MoveFailed("cancelled", code="cancelled")
+            state = self.link.current()
+            self._check(state)
+            q = np.array(state.joint_position_command)
+            error = self._error(kinematics.tcp(q))
+            distance = float(np.linalg.norm(error[:3]))
+            self.progress = float(np.clip(1.0 - distance / first, 0.0, 1.0))
+            turned = float(np.linalg.norm(error[3:]))
+            moving = np.max(np.abs(state.joint_velocity)) > SETTLED
+            if distance < ARRIVED[0] and turned < ARRIVED[1] and not moving:
+                self.progress = 1.0
+                return
+            now = time.monotonic()
+            if distance < best - PROGRESS:
+                best, best_at = distance, now
+            elif now - best_at > BLOCKED_AFTER:
+                raise MoveFailed(self._blocked(distance), code="blocked")
+            step = self.controller.from_twist(q, self._twist(error), self.tcp_cap, previous)
+            previous = step.velocity
+            await self._send(step.velocity)
+            next_tick = max(next_tick + PERIOD, time.monotonic())
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._cancel.wait(), next_tick - time.monotonic())
+
+    def _error(self, tcp: pin.SE3) -> np.ndarray:
+        """From the TCP to the goal: [translation, rotation vector], in the base frame."""
+        local = pin.log6(tcp.actInv(self.goal))
+        rotation = tcp.rotation
+        return np.concatenate((rotation @ local.linear, rotation @ local.angular))
+
+    def _twist(self, error: np.ndarray) -> np.ndarray:
+        twist = GAIN * error
+        for part, limit in ((slice(0, 3), LINEAR_SPEED), (slice(3, 6), ANGULAR_SPEED)):
+            norm = float(np.linalg.norm(twist[part]))
+            if norm > limit * self.speed:
+                twist[part] *= limit * self.speed / norm
+        return twist
+
+    def _blocked(self, distance: float) -> str:
+        message = f"blocked {distance * 1000:.0f} mm from the goal"
+        nearest = self.avoidance.nearest
+        if nearest is not None:
+            p = nearest.proximity
+            message += f": {p.body} is {p.distance * 1000:.0f} mm from {p.other}"
+        return message
+
+    async def _send(self, velocity: np.ndarray) -> None:
+        await self.link.send(
+            {
+                "type": "velocity_command",
+                "velocity": velocity.tolist(),
+                "timeout": COMMAND_TIMEOUT,
+                "tag": "motion:reactive",
+            }
+        )
+
+    @staticmethod
+    def _check(state: RobotState) -> None:
+        if state.flags.estop:
+            raise RobotError("E-stop: the move is stopped", code="estop")
+        if state.flags.error:
+            raise RobotError(f"robot fault: {state.error_message}", code="robot_fault")
