@@ -83,6 +83,8 @@ def test_jog_teach_and_move_to_by_touch(
     page.wait_for_timeout(300)
     page.screenshot(path=artifacts / "1-jog-panel.png")
     assert robot_pixels(view.screenshot(path=artifacts / "2-robot-view.png")) > 500
+    # The closest distance to anything else in the scene shows beside the view.
+    expect(page.get_by_test_id("clearance")).to_contain_text("Nothing near")
 
     finger = Finger(page)
     j1_plus = page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus]")

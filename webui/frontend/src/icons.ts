@@ -13,6 +13,9 @@ export const icons = {
   jog: icon(
     svg`<path d="M12 3v18M3 12h18"/><path d="M12 3l-3 3M12 3l3 3M12 21l-3-3M12 21l3-3M3 12l3-3M3 12l3 3M21 12l-3-3M21 12l-3 3"/>`,
   ),
+  scene: icon(
+    svg`<path d="M12 3l8 4.5v9L12 21l-8-4.5v-9z"/><path d="M12 12l8-4.5M12 12v9M12 12L4 7.5"/>`,
+  ),
   robot: icon(
     svg`<path d="M4 20h8M8 20v-4l6-6M14 10l3-5M17 5l3 2"/><circle cx="8" cy="16" r="1.5"/><circle cx="14" cy="10" r="1.5"/>`,
   ),

@@ -1,6 +1,6 @@
 import { LitElement, css, html } from "lit";
 import { shared } from "../styles";
-import type { Marker, RobotScene } from "../three/scene";
+import type { Marker, RobotScene, WorldContents } from "../three/scene";
 
 export interface RobotModel {
   urdf: string | null;
@@ -14,16 +14,19 @@ export class OpRobotView extends LitElement {
     model: { attribute: false },
     joints: { attribute: false },
     markers: { attribute: false },
+    world: { attribute: false },
     status: { state: true },
     progress: { state: true },
   };
   declare model: RobotModel | null;
   declare joints: number[] | null;
   declare markers: Marker[];
+  declare world: WorldContents | null; // obstacles and a path preview, when shown
   declare status: "loading" | "ready" | "error";
   declare progress: string;
   private scene: RobotScene | null = null;
   private shownMarkers = "";
+  private shownWorld = "";
   private shownJoints = "";
   private observer = new ResizeObserver(() => this.scene?.resize());
   private loadedUrdf = "";
@@ -60,6 +63,7 @@ export class OpRobotView extends LitElement {
     this.model = null;
     this.joints = null;
     this.markers = [];
+    this.world = null;
     this.status = "loading";
     this.progress = "";
   }
@@ -86,6 +90,14 @@ export class OpRobotView extends LitElement {
       this.shownMarkers = markers;
       this.scene.setMarkers(this.markers);
     }
+    this.showWorld();
+  }
+
+  private showWorld(): void {
+    const world = JSON.stringify(this.world);
+    if (!this.scene || !this.world || world === this.shownWorld) return;
+    this.shownWorld = world;
+    this.scene.setWorld(this.world);
   }
 
   private async load(): Promise<void> {
@@ -108,6 +120,8 @@ export class OpRobotView extends LitElement {
       this.scene.setMarkers(this.markers);
       this.shownJoints = JSON.stringify(this.joints);
       this.shownMarkers = JSON.stringify(this.markers);
+      this.shownWorld = "";
+      this.showWorld();
     } catch (err) {
       this.status = "error";
       this.progress = `3D view unavailable: ${err instanceof Error ? err.message : String(err)}`;

@@ -8,6 +8,7 @@ import { quaternionToRpy } from "../math";
 import { shared } from "../styles";
 import type { Marker } from "../three/scene";
 import type { RobotState } from "../types";
+import "../components/clearance-chip";
 import "../components/jog-pad";
 import "../components/name-dialog";
 import "../components/robot-view";
@@ -587,6 +588,7 @@ export class OpJogPanel extends LitElement {
         <div class="view">
           <op-robot-view .model=${this.model} .joints=${state?.joint_position ?? null}
             .markers=${markers}></op-robot-view>
+          <op-clearance-chip .robot=${this.robot}></op-clearance-chip>
           <div class="readout" data-testid="tcp-readout">
             <div><small>X mm</small>${state ? mm(state.tcp_pose.position[0]) : "–"}</div>
             <div><small>Y mm</small>${state ? mm(state.tcp_pose.position[1]) : "–"}</div>

@@ -3,6 +3,7 @@ import { html, type SVGTemplateResult, type TemplateResult } from "lit";
 import { icons } from "../icons";
 import "./devices-panel";
 import "./jog-panel";
+import "./scene-panel";
 import "./system-panel";
 
 export interface Panel {
@@ -18,6 +19,12 @@ export const panels: Panel[] = [
     title: "Jog",
     icon: icons.jog,
     render: () => html`<op-jog-panel></op-jog-panel>`,
+  },
+  {
+    id: "scene",
+    title: "Scene",
+    icon: icons.scene,
+    render: () => html`<op-scene-panel></op-scene-panel>`,
   },
   {
     id: "devices",

@@ -14,6 +14,66 @@ export interface Marker {
 
 export type Progress = (loaded: number, total: number) => void;
 
+export interface PoseJson {
+  position: number[];
+  orientation: number[]; // quaternion x, y, z, w
+}
+
+/** A scene object as stored (world frame, metres); meshes show as their name only. */
+export interface Obstacle {
+  name: string;
+  shape: "box" | "cylinder" | "sphere" | "mesh";
+  size: number[];
+  pose: PoseJson;
+  keep_out: boolean;
+  color: string;
+  attached_to: string | null;
+  selected?: boolean;
+}
+
+/** A planned TCP path in the world frame, drawn green when clear and red when it collides. */
+export interface PathPreview {
+  points: [number, number, number][];
+  ok: boolean;
+  collision: [number, number, number] | null;
+}
+
+export interface WorldContents {
+  base: PoseJson | null; // this robot's base in the world
+  obstacles: Obstacle[];
+  path: PathPreview | null;
+}
+
+function matrixOf(pose: PoseJson): THREE.Matrix4 {
+  const [x, y, z, w] = pose.orientation;
+  return new THREE.Matrix4().compose(
+    new THREE.Vector3(...pose.position),
+    new THREE.Quaternion(x, y, z, w),
+    new THREE.Vector3(1, 1, 1),
+  );
+}
+
+function obstacleMesh(o: Obstacle): THREE.Object3D | null {
+  let geometry: THREE.BufferGeometry;
+  if (o.shape === "box") geometry = new THREE.BoxGeometry(o.size[0], o.size[1], o.size[2]);
+  else if (o.shape === "cylinder") {
+    geometry = new THREE.CylinderGeometry(o.size[0], o.size[0], o.size[1], 32);
+    geometry.rotateX(Math.PI / 2); // three's cylinders stand along y; ours along z
+  } else if (o.shape === "sphere") geometry = new THREE.SphereGeometry(o.size[0], 24, 16);
+  else return null;
+  const color = o.selected ? 0xf5a524 : o.keep_out ? 0xf85149 : new THREE.Color(o.color);
+  const material = new THREE.MeshPhongMaterial({
+    color,
+    transparent: true,
+    opacity: o.keep_out ? 0.3 : 0.75,
+  });
+  const mesh = new THREE.Mesh(geometry, material);
+  mesh.name = o.name;
+  mesh.matrixAutoUpdate = false;
+  mesh.matrix.copy(matrixOf(o.pose));
+  return mesh;
+}
+
 // Without a GPU (WebGL in software) a detailed model at 30 frames/s would take the page's
 // whole main thread, and with it the jog heartbeat: draw the simpler collision meshes,
 // and fewer frames.
@@ -34,6 +94,8 @@ export class RobotScene {
   private robot: URDFRobot | null = null;
   private base: THREE.Object3D | null = null;
   private markers = new THREE.Group();
+  private world = new THREE.Group(); // world-frame contents, placed by the robot's base
+  private worldBase: PoseJson | null = null;
   private frame = 0;
   private lastFrame = 0;
   private unsubscribe: () => void;
@@ -58,7 +120,8 @@ export class RobotScene {
     this.scene.add(sun);
     const grid = new THREE.GridHelper(2, 20, 0x3a4a5c, 0x222d3a);
     grid.rotation.x = Math.PI / 2;
-    this.scene.add(grid, this.markers);
+    this.world.matrixAutoUpdate = false;
+    this.scene.add(grid, this.markers, this.world);
     this.resize();
   }
 
@@ -88,6 +151,7 @@ export class RobotScene {
       });
     }
     this.frameRobot(robot);
+    this.placeWorld();
     this.requestRender();
   }
 
@@ -123,6 +187,50 @@ export class RobotScene {
       this.markers.add(sphere);
     }
     this.requestRender();
+  }
+
+  setWorld(contents: WorldContents): void {
+    for (const child of [...this.world.children]) {
+      this.world.remove(child);
+      child.traverse((part) => {
+        if (part instanceof THREE.Mesh || part instanceof THREE.Line) part.geometry.dispose();
+      });
+    }
+    this.worldBase = contents.base;
+    this.placeWorld();
+    for (const o of contents.obstacles) {
+      const mesh = o.attached_to ? null : obstacleMesh(o);
+      if (mesh) this.world.add(mesh);
+    }
+    const path = contents.path;
+    if (path && path.points.length > 1) {
+      const line = new THREE.Line(
+        new THREE.BufferGeometry().setFromPoints(path.points.map((p) => new THREE.Vector3(...p))),
+        new THREE.LineBasicMaterial({ color: path.ok ? 0x3fb950 : 0xf85149 }),
+      );
+      line.name = "path";
+      this.world.add(line);
+    }
+    if (path?.collision) {
+      const hit = new THREE.Mesh(
+        new THREE.SphereGeometry(0.02, 16, 12),
+        new THREE.MeshBasicMaterial({ color: 0xf85149 }),
+      );
+      hit.position.set(...path.collision);
+      this.world.add(hit);
+    }
+    this.requestRender();
+  }
+
+  /** World coordinates drawn where they are relative to the robot, which stands at the
+   * view's origin: base link × (base in the world)⁻¹. */
+  private placeWorld(): void {
+    const inWorld = this.worldBase ? matrixOf(this.worldBase).invert() : new THREE.Matrix4();
+    if (this.base) {
+      this.base.updateMatrixWorld(true);
+      this.world.matrix.copy(this.base.matrixWorld).multiply(inWorld);
+    } else this.world.matrix.copy(inWorld);
+    this.world.matrixWorldNeedsUpdate = true;
   }
 
   resize(): void {

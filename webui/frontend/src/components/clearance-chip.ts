@@ -1,0 +1,66 @@
+import { LitElement, html } from "lit";
+import { api } from "../api";
+import { shared } from "../styles";
+
+interface Clearance {
+  distance: number | null;
+  robot_part?: string;
+  other?: string;
+}
+
+const POLL_MS = 500;
+const NEAR = 0.05; // m: shown as a warning closer than this
+
+// The robot's closest distance to anything else in the scene (obstacles, other robots),
+// kept up to date while shown, so a technician jogging sees how near the arm is.
+export class OpClearanceChip extends LitElement {
+  static properties = { robot: { type: String }, clearance: { state: true } };
+  declare robot: string;
+  declare clearance: Clearance | null;
+  private timer = 0;
+  private busy = false;
+
+  static styles = [shared];
+
+  constructor() {
+    super();
+    this.robot = "";
+    this.clearance = null;
+  }
+
+  connectedCallback(): void {
+    super.connectedCallback();
+    this.timer = window.setInterval(() => void this.poll(), POLL_MS);
+    void this.poll();
+  }
+
+  disconnectedCallback(): void {
+    window.clearInterval(this.timer);
+    super.disconnectedCallback();
+  }
+
+  private async poll(): Promise<void> {
+    if (!this.robot || document.hidden || this.busy) return;
+    this.busy = true;
+    try {
+      const path = `/api/motion/robots/${encodeURIComponent(this.robot)}/clearance`;
+      this.clearance = await api<Clearance>("GET", path);
+    } catch {
+      this.clearance = null;
+    } finally {
+      this.busy = false;
+    }
+  }
+
+  render() {
+    const c = this.clearance;
+    if (!c) return html`<span class="chip" data-testid="clearance">Clearance unknown</span>`;
+    const text = c.distance == null
+      ? "Nothing near"
+      : `Closest: ${(c.distance * 1000).toFixed(0)} mm (${c.robot_part} – ${c.other})`;
+    const near = c.distance != null && c.distance < NEAR;
+    return html`<span class="chip ${near ? "bad" : ""}" data-testid="clearance">${text}</span>`;
+  }
+}
+
+customElements.define("op-clearance-chip", OpClearanceChip);
