@@ -70,6 +70,7 @@ class Setpoint:
     position: FloatArray
     velocity: FloatArray
     acceleration: FloatArray
+    wall: float  # s since the epoch: lines up the setpoints of several robots
 
 
 class SimCore:
@@ -227,7 +228,9 @@ class SimCore:
         self._check_limits()
         t = self.tracker
         self.setpoints.append(
-            Setpoint(self.seqno, self.sim_time, t.position, t.velocity, t.acceleration)
+            Setpoint(
+                self.seqno, self.sim_time, t.position, t.velocity, t.acceleration, self.cycle_time
+            )
         )
 
     def _advance(self, command: StreamCommand | None, now: float) -> None:

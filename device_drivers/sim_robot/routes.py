@@ -66,6 +66,7 @@ def sim_router(robot: SimRobot) -> APIRouter:
             "cycle": 0.002,
             "seqno": [s.seqno for s in samples],
             "t": [s.t for s in samples],
+            "wall": [s.wall for s in samples],
             "position": [s.position.tolist() for s in samples],
             "velocity": [s.velocity.tolist() for s in samples],
             "acceleration": [s.acceleration.tolist() for s in samples],

@@ -30,6 +30,10 @@ ANGULAR_WEIGHT = 0.3  # m
 SINGULAR_BELOW = 0.04  # smallest weighted singular value where damping starts
 MAX_DAMPING = 0.02
 HORIZON = 0.15  # s: a joint slows so as not to reach its limit sooner than this
+# A well-posed step converges in tens of iterations; an infeasible one (collision bounds
+# against the per-cycle acceleration bounds) would otherwise iterate for seconds and stall
+# the control loop. Not converging counts as no solution.
+MAX_ITERATIONS = 200
 
 # Extra constraints: (q, jacobian) -> (G, h) meaning G q̇ ≤ h, or None.
 Constraint = Callable[[FloatArray, FloatArray], tuple[FloatArray, FloatArray] | None]
@@ -95,12 +99,12 @@ class VelocityController:
         previous: FloatArray | None,
     ) -> FloatArray:
         lower, upper = self._bounds(q, previous)
-        solution = solve_qp(hessian, gradient, G=g, h=h, lb=lower, ub=upper, solver="proxqp")
+        solution = _qp(hessian, gradient, g, h, lower, upper)
         if solution is None and g is not None:
             # Keeping clear wins over smoothness: the driver still limits acceleration.
             lower, upper = self._bounds(q, None)
-            solution = solve_qp(hessian, gradient, G=g, h=h, lb=lower, ub=upper, solver="proxqp")
-        return np.zeros(q.size) if solution is None else np.asarray(solution, dtype=float)
+            solution = _qp(hessian, gradient, g, h, lower, upper)
+        return np.zeros(q.size) if solution is None else solution
 
     def _extra(
         self, q: FloatArray, jacobian: FloatArray
@@ -139,3 +143,17 @@ class VelocityController:
         if tcp_cap is not None and speed > tcp_cap:
             return VelocityStep(velocity * (tcp_cap / speed), tcp_cap, capped=True)
         return VelocityStep(velocity, speed)
+
+
+def _qp(
+    hessian: FloatArray,
+    gradient: FloatArray,
+    g: FloatArray | None,
+    h: FloatArray | None,
+    lower: FloatArray,
+    upper: FloatArray,
+) -> FloatArray | None:
+    solution = solve_qp(
+        hessian, gradient, G=g, h=h, lb=lower, ub=upper, solver="proxqp", max_iter=MAX_ITERATIONS
+    )
+    return None if solution is None else np.asarray(solution, dtype=float)

@@ -54,8 +54,14 @@ class AvoidanceConstraint:
             jacobian = body.point_jacobian(contact.part, p.point)
             rows.append(normal @ jacobian)
             scale = (p.distance - self.safety) / (self.influence - self.safety)
+            if self._is_robot(p.other):
+                scale /= 2  # the other robot may approach as fast: each takes half
             bounds.append(self.approach_speed * scale)
         return np.array(rows), np.array(bounds)
+
+    def _is_robot(self, shape: str) -> bool:
+        owner, _, part = shape.partition("/")
+        return bool(part) and owner != self.robot and owner in self.world.robots
 
     def _centre_of(self, name: str) -> FloatArray:
         for shape in self.world.obstacles:

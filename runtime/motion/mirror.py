@@ -8,6 +8,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import time
 from typing import Any
 
 import numpy as np
@@ -21,13 +22,15 @@ from runtime.kit.client import ServiceClient
 from runtime.kit.errors import OpenPendantError
 from runtime.motion.avoidance import AvoidanceConstraint
 from runtime.motion.robot_body import RobotBody
-from runtime.motion.world import Contact, World
+from runtime.motion.world import Contact, World, build_obstacles
 from runtime.state_feed import StateFeed
 from runtime.variable_storage.client import StorageClient
 
 log = logging.getLogger(__name__)
 
 REFRESH = 0.5  # s: how late a scene edit or a moved base may reach the constraints
+LOOKAHEAD = 0.02  # s: another robot is placed this far ahead of its reported state ...
+MAX_AGE = 0.2  # s: ... plus the report's age up to this (older means the feed is stuck)
 
 
 async def scene_objects(storage: StorageClient) -> dict[str, SceneObject]:
@@ -82,8 +85,9 @@ class WorldMirror:
                 body.set_base(base)
         scene = await scene_objects(self.storage)
         if scene != self.world.objects:
-            # Mesh hulls take a while: built off the loop, swapped in whole.
-            await asyncio.to_thread(self.world.set_objects, scene)
+            # Built off the loop, swapped in on it: a control cycle never sees half a scene.
+            obstacles = await asyncio.to_thread(build_obstacles, scene)
+            self.world.set_objects(scene, obstacles)
 
     async def _ensure(self, name: str, device: dict[str, Any]) -> None:
         feed = self.feeds.get(name)
@@ -101,15 +105,20 @@ class WorldMirror:
         await feed.start(wait=1.0)
         self.feeds[name] = feed
 
-    def place_others(self, robot: str) -> None:
-        """Every other robot at its latest reported joints."""
+    def place_others(self, robot: str, lookahead: float = LOOKAHEAD) -> None:
+        """Every other robot where it will be a cycle from now: its latest reported joints
+        carried on at its velocity for the report's age and a little more, so a robot that
+        is coming closer is met early, not late."""
+        now = time.time()
         for name, body in self.world.robots.items():
             if name == robot:
                 continue
             feed = self.feeds.get(name)
             state = feed.state if feed is not None else None
             if state is not None:
-                body.place(np.array(state.joint_position))
+                ahead = min(max(now - state.ts, 0.0), MAX_AGE) + lookahead
+                q = np.array(state.joint_position) + ahead * np.array(state.joint_velocity)
+                body.place(np.clip(q, body.kinematics.lower, body.kinematics.upper))
 
     def constraint(self, robot: str) -> MirrorConstraint:
         return MirrorConstraint(self, robot)
@@ -123,6 +132,8 @@ class MirrorConstraint:
         self.mirror = mirror
         self.robot = robot
         self.avoidance = AvoidanceConstraint(mirror.world, robot)
+        # How long the command being computed will last: a loop running late sets it longer.
+        self.horizon = LOOKAHEAD
 
     @property
     def nearest(self) -> Contact | None:
@@ -131,5 +142,5 @@ class MirrorConstraint:
     def __call__(self, q: FloatArray, jacobian: FloatArray) -> tuple[FloatArray, FloatArray] | None:
         if self.robot not in self.mirror.world.robots:
             return None
-        self.mirror.place_others(self.robot)
+        self.mirror.place_others(self.robot, self.horizon)
         return self.avoidance(q, jacobian)

@@ -15,7 +15,7 @@ from runtime.interfaces.robot import CommandMode, RobotState
 from runtime.jog.velocity import VelocityController
 from runtime.kit.errors import RobotError
 from runtime.motion.executor import MoveFailed
-from runtime.motion.mirror import MirrorConstraint
+from runtime.motion.mirror import MAX_AGE, MirrorConstraint
 from runtime.robot_link import RobotLink
 
 PERIOD = 0.01  # s
@@ -26,7 +26,9 @@ ARRIVED = (1e-4, 1e-3)  # m, rad
 SETTLED = 1e-3  # rad/s: joints slower than this have stopped
 PROGRESS = 1e-3  # m: getting nearer by less than this ...
 BLOCKED_AFTER = 1.5  # s: ... for this long means blocked
-COMMAND_TIMEOUT = 0.1  # s: the driver stops by itself if the commands stop
+# s: the driver stops by itself if the commands stop (as long as the jog's: a stalled
+# host must not stop a move that still has time)
+COMMAND_TIMEOUT = 0.2
 
 
 class ReactiveExecution:
@@ -66,7 +68,7 @@ class ReactiveExecution:
         first = max(float(np.linalg.norm(start[:3])), 1e-9)
         best, best_at = np.inf, time.monotonic()
         previous: np.ndarray | None = None
-        next_tick = time.monotonic()
+        next_tick = last_tick = time.monotonic()
         while True:
             if self._cancel.is_set():
                 raise MoveFailed("cancelled", code="cancelled")
@@ -82,6 +84,9 @@ class ReactiveExecution:
                 self.progress = 1.0
                 return
             now = time.monotonic()
+            # A late loop: the other robots are met that much further ahead.
+            self.avoidance.horizon = float(np.clip(now - last_tick, 2 * PERIOD, MAX_AGE))
+            last_tick = now
             if distance < best - PROGRESS:
                 best, best_at = distance, now
             elif now - best_at > BLOCKED_AFTER:

@@ -33,6 +33,18 @@ def scene_shape(name: str, obj: SceneObject) -> Shape:
     return geometry.mesh(name, path, (obj.size[0], obj.size[1], obj.size[2]), local)
 
 
+def build_obstacles(objects: dict[str, SceneObject]) -> list[Shape]:
+    """The placed shapes of the objects standing in the world (mesh hulls take a while:
+    this touches no world, so it can run on another thread)."""
+    obstacles = []
+    for name, obj in sorted(objects.items()):
+        if obj.attached_to is None:
+            shape = scene_shape(name, obj)
+            shape.place(pin.SE3.Identity())
+            obstacles.append(shape)
+    return obstacles
+
+
 @dataclass
 class Contact:
     """What a robot part is nearest to (or touching, at distance ≤ 0)."""
@@ -71,15 +83,13 @@ class World:
             raise NotFound(f"robot {name!r} is not in the scene", code="unknown_robot")
         return body
 
-    def set_objects(self, objects: dict[str, SceneObject]) -> None:
-        """Replace the scene's objects (obstacles, keep-out zones, carried objects)."""
-        # Built first and swapped in whole: readers on another thread never see half a scene.
-        obstacles = []
-        for name, obj in sorted(objects.items()):
-            if obj.attached_to is None:
-                shape = scene_shape(name, obj)
-                shape.place(pin.SE3.Identity())
-                obstacles.append(shape)
+    def set_objects(
+        self, objects: dict[str, SceneObject], obstacles: list[Shape] | None = None
+    ) -> None:
+        """Replace the scene's objects (obstacles, keep-out zones, carried objects); the
+        obstacles' shapes may come ready-made from `build_obstacles`."""
+        if obstacles is None:
+            obstacles = build_obstacles(objects)
         self.objects, self.obstacles = dict(objects), obstacles
         self._attach()
 
