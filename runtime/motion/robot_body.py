@@ -81,6 +81,22 @@ class RobotBody:
         self.world_base = pin.SE3.Identity()
         self.q: FloatArray = np.array(kinematics.info.home, dtype=float)
         self.place(self.q)
+        self.self_pairs = self._self_pairs()
+
+    def _self_pairs(self) -> list[tuple[BodyPart, BodyPart]]:
+        """The pairs of the robot's own links that can hit each other: not on the same or
+        adjacent joints (a joint's two sides always touch), and not touching at the home
+        position (meshes that overlap by design)."""
+        parents = self.model.parents
+        pairs = []
+        for i, a in enumerate(self.parts):
+            for b in self.parts[i + 1 :]:
+                if a.joint == b.joint or parents[a.joint] == b.joint or parents[b.joint] == a.joint:
+                    continue
+                if geometry.proximity(a.shape, b.shape).distance <= 0:
+                    continue
+                pairs.append((a, b))
+        return pairs
 
     @property
     def moving(self) -> list[BodyPart]:

@@ -139,6 +139,24 @@ class World:
                 best = Contact(parts[i], near)
         return best
 
+    def nearest_self(self, robot: str, q: FloatArray | None = None) -> Contact | None:
+        """The closest pair of the robot's own links that can hit each other."""
+        body = self.robot(robot)
+        if q is not None:
+            body.place(q)
+        best: Contact | None = None
+        pairs = sorted(body.self_pairs, key=lambda p: geometry.sphere_gap(p[0].shape, p[1].shape))
+        for a, b in pairs:
+            if (
+                best is not None
+                and geometry.sphere_gap(a.shape, b.shape) >= best.proximity.distance
+            ):
+                break
+            near = proximity(a.shape, b.shape)
+            if best is None or near.distance < best.proximity.distance:
+                best = Contact(a, near)
+        return best
+
     def _pairs(
         self, robot: str, q: FloatArray | None
     ) -> tuple[list[BodyPart], list[Shape], FloatArray]:

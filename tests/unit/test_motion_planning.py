@@ -77,6 +77,38 @@ def test_a_colliding_move_is_refused_with_the_pair() -> None:
     assert plan.timed is None
 
 
+def test_a_move_folding_the_arm_into_itself_is_refused_with_the_pair() -> None:
+    world = world_with({})
+    checker = PathChecker(world, "r")
+    home = np.array(INFO.home)
+    # The robot's own links at home and in the test poses are clear of each other.
+    for q in (home, LEFT, RIGHT):
+        assert checker.configuration(q) is None
+    folded = np.array([0.0, -1.57, 3.0, 0.0, 0.0, 0.0])  # the wrist into the upper arm
+    hit = checker.configuration(folded)
+    assert hit is not None
+    assert {hit.robot_part, hit.other} <= {
+        f"r/{link}"
+        for link in ("upper_arm_link", "wrist_2_link", "wrist_3_link", "wrist_1_link", "ee_link")
+    }
+    plan = MovePlanner(world, "r", None).plan(
+        joint_move(avoid_obstacles=False), home, [Point(folded, None)]
+    )
+    assert not plan.report.ok and plan.report.code == "collision"
+    assert plan.report.collision is not None
+    assert plan.report.collision.other.startswith("r/")
+    # The upper arm swung down through the base.
+    down = np.array([0.0, 0.8, 0.0, -1.57, -1.57, 0.0])
+    hit = checker.configuration(down)
+    assert hit is not None and "r/base_link" in (hit.robot_part, hit.other)
+    # Both ends clear, the elbow folding through itself between them: found on the way.
+    start, end = LEFT.copy(), LEFT.copy()
+    start[2], end[2] = 2.0, 4.0
+    assert checker.configuration(start) is None and checker.configuration(end) is None
+    hit = checker.path(np.array([start, end]))
+    assert hit is not None and hit.robot_part.startswith("r/") and hit.other.startswith("r/")
+
+
 def test_the_planner_finds_a_collision_free_path_in_a_cluttered_scene() -> None:
     world = world_with(cluttered())
     plan = MovePlanner(world, "r", None).plan(joint_move(), LEFT, [Point(RIGHT, None)])
