@@ -34,6 +34,14 @@ def waypoints(timed: TimedPath) -> dict[str, object]:
     }
 
 
+def check_faults(state: RobotState) -> None:
+    """Raise when the robot can no longer move: E-stop, or a fault."""
+    if state.flags.estop:
+        raise RobotError("E-stop: the move is stopped", code="estop")
+    if state.flags.error:
+        raise RobotError(f"robot fault: {state.error_message}", code="robot_fault")
+
+
 class Execution:
     def __init__(self, link: RobotLink, timed: TimedPath) -> None:
         self.link = link
@@ -87,10 +95,7 @@ class Execution:
 
     @staticmethod
     def _check(state: RobotState) -> None:
-        if state.flags.estop:
-            raise RobotError("E-stop: the move is stopped", code="estop")
-        if state.flags.error:
-            raise RobotError(f"robot fault: {state.error_message}", code="robot_fault")
+        check_faults(state)
         lag = np.max(
             np.abs(np.array(state.joint_position) - np.array(state.joint_position_command))
         )

@@ -33,6 +33,14 @@ LOOKAHEAD = 0.02  # s: another robot is placed this far ahead of its reported st
 MAX_AGE = 0.2  # s: ... plus the report's age up to this (older means the feed is stuck)
 
 
+async def connected_robots(devices: ServiceClient) -> dict[str, dict[str, Any]]:
+    """The device manager's connected robots by local name."""
+    added: list[dict[str, Any]] = await devices.get("/devices")
+    return {
+        d["local_name"]: d for d in added if d["kind"] == "robot" and d["status"] == "connected"
+    }
+
+
 async def scene_objects(storage: StorageClient) -> dict[str, SceneObject]:
     objects = await storage.query(type_name="scene_object")
     return {v.name: SceneObject.model_validate(v.value) for v in objects}
@@ -68,12 +76,7 @@ class WorldMirror:
             await asyncio.sleep(REFRESH)
 
     async def refresh(self) -> None:
-        devices: list[dict[str, Any]] = await self.devices.get("/devices")
-        robots = {
-            d["local_name"]: d
-            for d in devices
-            if d["kind"] == "robot" and d["status"] == "connected"
-        }
+        robots = await connected_robots(self.devices)
         for name in [n for n in self.feeds if n not in robots]:
             await self.feeds.pop(name).close()
             self.world.remove_robot(name)

@@ -11,10 +11,9 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from runtime.interfaces.robot import CommandMode, RobotState
+from runtime.interfaces.robot import CommandMode
 from runtime.jog.velocity import VelocityController
-from runtime.kit.errors import RobotError
-from runtime.motion.executor import MoveFailed
+from runtime.motion.executor import MoveFailed, check_faults
 from runtime.motion.mirror import MAX_AGE, MirrorConstraint
 from runtime.robot_link import RobotLink
 
@@ -73,7 +72,7 @@ class ReactiveExecution:
             if self._cancel.is_set():
                 raise MoveFailed("cancelled", code="cancelled")
             state = self.link.current()
-            self._check(state)
+            check_faults(state)
             q = np.array(state.joint_position_command)
             error = self._error(kinematics.tcp(q))
             distance = float(np.linalg.norm(error[:3]))
@@ -129,10 +128,3 @@ class ReactiveExecution:
                 "tag": "motion:reactive",
             }
         )
-
-    @staticmethod
-    def _check(state: RobotState) -> None:
-        if state.flags.estop:
-            raise RobotError("E-stop: the move is stopped", code="estop")
-        if state.flags.error:
-            raise RobotError(f"robot fault: {state.error_message}", code="robot_fault")

@@ -13,10 +13,10 @@ import pinocchio as pin
 
 from runtime.device_manager.client import check_lease, open_robot_link, require_token
 from runtime.interfaces.common import Pose
-from runtime.interfaces.scene import SceneObject
 from runtime.jog.waypoints import base_in_world
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import NotFound
+from runtime.motion.mirror import connected_robots, scene_objects
 from runtime.motion.world import World
 from runtime.robot_link import RobotLink
 from runtime.variable_storage.client import StorageClient
@@ -59,20 +59,14 @@ class Robots:
 
     async def _sync(self) -> World:
         """Bring the world up to date: robots, their bases and joints, the scene objects."""
-        devices: list[dict[str, Any]] = await self.devices.get("/devices")
-        robots = {
-            d["local_name"]: d
-            for d in devices
-            if d["kind"] == "robot" and d["status"] == "connected"
-        }
+        robots = await connected_robots(self.devices)
         for name in [n for n in self.links if n not in robots]:
             await self.links.pop(name).close()
             self._world.remove_robot(name)
         for name, device in robots.items():
             await self._ensure(name, device)
         await self._bases()
-        objects = await self.storage.query(type_name="scene_object")
-        scene = {v.name: SceneObject.model_validate(v.value) for v in objects}
+        scene = await scene_objects(self.storage)
         if scene != self._world.objects:
             self._world.set_objects(scene)
         for name, link in self.links.items():

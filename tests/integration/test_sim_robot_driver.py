@@ -85,12 +85,17 @@ def test_identity_info_and_health(sim: SimRobotProc, robot: Robot) -> None:
 def test_joint_jog_moves_then_stops_on_command_timeout(robot: Robot) -> None:
     robot.call("PUT", "/command_mode", {"mode": "jog"})
     start = robot.state()
-    timeouts_before = robot.call("GET", "/sim/loop_stats")["command_timeouts"]
     # Each command lives 300 ms, so a test process that the host stalls between two commands
-    # does not make the driver time out early.
-    robot.jog([0.0, 0.0, 0.0, 0.0, 0.0, 0.6], seconds=0.6, timeout=0.3)
-    moving = robot.state()
+    # does not make the driver time out early; the jog goes on until J6 has turned 0.3 rad.
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        robot.call("POST", "/jog_joint", {"velocity": [0, 0, 0, 0, 0, 0.6], "timeout": 0.3}, 204)
+        moving = robot.state()
+        if moving["joint_position"][5] - start["joint_position"][5] > 0.3:
+            break
+        time.sleep(0.02)
     assert moving["joint_velocity"][5] > 0.5
+    timeouts_before = robot.call("GET", "/sim/loop_stats")["command_timeouts"]
     # No more commands: the driver halts by itself once the command timeout lapses.
     wait_for(robot.stopped, 2, what="halt after command timeout")
     stats = robot.call("GET", "/sim/loop_stats")

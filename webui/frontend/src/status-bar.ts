@@ -76,7 +76,7 @@ export class OpStatusBar extends LitElement {
   }
 
   render() {
-    const robots = feed.devices.filter((d) => d.kind === "robot");
+    const robots = feed.robots();
     return html`
       <div class="brand">Open<span>Pendant</span></div>
       <div class="robots">

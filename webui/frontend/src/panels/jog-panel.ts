@@ -226,15 +226,9 @@ export class OpJogPanel extends LitElement {
 
   // Robot selection and its model --------------------------------------------------------------
 
-  private robots() {
-    return feed.devices.filter((d) => d.kind === "robot");
-  }
-
   protected willUpdate(): void {
-    const robots = this.robots();
-    if (robots.length && !robots.some((r) => r.local_name === this.robot)) {
-      this.robot = robots[0].local_name;
-    }
+    const robot = feed.pickRobot(this.robot);
+    if (robot) this.robot = robot;
   }
 
   protected updated(changed: Map<string, unknown>): void {
@@ -542,7 +536,7 @@ export class OpJogPanel extends LitElement {
   }
 
   render() {
-    const robots = this.robots();
+    const robots = feed.robots();
     if (!robots.length) {
       return html`<div class="card">
         <h2>No robot yet</h2>

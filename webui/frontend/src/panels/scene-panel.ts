@@ -172,15 +172,9 @@ export class OpScenePanel extends LitElement {
     this.confirmDelete = false;
   }
 
-  private robots() {
-    return feed.devices.filter((d) => d.kind === "robot");
-  }
-
   protected willUpdate(): void {
-    const robots = this.robots();
-    if (robots.length && !robots.some((r) => r.local_name === this.robot)) {
-      this.robot = robots[0].local_name;
-    }
+    const robot = feed.pickRobot(this.robot);
+    if (robot) this.robot = robot;
   }
 
   protected updated(changed: Map<string, unknown>): void {
@@ -373,7 +367,7 @@ export class OpScenePanel extends LitElement {
   }
 
   render() {
-    if (!this.robots().length) {
+    if (!feed.robots().length) {
       return html`<div class="card"><h2>No robot yet</h2>
         <p>Add a robot in the Devices panel; its scene shows here.</p></div>`;
     }
