@@ -26,12 +26,16 @@ async def check_lease(devices: ServiceClient, name: str, token: str) -> dict[str
     return granted
 
 
+async def robot_info(devices: ServiceClient, name: str) -> RobotInfo:
+    """An added robot's info, as the device manager has it from the driver."""
+    details = await devices.get(f"/devices/{name}")
+    return RobotInfo.model_validate(details["info"]["info"])
+
+
 async def open_robot_link(devices: ServiceClient, name: str, url: str) -> RobotLink:
     """A started link to an added robot, its info from the device manager; fails unless the
     robot's state is streaming."""
-    details = await devices.get(f"/devices/{name}")
-    info = RobotInfo.model_validate(details["info"]["info"])
-    link = RobotLink(name, url, info)
+    link = RobotLink(name, url, await robot_info(devices, name))
     await link.start()
     if not link.alive:
         await link.close()

@@ -13,8 +13,9 @@ from typing import Any
 
 import numpy as np
 
+from runtime.device_manager.client import robot_info
 from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import RobotInfo, RobotState
+from runtime.interfaces.robot import RobotState
 from runtime.interfaces.scene import SceneObject
 from runtime.jog.waypoints import base_in_world
 from runtime.kinematics import Kinematics
@@ -44,6 +45,15 @@ async def connected_robots(devices: ServiceClient) -> dict[str, dict[str, Any]]:
 async def scene_objects(storage: StorageClient) -> dict[str, SceneObject]:
     objects = await storage.query(type_name="scene_object")
     return {v.name: SceneObject.model_validate(v.value) for v in objects}
+
+
+async def sync_bases(world: World, storage: StorageClient) -> None:
+    """Each robot's base as the stored frame `frames.<robot>` places it (identity without
+    one), the same frame the jog service uses for world-frame waypoints."""
+    for name, body in world.robots.items():
+        base = await base_in_world(storage, name)
+        if not body.world_base.isApprox(base):
+            body.set_base(base)
 
 
 class WorldMirror:
@@ -82,10 +92,7 @@ class WorldMirror:
             self.world.remove_robot(name)
         for name, device in robots.items():
             await self._ensure(name, device)
-        for name, body in self.world.robots.items():
-            base = await base_in_world(self.storage, name)
-            if not body.world_base.isApprox(base):
-                body.set_base(base)
+        await sync_bases(self.world, self.storage)
         scene = await scene_objects(self.storage)
         if scene != self.world.objects:
             # Built off the loop, swapped in on it: a control cycle never sees half a scene.
@@ -98,8 +105,7 @@ class WorldMirror:
             return
         if feed is not None:
             await self.feeds.pop(name).close()
-        details = await self.devices.get(f"/devices/{name}")
-        info = RobotInfo.model_validate(details["info"]["info"])
+        info = await robot_info(self.devices, name)
         known = self.world.robots.get(name)
         if known is None or known.kinematics.info != info:
             body = await asyncio.to_thread(RobotBody, name, Kinematics(info))

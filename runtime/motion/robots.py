@@ -13,10 +13,9 @@ import pinocchio as pin
 
 from runtime.device_manager.client import check_lease, open_robot_link, require_token
 from runtime.interfaces.common import Pose
-from runtime.jog.waypoints import base_in_world
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import NotFound
-from runtime.motion.mirror import connected_robots, scene_objects
+from runtime.motion.mirror import connected_robots, scene_objects, sync_bases
 from runtime.motion.world import World
 from runtime.robot_link import RobotLink
 from runtime.variable_storage.client import StorageClient
@@ -65,7 +64,7 @@ class Robots:
             self._world.remove_robot(name)
         for name, device in robots.items():
             await self._ensure(name, device)
-        await self._bases()
+        await sync_bases(self._world, self.storage)
         scene = await scene_objects(self.storage)
         if scene != self._world.objects:
             self._world.set_objects(scene)
@@ -87,15 +86,6 @@ class Robots:
         known = self._world.robots.get(name)
         if known is None or known.kinematics.info != link.info:
             self._world.add_robot(name, link.info)
-
-    async def _bases(self) -> None:
-        """Each base as the stored frame `frames.<robot>` places it (identity without one),
-        the same frame the jog service uses for world-frame waypoints."""
-        for name in self.links:
-            base = await base_in_world(self.storage, name)
-            body = self._world.robot(name)
-            if not body.world_base.isApprox(base):
-                body.set_base(base)
 
 
 def world_pose(base: pin.SE3) -> Pose:

@@ -145,12 +145,10 @@ class World:
         if q is not None:
             body.place(q)
         best: Contact | None = None
-        pairs = sorted(body.self_pairs, key=lambda p: geometry.sphere_gap(p[0].shape, p[1].shape))
-        for a, b in pairs:
-            if (
-                best is not None
-                and geometry.sphere_gap(a.shape, b.shape) >= best.proximity.distance
-            ):
+        gaps = [(geometry.sphere_gap(a.shape, b.shape), a, b) for a, b in body.self_pairs]
+        # Pairs in order of their lower bound; stop once no remaining pair can be nearer.
+        for gap, a, b in sorted(gaps, key=lambda g: g[0]):
+            if best is not None and gap >= best.proximity.distance:
                 break
             near = proximity(a.shape, b.shape)
             if best is None or near.distance < best.proximity.distance:
