@@ -1,0 +1,202 @@
+"""The server-side Python generator: a workspace becomes a program in the sandbox's dialect
+(no imports; helpers are sandbox functions), each statement preceded by
+`at_block('<block id>')`, the marker that highlights, pauses, steps and breaks there.
+
+Each block type has one generator function, registered with `statement` or `value`; a
+value generator returns an expression that is safe to use as an operand (atomic or
+parenthesized), so no precedence table is needed."""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from typing import Any
+
+from blockly_blocks.names import NameTable
+from blockly_blocks.workspace import Block, Reader, Workspace, WorkspaceError, parse_json
+
+INDENT = "    "
+StatementGen = Callable[[Block, "Generator"], list[str]]
+ValueGen = Callable[[Block, "Generator"], str]
+
+STATEMENTS: dict[str, StatementGen] = {}
+VALUES: dict[str, ValueGen] = {}
+# Blocks that are a statement or a value depending on their settings (lists_getIndex).
+DUAL: dict[str, Callable[[Block], bool]] = {}
+DEFINITIONS = ("procedures_defnoreturn", "procedures_defreturn")
+
+
+def statement(*types: str) -> Callable[[StatementGen], StatementGen]:
+    def register(fn: StatementGen) -> StatementGen:
+        for kind in types:
+            STATEMENTS[kind] = fn
+        return fn
+
+    return register
+
+
+def value(*types: str) -> Callable[[ValueGen], ValueGen]:
+    def register(fn: ValueGen) -> ValueGen:
+        for kind in types:
+            VALUES[kind] = fn
+        return fn
+
+    return register
+
+
+def known_types() -> frozenset[str]:
+    _load_generators()
+    return frozenset(STATEMENTS) | frozenset(VALUES)
+
+
+@dataclass(frozen=True)
+class Generated:
+    python: str
+    blocks: int
+    block_lines: dict[str, int]  # block id -> line of its marker
+
+
+class Generator:
+    def __init__(self, workspace: Workspace) -> None:
+        self.workspace = workspace
+        self.names = NameTable()
+        self.procedure: Block | None = None  # the definition being generated
+        self.procedures: dict[str, Block] = {}
+
+    # Fields --------------------------------------------------------------------------------
+
+    def option(self, block: Block, name: str, options: Iterable[str]) -> str:
+        chosen = block.field(name)
+        allowed = tuple(options)
+        if chosen not in allowed:
+            raise WorkspaceError(
+                f"block {block.type}: {name} is {str(chosen)[:40]!r}, not one of {allowed}",
+                block.id,
+            )
+        return str(chosen)
+
+    def text_field(self, block: Block, name: str) -> str:
+        text = block.field(name)
+        if not isinstance(text, str):
+            raise WorkspaceError(f"block {block.type}: {name} must be text", block.id)
+        return text
+
+    def number_field(self, block: Block, name: str) -> float | int:
+        raw = block.field(name)
+        try:
+            number = float(raw) if isinstance(raw, str) else raw
+        except ValueError:
+            raise WorkspaceError(f"block {block.type}: {name} is not a number", block.id) from None
+        if isinstance(number, bool) or not isinstance(number, int | float):
+            raise WorkspaceError(f"block {block.type}: {name} is not a number", block.id)
+        if number != number or abs(number) == float("inf"):
+            raise WorkspaceError(f"block {block.type}: {name} must be finite", block.id)
+        return int(number) if float(number).is_integer() and abs(number) < 2**53 else number
+
+    def variable(self, block: Block, name: str = "VAR") -> str:
+        ref = block.field(name)
+        var_id = ref.get("id") if isinstance(ref, dict) else None
+        if var_id not in self.workspace.variables:
+            raise WorkspaceError(
+                f"block {block.type} uses a variable that does not exist", block.id
+            )
+        return self.var_name(var_id)
+
+    def var_name(self, var_id: str) -> str:
+        return self.names.get("variable", var_id, self.workspace.variables[var_id])
+
+    # Code ----------------------------------------------------------------------------------
+
+    def value(self, block: Block, name: str, default: str = "None") -> str:
+        child = block.inputs.get(name)
+        if child is None:
+            return default
+        gen = VALUES.get(child.type)
+        if gen is None or (child.type in DUAL and DUAL[child.type](child)):
+            raise WorkspaceError(f"a {child.type} block cannot be used as a value", child.id)
+        return gen(child, self)
+
+    def body(self, block: Block, name: str) -> list[str]:
+        """An indented statement body; `pass` when empty."""
+        lines = self.stack(block.inputs.get(name))
+        return indent(lines or ["pass"])
+
+    def stack(self, first: Block | None) -> list[str]:
+        lines: list[str] = []
+        block = first
+        while block is not None:
+            gen = STATEMENTS.get(block.type)
+            if gen is None or (block.type in DUAL and not DUAL[block.type](block)):
+                raise WorkspaceError(
+                    f"a {block.type} block cannot be used as a statement", block.id
+                )
+            lines.append(f"at_block({block.id!r})")
+            lines.extend(gen(block, self))
+            block = block.next
+        return lines
+
+    def program(self) -> list[str]:
+        top = sorted(self.workspace.top, key=lambda b: (b.y, b.x))
+        for block in top:
+            if block.type in DEFINITIONS:
+                name = self.text_field(block, "NAME")
+                if name in self.procedures:
+                    raise WorkspaceError(f"two functions are named {name!r}", block.id)
+                self.procedures[name] = block
+        variables = [self.var_name(v) for v in self.workspace.variables]
+        lines = [f"{v} = None" for v in variables]
+        for block in top:
+            if block.type in DEFINITIONS:
+                self.procedure = block
+                lines += ["", *STATEMENTS[block.type](block, self)]
+                self.procedure = None
+        runnable = [b for b in top if b.type not in DEFINITIONS and _is_statement(b)]
+        for loose in [b for b in top if b.type not in DEFINITIONS and not _is_statement(b)]:
+            if loose.next is not None:
+                raise WorkspaceError(
+                    f"a {loose.type} block cannot be used as a statement", loose.id
+                )
+            VALUES[loose.type](loose, self)  # not run, as in Blockly, but still checked
+        if lines and runnable:
+            lines.append("")
+        for block in runnable:
+            lines += self.stack(block)
+        return lines
+
+
+def _is_statement(block: Block) -> bool:
+    if block.type in DUAL:
+        return DUAL[block.type](block)
+    return block.type in STATEMENTS
+
+
+def indent(lines: list[str]) -> list[str]:
+    return [INDENT + line if line else line for line in lines]
+
+
+def py_string(text: str) -> str:
+    return repr(str(text))
+
+
+HEADER = "# Generated by OpenPendant from a Blockly workspace; edit the blocks, not this code."
+
+
+def generate(workspace_json: Any) -> Generated:
+    """Python for a workspace (its JSON text, bytes or parsed form), or WorkspaceError."""
+    data = parse_json(workspace_json) if isinstance(workspace_json, str | bytes) else workspace_json
+    workspace = Reader(known_types()).workspace(data)
+    lines = [HEADER, *Generator(workspace).program()]
+    python = "\n".join(lines) + "\n"
+    block_lines: dict[str, int] = {}
+    for number, line in enumerate(lines, start=1):
+        stripped = line.strip()
+        if stripped.startswith("at_block("):
+            block_id = str(ast.literal_eval(stripped[len("at_block(") : -1]))
+            block_lines.setdefault(block_id, number)
+    return Generated(python, workspace.count, block_lines)
+
+
+def _load_generators() -> None:
+    # The generator modules register themselves on import.
+    from blockly_blocks import project, standard  # noqa: F401

@@ -1,0 +1,47 @@
+"""Digital I/O by name: "<robot>.do<N>" and "<robot>.di<N>" are the robot controller's
+outputs and inputs (numbered from 0)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from sandbox.library.base import (
+    ProgramError,
+    bool_arg,
+    host,
+    number_arg,
+    sandbox_function,
+    text_arg,
+)
+from sandbox.library.timing import POLL
+
+
+@sandbox_function
+def set_output(name: str, value: Any) -> None:
+    """Switch a digital output on (true) or off (false)."""
+    host().call(
+        "io.set", {"name": text_arg(name, "output name"), "value": bool_arg(value, "value")}
+    )
+
+
+@sandbox_function
+def get_input(name: str) -> bool:
+    return bool(host().call("io.get", {"name": text_arg(name, "input name")}))
+
+
+@sandbox_function
+def get_output(name: str) -> bool:
+    return bool(host().call("io.get", {"name": text_arg(name, "output name")}))
+
+
+@sandbox_function
+def wait_for_input(name: str, value: Any, timeout: Any) -> None:
+    """Wait until the input reads `value`; fail after `timeout` seconds."""
+    wanted = bool_arg(value, "value")
+    limit = number_arg(timeout, "timeout", low=0, high=24 * 3600.0)
+    waited = 0.0
+    while get_input(name) is not wanted:
+        if waited >= limit:
+            raise ProgramError(f"{name} did not turn {wanted} within {limit:g} s", "timeout")
+        host().sleep(POLL)
+        waited += POLL

@@ -1,0 +1,37 @@
+"""Program control: log lines, pause for the operator, end the run, and the block markers
+the Blockly generator puts before every statement."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from sandbox.guards import SandboxError
+from sandbox.library.base import host, sandbox_function, text_arg
+
+LEVELS = ("info", "warning", "error")
+
+
+@sandbox_function
+def log(text: Any, level: str = "info") -> None:
+    """A line in the program's output, marked info, warning or error."""
+    if level not in LEVELS:
+        raise SandboxError(f"a log level is one of {', '.join(LEVELS)}")
+    host().output(str(text), level)
+
+
+@sandbox_function
+def confirm(message: Any = "Continue?") -> None:
+    """Pause here until the operator presses resume, showing the message."""
+    host().confirm(str(message))
+
+
+@sandbox_function
+def stop_program() -> None:
+    """End the run here, as finished."""
+    host().finish()
+
+
+@sandbox_function
+def at_block(block_id: str) -> None:
+    """Where the program is, for highlighting, pausing, stepping and breakpoints."""
+    host().at_block(text_arg(block_id, "block id", max_length=64))

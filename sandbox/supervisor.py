@@ -1,0 +1,351 @@
+"""The runtime's side of one program run: start the worker, answer its requests through the
+host, relay pause/resume/step/breakpoints, collect output, and stop it - kill the worker
+and halt what it commanded - on request, on the wall-clock limit, or when it breaks the
+protocol."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import itertools
+import json
+import logging
+import signal
+import sys
+import time
+from collections import deque
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass, field
+from enum import StrEnum
+from typing import Any, Protocol
+
+from sandbox.protocol import MAX_LINE_BYTES, MAX_OUTPUT_CHARS, ProtocolError, decode, encode
+
+log = logging.getLogger(__name__)
+
+KEEP_OUTPUT = 1000
+STDERR_TAIL = 4096
+
+
+class RunState(StrEnum):
+    starting = "starting"
+    running = "running"
+    paused = "paused"
+    stopped = "stopped"
+    error = "error"
+    finished = "finished"
+
+
+ENDED = (RunState.stopped, RunState.error, RunState.finished)
+
+
+class CallRefused(Exception):
+    """What a host raises to refuse a program's request; the program gets the message."""
+
+    def __init__(self, message: str, code: str = "error") -> None:
+        super().__init__(message)
+        self.message = message
+        self.code = code
+
+
+class Host(Protocol):
+    async def call(self, fn: str, args: dict[str, Any]) -> Any: ...
+
+    async def halt(self) -> None:
+        """Halt every device this run commanded, at once."""
+
+
+@dataclass(frozen=True)
+class RunLimits:
+    wall_seconds: float = 8 * 3600.0
+    cpu_seconds: int = 3600
+    memory_mb: int = 256
+
+
+@dataclass
+class OutputLine:
+    seq: int
+    text: str
+    stream: str  # out | info | warning | error | system
+    block: str | None
+    ts: float = field(default_factory=time.time)
+
+
+@dataclass
+class RunError:
+    message: str
+    kind: str
+    line: int | None = None
+    block: str | None = None
+    code: str | None = None
+
+
+Listener = Callable[[], None]
+
+
+class ProgramRun:
+    def __init__(
+        self,
+        source: str,
+        host: Host,
+        *,
+        limits: RunLimits | None = None,
+        breakpoints: set[str] | None = None,
+        listener: Listener | None = None,
+    ) -> None:
+        self.source = source
+        self.host = host
+        self.limits = limits or RunLimits()
+        self.breakpoints = set(breakpoints or ())
+        self.listener = listener
+        self.state = RunState.starting
+        self.block: str | None = None
+        self.pause_reason = ""
+        self.message = ""
+        self.error: RunError | None = None
+        self.isolation: list[str] = []
+        self.output: deque[OutputLine] = deque(maxlen=KEEP_OUTPUT)
+        self.started = time.time()
+        self.ended: float | None = None
+        self._seq = itertools.count(1)
+        self._process: asyncio.subprocess.Process | None = None
+        self._tasks: set[asyncio.Task[Any]] = set()
+        self._done = asyncio.Event()
+        self._stopping = False
+        self._stderr = b""
+
+    # Control -------------------------------------------------------------------------------
+
+    async def start(self) -> None:
+        limits = {"memory_mb": self.limits.memory_mb, "cpu_seconds": self.limits.cpu_seconds}
+        self._process = await asyncio.create_subprocess_exec(
+            sys.executable,
+            "-m",
+            "sandbox.worker",
+            json.dumps(limits),
+            stdin=asyncio.subprocess.PIPE,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.PIPE,
+            limit=MAX_LINE_BYTES + 1,
+        )
+        await self._send(
+            {"t": "start", "source": self.source, "breakpoints": sorted(self.breakpoints)}
+        )
+        self._spawn(self._read())
+        self._spawn(self._drain_stderr())
+        self._spawn(self._watchdog())
+
+    @property
+    def ended_state(self) -> bool:
+        return self.state in ENDED
+
+    async def pause(self) -> None:
+        self._require_live()
+        await self._send({"t": "pause"})
+
+    async def resume(self) -> None:
+        self._require_live()
+        await self._send({"t": "resume"})
+
+    async def step(self) -> None:
+        self._require_live()
+        await self._send({"t": "step"})
+
+    async def set_breakpoints(self, ids: set[str]) -> None:
+        self.breakpoints = set(ids)
+        if not self.ended_state:
+            await self._send({"t": "breakpoints", "ids": sorted(self.breakpoints)})
+
+    async def stop(self, reason: str = "stopped by the operator") -> None:
+        """Stop wins: kill the worker and halt the devices, whatever it was doing."""
+        if self.ended_state or self._stopping:
+            return
+        self._stopping = True
+        self._kill()
+        try:
+            await self.host.halt()
+        finally:
+            self._end(RunState.stopped, reason)
+            self._cancel_tasks()
+
+    async def wait(self, timeout: float | None = None) -> RunState:
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(self._done.wait(), timeout)
+        return self.state
+
+    def _require_live(self) -> None:
+        if self.ended_state:
+            raise RuntimeError(f"the run has ended ({self.state})")
+
+    # Worker messages -----------------------------------------------------------------------
+
+    async def _read(self) -> None:
+        assert self._process is not None
+        assert self._process.stdout is not None
+        stdout = self._process.stdout
+        try:
+            while True:
+                try:
+                    line = await stdout.readline()
+                except (ValueError, asyncio.LimitOverrunError):
+                    raise ProtocolError("a message from the worker is too long") from None
+                if not line:
+                    break
+                await self._handle(decode(line))
+        except ProtocolError as exc:
+            await self._fail(RunError(f"the program broke the worker protocol: {exc}", "protocol"))
+            return
+        await self._process.wait()
+        if not self.ended_state:
+            await self._fail(self._worker_death())
+
+    async def _handle(self, message: dict[str, Any]) -> None:
+        kind = message["t"]
+        if kind == "ready":
+            self.isolation = [str(i) for i in message.get("isolation", [])]
+            self.state = RunState.running
+        elif kind == "block":
+            self.block = _block(message.get("id"))
+        elif kind == "paused":
+            self.block = _block(message.get("block"))
+            self.state = RunState.paused
+            self.pause_reason = str(message.get("reason", "pause"))
+            self.message = str(message.get("message", ""))[:MAX_OUTPUT_CHARS]
+        elif kind == "resumed":
+            self.state, self.pause_reason, self.message = RunState.running, "", ""
+        elif kind == "call":
+            self.block = _block(message.get("block"))
+            self._spawn(self._answer(message))
+        elif kind == "output":
+            self._add_output(str(message.get("text", "")), message.get("stream"), message)
+        elif kind == "error":
+            error = RunError(
+                message=str(message.get("message", "error"))[:MAX_OUTPUT_CHARS],
+                kind=str(message.get("kind", "error")),
+                line=message.get("line") if isinstance(message.get("line"), int) else None,
+                block=_block(message.get("block")),
+                code=str(message["code"]) if message.get("code") else None,
+            )
+            await self._fail(error)
+        elif kind == "done":
+            stopped = bool(message.get("stopped"))
+            self._end(RunState.finished, "ended by stop program" if stopped else "finished")
+        else:
+            raise ProtocolError(f"unknown message {kind!r}")
+        self._notify()
+
+    async def _answer(self, message: dict[str, Any]) -> None:
+        call_id = message.get("id")
+        fn, args = message.get("fn"), message.get("args")
+        if not isinstance(fn, str) or not isinstance(args, dict):
+            reply: dict[str, Any] = {
+                "ok": False,
+                "error": {"code": "bad_call", "message": "malformed call"},
+            }
+        else:
+            try:
+                reply = {"ok": True, "value": await self.host.call(fn, args)}
+            except CallRefused as exc:
+                reply = {"ok": False, "error": {"code": exc.code, "message": exc.message}}
+        if not self.ended_state:
+            with contextlib.suppress(ProtocolError, ConnectionError, RuntimeError):
+                await self._send({"t": "reply", "id": call_id, **reply})
+
+    async def _drain_stderr(self) -> None:
+        """Keep the tail of what the worker wrote to stderr (a crash's traceback)."""
+        assert self._process is not None
+        assert self._process.stderr is not None
+        while chunk := await self._process.stderr.read(4096):
+            self._stderr = (self._stderr + chunk)[-STDERR_TAIL:]
+
+    async def _watchdog(self) -> None:
+        await asyncio.sleep(self.limits.wall_seconds)
+        if not self.ended_state:
+            limit = self.limits.wall_seconds
+            await self._halt_and_fail(RunError(f"the run took longer than {limit:g} s", "timeout"))
+
+    async def _fail(self, error: RunError) -> None:
+        await self._halt_and_fail(error)
+
+    async def _halt_and_fail(self, error: RunError) -> None:
+        if self.ended_state or self._stopping:
+            return
+        self._stopping = True
+        self._kill()
+        self.error = error
+        if error.block is not None:
+            self.block = error.block
+        line = f" (line {error.line})" if error.line else ""
+        self._add_output(f"{error.message}{line}", "error", {"block": error.block})
+        try:
+            await self.host.halt()
+        except Exception:  # the error is the news; a failed halt is logged
+            log.exception("halting after a program error failed")
+        self._end(RunState.error, error.message)
+        self._cancel_tasks(keep=asyncio.current_task())
+
+    def _worker_death(self) -> RunError:
+        assert self._process is not None
+        code = self._process.returncode
+        if code is not None and code < 0:
+            name = signal.Signals(-code).name
+            if -code == signal.SIGXCPU:
+                return RunError(
+                    f"the program used its {self.limits.cpu_seconds} s of CPU time", "cpu_limit"
+                )
+            return RunError(f"the program's worker was killed ({name}); out of memory?", name)
+        tail = self._stderr.decode(errors="replace").strip().splitlines()[-1:]
+        detail = f": {tail[0]}" if tail else ""
+        return RunError(f"the program's worker ended unexpectedly (exit {code}){detail}", "worker")
+
+    # Helpers -------------------------------------------------------------------------------
+
+    async def _send(self, message: dict[str, Any]) -> None:
+        if self._process is None or self._process.stdin is None:
+            raise RuntimeError("the worker is not running")
+        self._process.stdin.write(encode(message))
+        with contextlib.suppress(ConnectionError):
+            await self._process.stdin.drain()
+
+    def _add_output(self, text: str, stream: Any, message: dict[str, Any]) -> None:
+        kind = stream if stream in ("out", "info", "warning", "error", "system") else "out"
+        self.output.append(
+            OutputLine(next(self._seq), text[:MAX_OUTPUT_CHARS], kind, _block(message.get("block")))
+        )
+
+    def _kill(self) -> None:
+        if self._process is not None and self._process.returncode is None:
+            with contextlib.suppress(ProcessLookupError):
+                self._process.kill()
+
+    def _end(self, state: RunState, message: str) -> None:
+        if self.ended_state:
+            return
+        self.state, self.message, self.ended = state, message, time.time()
+        self._done.set()
+        self._notify()
+
+    def _spawn(self, coro: Awaitable[Any]) -> None:
+        task: asyncio.Task[Any] = asyncio.ensure_future(coro)
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    def _cancel_tasks(self, keep: asyncio.Task[Any] | None = None) -> None:
+        for task in list(self._tasks):
+            if task is not keep and task is not asyncio.current_task():
+                task.cancel()
+
+    def _notify(self) -> None:
+        if self.listener is not None:
+            self.listener()
+
+    async def close(self) -> None:
+        self._kill()
+        self._cancel_tasks()
+        if self._process is not None:
+            with contextlib.suppress(Exception):
+                await asyncio.wait_for(self._process.wait(), 2.0)
+
+
+def _block(value: Any) -> str | None:
+    return value[:64] if isinstance(value, str) else None
