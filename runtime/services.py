@@ -33,6 +33,7 @@ SERVICES: tuple[ServiceSpec, ...] = (
     ServiceSpec("device_manager", "runtime.device_manager.service:build_app", ("devices",)),
     ServiceSpec("jog", "runtime.jog.service:build_app", ("jog",)),
     ServiceSpec("motion", "runtime.motion.service:build_app", ("motion",)),
+    ServiceSpec("program", "runtime.program.service:build_app", ("programs",)),
 )
 WEBUI = ServiceSpec("webui", "webui.server:build_app")
 ALL_SERVICES = {spec.name: spec for spec in (*SERVICES, WEBUI)}

@@ -94,6 +94,9 @@ class SimCore:
         self._ids = itertools.count(1)
         self.command_timeouts = 0
         self.setpoints: deque[Setpoint] = deque(maxlen=history)
+        self.tool_open: bool | None = True if "tool" in info.capabilities else None
+        self.digital_inputs = [False] * info.digital_inputs
+        self.digital_outputs = [False] * info.digital_outputs
 
     # Commands -------------------------------------------------------------------------------
 
@@ -293,6 +296,9 @@ class SimCore:
             speed_ratio=self.speed_ratio,
             error_message=self.error_message,
             trajectory=self.trajectory.status() if self.trajectory is not None else None,
+            tool_open=self.tool_open,
+            digital_inputs=tuple(self.digital_inputs),
+            digital_outputs=tuple(self.digital_outputs),
         )
 
     def state(self) -> RobotState:
@@ -311,6 +317,9 @@ class Snapshot:
     speed_ratio: float
     error_message: str
     trajectory: TrajectoryStatus | None
+    tool_open: bool | None
+    digital_inputs: tuple[bool, ...]
+    digital_outputs: tuple[bool, ...]
 
     def to_state(self, kinematics: Kinematics) -> RobotState:
         return RobotState(
@@ -326,4 +335,7 @@ class Snapshot:
             speed_ratio=self.speed_ratio,
             error_message=self.error_message,
             trajectory=self.trajectory,
+            tool_open=self.tool_open,
+            digital_inputs=list(self.digital_inputs),
+            digital_outputs=list(self.digital_outputs),
         )

@@ -21,6 +21,7 @@ from runtime.interfaces.robot import (
 )
 from runtime.interfaces.robot_driver import RobotDriver, RobotStatus
 from runtime.kinematics import Kinematics
+from runtime.kit.errors import RobotError
 
 log = logging.getLogger(__name__)
 
@@ -160,7 +161,22 @@ class SimRobot(RobotDriver):
         with self.lock:
             return self.core.start_trajectory(trajectory)
 
+    async def _set_tool(self, open_: bool) -> None:
+        with self.lock:
+            self.core.tool_open = open_
+
+    async def _set_digital_output(self, index: int, value: bool) -> None:
+        with self.lock:
+            self.core.digital_outputs[index] = value
+
     # Simulation controls (the physical E-stop button, key switch and faults) ------------------
+
+    def set_digital_input(self, index: int, value: bool) -> None:
+        """What a sensor wired to the controller would do."""
+        with self.lock:
+            if not 0 <= index < len(self.core.digital_inputs):
+                raise RobotError(f"no digital input {index}", code="unknown_io")
+            self.core.digital_inputs[index] = value
 
     def set_estop(self, engaged: bool) -> None:
         with self.lock:

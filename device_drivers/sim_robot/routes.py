@@ -21,6 +21,10 @@ class FaultRequest(Strict):
     message: str = Field(default="simulated fault", max_length=200)
 
 
+class DigitalInputRequest(Strict):
+    value: bool
+
+
 class OperationalModeRequest(Strict):
     mode: OperationalMode
 
@@ -41,6 +45,11 @@ def sim_router(robot: SimRobot) -> APIRouter:
     @router.put("/operational_mode")
     async def operational_mode(body: OperationalModeRequest) -> RobotState:
         robot.set_operational_mode(body.mode)
+        return robot.state()
+
+    @router.put("/digital_inputs/{index}")
+    async def digital_input(index: int, body: DigitalInputRequest) -> RobotState:
+        robot.set_digital_input(index, body.value)
         return robot.state()
 
     @router.get("/loop_stats")

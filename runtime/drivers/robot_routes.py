@@ -10,11 +10,13 @@ from pydantic import ValidationError
 from runtime.drivers.command_log import CommandLog, LoggedCommand
 from runtime.interfaces.robot import (
     CommandModeRequest,
+    DigitalOutputCommand,
     JogJointCommand,
     JointTrajectory,
     PositionCommand,
     RobotState,
     SpeedRatioRequest,
+    ToolCommand,
     TrajectoryAccepted,
     TrajectoryStatus,
     VelocityCommand,
@@ -68,6 +70,18 @@ def robot_router(driver: RobotDriver, log: CommandLog) -> APIRouter:
     async def speed_ratio(body: SpeedRatioRequest) -> RobotState:
         await driver.set_speed_ratio(body.ratio)
         log.record("speed_ratio")
+        return driver.state()
+
+    @router.post("/tool")
+    async def tool(body: ToolCommand) -> RobotState:
+        await driver.set_tool(body.open)
+        log.record("tool:open" if body.open else "tool:close")
+        return driver.state()
+
+    @router.put("/digital_outputs/{index}")
+    async def digital_output(index: int, body: DigitalOutputCommand) -> RobotState:
+        await driver.set_digital_output(index, body.value)
+        log.record(f"digital_output:{index}:{int(body.value)}")
         return driver.state()
 
     @router.post("/jog_joint", status_code=204)

@@ -56,6 +56,9 @@ class RobotInfo(Strict):
     joints: list[JointLimits] = Field(min_length=1, max_length=64)
     home: JointVector
     capabilities: list[str] = Field(default_factory=list)
+    # The controller's digital I/O, numbered from 0 ("tool" in capabilities: a gripper).
+    digital_inputs: int = Field(default=0, ge=0, le=64)
+    digital_outputs: int = Field(default=0, ge=0, le=64)
 
     @property
     def joint_names(self) -> list[str]:
@@ -112,6 +115,9 @@ class RobotState(BaseModel):
     speed_ratio: float
     error_message: str = ""
     trajectory: TrajectoryStatus | None = None
+    tool_open: bool | None = None  # None: no tool, or not known yet
+    digital_inputs: list[bool] = Field(default_factory=list)
+    digital_outputs: list[bool] = Field(default_factory=list)
 
 
 class RobotDescription(BaseModel):
@@ -163,6 +169,14 @@ class JointTrajectory(Strict):
     """Starts from the current position at t=0; waypoints follow in increasing time."""
 
     waypoints: list[TrajectoryWaypoint] = Field(min_length=1, max_length=200_000)
+
+
+class ToolCommand(Strict):
+    open: bool
+
+
+class DigitalOutputCommand(Strict):
+    value: bool
 
 
 class SpeedRatioRequest(Strict):

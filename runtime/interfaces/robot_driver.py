@@ -91,6 +91,23 @@ class RobotDriver(DeviceDriver):
             self._require_ready()
         await self._set_command_mode(mode)
 
+    # Tool and I/O: allowed whenever the E-stop is released --------------------------------
+
+    async def set_tool(self, open_: bool) -> None:
+        if "tool" not in self.info.capabilities:
+            raise RobotError(f"{self.info.model} has no tool to open or close", code="no_tool")
+        self._require_no_estop()
+        await self._set_tool(open_)
+
+    async def set_digital_output(self, index: int, value: bool) -> None:
+        if not 0 <= index < self.info.digital_outputs:
+            raise RobotError(
+                f"no digital output {index}; this robot has {self.info.digital_outputs}",
+                code="unknown_io",
+            )
+        self._require_no_estop()
+        await self._set_digital_output(index, value)
+
     # Motion commands: checked, then handed to the driver -----------------------------------
 
     async def jog_joint(self, command: JogJointCommand) -> None:
@@ -126,6 +143,10 @@ class RobotDriver(DeviceDriver):
     async def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus: ...
 
     # Checks ---------------------------------------------------------------------------------
+
+    def _require_no_estop(self) -> None:
+        if self.status().flags.estop:
+            raise RobotError("the E-stop is engaged; release it first", code="estop")
 
     def _require_ready(self) -> RobotStatus:
         state = self.status()
@@ -181,3 +202,9 @@ class RobotDriver(DeviceDriver):
 
     @abstractmethod
     async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str: ...
+
+    async def _set_tool(self, open_: bool) -> None:
+        raise RobotError(f"{self.info.model}: this driver cannot drive a tool", code="no_tool")
+
+    async def _set_digital_output(self, index: int, value: bool) -> None:
+        raise RobotError(f"{self.info.model}: this driver has no digital I/O", code="unknown_io")

@@ -15,6 +15,7 @@ from runtime.interfaces.common import JointVector, Pose, Strict, all_finite
 from runtime.interfaces.scene import SceneObject
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue
+from runtime.program.models import StoredProgram
 
 MAX_VALUE_BYTES = 4 * 1024 * 1024
 MAX_DEPTH = 64
@@ -151,3 +152,4 @@ register("list", "a list of JSON values", _list)
 register("json", "any JSON value", _json)
 register("device", "a device added under a local name", DeviceRecord)
 register("scene_object", "an obstacle, keep-out zone or held object of the scene", SceneObject)
+register("program", "a program: its Blockly workspace and generated Python", StoredProgram)

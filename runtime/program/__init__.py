@@ -1,0 +1,1 @@
+"""The program service: Blockly programs stored, generated and run in the sandbox."""

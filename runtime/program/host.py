@@ -1,0 +1,278 @@
+"""The runtime's answers to one run's sandbox calls. Moves go to the motion service (limits,
+collisions, the manual-mode speed cap), tool and I/O to the robot's driver, values to the
+variable storage; every command needs the robot's control lease, which the run holds
+(the caller's, or its own). Stop halts every robot the run commanded."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import re
+from collections.abc import Awaitable, Callable
+from typing import Any
+
+from runtime.kit.client import ServiceClient
+from runtime.kit.errors import NotFound, OpenPendantError
+from runtime.variable_storage.client import StorageClient
+from sandbox.supervisor import CallRefused
+
+log = logging.getLogger(__name__)
+
+MOVE_POLL = 5.0  # s per long-poll of a running move
+IO_NAME = re.compile(r"^([a-z][a-z0-9_]{0,31})\.(di|do)(\d{1,2})$")
+WAYPOINT_TYPES = ("joint_waypoint", "pose_waypoint")
+MAX_STORED = 256 * 1024
+
+Handler = Callable[[dict[str, Any]], Awaitable[Any]]
+
+
+class RunHost:
+    def __init__(
+        self,
+        holder: str,
+        devices: ServiceClient,
+        motion: ServiceClient,
+        storage: StorageClient,
+        *,
+        robot: str | None,
+        leases: dict[str, str],
+    ) -> None:
+        self.holder = holder
+        self.devices = devices
+        self.motion = motion
+        self.storage = storage
+        self.robot = robot
+        self.given = dict(leases)
+        self.acquired: dict[str, str] = {}
+        self.commanded: list[str] = []
+        self.speed = 0.5
+        self._drivers: dict[str, ServiceClient] = {}
+        self._renewer: asyncio.Task[None] | None = None
+        self.handlers: dict[str, Handler] = {
+            "robot.use": self._use,
+            "robot.move": self._move,
+            "robot.move_relative": self._move_relative,
+            "robot.speed": self._speed,
+            "robot.joints": self._joints,
+            "robot.tcp": self._tcp,
+            "robot.tool": self._tool,
+            "robot.home": self._home,
+            "waypoint.check": self._waypoint,
+            "io.set": self._io_set,
+            "io.get": self._io_get,
+            "store.get": self._store_get,
+            "store.set": self._store_set,
+        }
+
+    async def call(self, fn: str, args: dict[str, Any]) -> Any:
+        handler = self.handlers.get(fn)
+        if handler is None:
+            raise CallRefused(f"unknown program function {fn[:40]!r}", "unknown_function")
+        try:
+            return await handler(args)
+        except OpenPendantError as exc:
+            raise CallRefused(exc.message, exc.code) from None
+        except (KeyError, TypeError, ValueError) as exc:
+            raise CallRefused(f"malformed request to {fn}: {exc}", "bad_call") from None
+
+    async def halt(self) -> None:
+        """Stop wins: the driver halts at once; the motion service drops the move."""
+        await asyncio.gather(*(self._halt(robot) for robot in self.commanded))
+
+    async def _halt(self, robot: str) -> None:
+        driver = self._drivers.get(robot)
+        calls = [self.motion.post(f"/motion/robots/{robot}/stop")]
+        if driver is not None:
+            calls.insert(0, driver.post("/halt"))
+        for result in await asyncio.gather(*calls, return_exceptions=True):
+            if isinstance(result, Exception):
+                log.warning("halting %s: %s", robot, result)
+
+    async def close(self) -> None:
+        if self._renewer is not None:
+            self._renewer.cancel()
+        for robot, token in self.acquired.items():
+            with contextlib.suppress(OpenPendantError):
+                await self.devices.delete(
+                    f"/devices/{robot}/lease", headers={"X-Lease-Token": token}
+                )
+        for driver in self._drivers.values():
+            await driver.aclose()
+
+    # Robots ---------------------------------------------------------------------------------
+
+    async def _active(self) -> str:
+        if self.robot is None:
+            robots = [
+                d["local_name"]
+                for d in await self.devices.get("/devices")
+                if d.get("kind") == "robot"
+            ]
+            if len(robots) != 1:
+                raise CallRefused(
+                    "choose the robot with a 'use robot' block first", "no_robot_selected"
+                )
+            self.robot = robots[0]
+        return self.robot
+
+    async def _use(self, args: dict[str, Any]) -> None:
+        name = str(args["robot"])
+        try:
+            details = await self.devices.get(f"/devices/{name}")
+        except NotFound:
+            raise CallRefused(f"there is no robot {name!r}", "unknown_device") from None
+        if details.get("kind") != "robot":
+            raise CallRefused(f"{name} is a {details.get('kind')}, not a robot", "not_a_robot")
+        self.robot = name
+
+    async def _token(self, robot: str) -> str:
+        """The lease this run commands `robot` under, taken on first use."""
+        token = self.given.get(robot) or self.acquired.get(robot)
+        if token is None:
+            granted = await self.devices.post(
+                f"/devices/{robot}/lease", json={"holder": self.holder}
+            )
+            token = str(granted["token"])
+            self.acquired[robot] = token
+            if self._renewer is None:
+                self._renewer = asyncio.create_task(self._renew())
+        if robot not in self.commanded:
+            self.commanded.append(robot)
+        return token
+
+    async def _renew(self) -> None:
+        """Leases lapse after a while without commands; a run that waits keeps them."""
+        while True:
+            await asyncio.sleep(5.0)
+            for robot, token in list(self.acquired.items()):
+                with contextlib.suppress(OpenPendantError):
+                    await self.devices.post(
+                        f"/devices/{robot}/lease/check", headers={"X-Lease-Token": token}
+                    )
+
+    async def _driver(self, robot: str, token: str) -> ServiceClient:
+        await self.devices.post(f"/devices/{robot}/lease/check", headers={"X-Lease-Token": token})
+        driver = self._drivers.get(robot)
+        if driver is None:
+            details = await self.devices.get(f"/devices/{robot}")
+            driver = ServiceClient(details["url"], timeout=3.0, name=f"robot {robot}")
+            self._drivers[robot] = driver
+        return driver
+
+    async def _run_move(self, request: dict[str, Any]) -> None:
+        robot = await self._active()
+        token = await self._token(robot)
+        if robot not in self._drivers:
+            await self._driver(robot, token)  # ready for a stop at once
+        request.setdefault("speed", self.speed)
+        request.setdefault("acceleration", self.speed)
+        status = await self.motion.post(
+            f"/motion/robots/{robot}/moves", json=request, headers={"X-Lease-Token": token}
+        )
+        while status["state"] in ("planning", "running"):
+            status = await self.motion.get(
+                f"/motion/moves/{status['id']}",
+                params={"wait": MOVE_POLL},
+                timeout=MOVE_POLL + 5.0,
+            )
+        if status["state"] != "finished":
+            message = status.get("message") or f"the move was {status['state']}"
+            raise CallRefused(message, status.get("code") or str(status["state"]))
+
+    async def _move(self, args: dict[str, Any]) -> None:
+        kind = args["kind"]
+        if kind not in ("joint", "linear"):
+            raise CallRefused(f"unknown move kind {kind!r}", "bad_call")
+        await self._run_move({"kind": kind, "target": args["target"]})
+
+    async def _move_relative(self, args: dict[str, Any]) -> None:
+        await self._run_move(
+            {"kind": "relative", "offset": args["offset"], "offset_frame": args["frame"]}
+        )
+
+    async def _home(self, _: dict[str, Any]) -> None:
+        robot = await self._active()
+        details = await self.devices.get(f"/devices/{robot}")
+        home = details["info"]["info"]["home"]
+        await self._run_move({"kind": "joint", "target": {"joints": home}})
+
+    async def _speed(self, args: dict[str, Any]) -> None:
+        ratio = float(args["ratio"])
+        if not 0 < ratio <= 1:
+            raise CallRefused("speed must be between 1 and 100 %", "invalid_value")
+        self.speed = ratio
+
+    async def _state(self) -> dict[str, Any]:
+        robot = await self._active()
+        state: dict[str, Any] = await self.devices.get(f"/devices/{robot}/state")
+        if not state:
+            raise CallRefused(f"no state from {robot}", "device_disconnected")
+        return state
+
+    async def _joints(self, _: dict[str, Any]) -> list[float]:
+        return [float(v) for v in (await self._state())["joint_position"]]
+
+    async def _tcp(self, _: dict[str, Any]) -> Any:
+        return (await self._state())["tcp_pose"]
+
+    async def _tool(self, args: dict[str, Any]) -> None:
+        robot = await self._active()
+        driver = await self._driver(robot, await self._token(robot))
+        await driver.post("/tool", json={"open": bool(args["open"])})
+
+    # Waypoints, I/O, stored values ----------------------------------------------------------
+
+    async def _waypoint(self, args: dict[str, Any]) -> dict[str, str]:
+        name = str(args["name"])
+        try:
+            variable = await self.storage.get(name)
+        except NotFound:
+            raise CallRefused(f"there is no waypoint {name!r}", "unknown_waypoint") from None
+        if variable.type not in WAYPOINT_TYPES:
+            raise CallRefused(f"{name} is a {variable.type}, not a waypoint", "not_a_waypoint")
+        return {"type": variable.type}
+
+    def _io(self, name: str) -> tuple[str, str, int]:
+        match = IO_NAME.match(name)
+        if match is None:
+            raise CallRefused(
+                f"I/O names look like robot.do0 or robot.di3, not {name[:40]!r}", "unknown_io"
+            )
+        return match.group(1), match.group(2), int(match.group(3))
+
+    async def _io_set(self, args: dict[str, Any]) -> None:
+        robot, kind, index = self._io(str(args["name"]))
+        if kind != "do":
+            raise CallRefused(f"{args['name']} is an input; only outputs can be set", "read_only")
+        driver = await self._driver(robot, await self._token(robot))
+        await driver.put(f"/digital_outputs/{index}", json={"value": bool(args["value"])})
+
+    async def _io_get(self, args: dict[str, Any]) -> bool:
+        robot, kind, index = self._io(str(args["name"]))
+        state = await self.devices.get(f"/devices/{robot}/state")
+        values = state.get("digital_inputs" if kind == "di" else "digital_outputs", [])
+        if index >= len(values):
+            raise CallRefused(f"{robot} has no {kind}{index}", "unknown_io")
+        return bool(values[index])
+
+    async def _store_get(self, args: dict[str, Any]) -> dict[str, Any]:
+        variable = await self.storage.get(str(args["name"]))
+        return {"type": variable.type, "value": variable.value}
+
+    async def _store_set(self, args: dict[str, Any]) -> None:
+        value = args["value"]
+        kind = args.get("type") or _type_of(value)
+        await self.storage.put(str(args["name"]), kind, value)
+
+
+def _type_of(value: Any) -> str:
+    if isinstance(value, bool):
+        return "bool"
+    if isinstance(value, int | float):
+        return "number"
+    if isinstance(value, str):
+        return "string"
+    if isinstance(value, list):
+        return "list"
+    return "json"

@@ -1,0 +1,104 @@
+"""What the program service stores and answers."""
+
+from __future__ import annotations
+
+import re
+from typing import Any, Literal
+
+from pydantic import BaseModel, Field
+
+from runtime.interfaces.common import Strict
+from runtime.kit.errors import InvalidValue
+
+NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,63}$")
+PREFIX = "program."
+TAG = "program"
+
+
+def check_program_name(name: str) -> str:
+    if not NAME.match(name):
+        raise InvalidValue(
+            f"invalid program name {name[:80]!r}: start with a letter; letters, digits, "
+            "'_' and '-' only; at most 64 characters",
+            code="invalid_name",
+        )
+    return name
+
+
+class StoredProgram(Strict):
+    """The variable storage's `program` type. The workspace is kept as JSON text: a long
+    stack of blocks nests deeper than stored values may."""
+
+    source: Literal["blocks", "python"]
+    workspace_json: str | None = None
+    python: str = Field(max_length=2_000_000)
+
+
+class Program(BaseModel):
+    name: str
+    source: Literal["blocks", "python"]
+    workspace: Any = None
+    python: str
+    version: int
+    updated: float
+
+
+class ProgramSummary(BaseModel):
+    name: str
+    source: str
+    version: int
+    updated: float
+
+
+class Saved(BaseModel):
+    name: str
+    python: str
+    version: int
+    blocks: int
+
+
+class RenameRequest(Strict):
+    to: str = Field(min_length=1, max_length=64)
+
+
+class RunRequest(Strict):
+    breakpoints: list[str] = Field(default_factory=list, max_length=5000)
+    # Control leases the caller already holds, by robot: the program runs under them.
+    leases: dict[str, str] = Field(default_factory=dict, max_length=16)
+    robot: str | None = Field(default=None, max_length=32)  # the robot blocks start with
+    time_limit: float | None = Field(default=None, gt=0, le=7 * 24 * 3600)
+
+
+class BreakpointsRequest(Strict):
+    ids: list[str] = Field(default_factory=list, max_length=5000)
+
+
+class OutputEntry(BaseModel):
+    seq: int
+    text: str
+    stream: str
+    block: str | None
+    ts: float
+
+
+class ErrorInfo(BaseModel):
+    message: str
+    kind: str
+    line: int | None = None
+    block: str | None = None
+    code: str | None = None
+
+
+class RunStatus(BaseModel):
+    program: str
+    run: int = 0  # which run of this program, since the service started (0: none yet)
+    state: Literal["idle", "starting", "running", "paused", "stopped", "error", "finished"]
+    block: str | None = None
+    pause_reason: str = ""
+    message: str = ""
+    output: list[OutputEntry] = Field(default_factory=list)
+    error: ErrorInfo | None = None
+    robots: list[str] = Field(default_factory=list)  # the robots this run commanded
+    isolation: list[str] = Field(default_factory=list)
+    started: float | None = None
+    ended: float | None = None

@@ -1,0 +1,162 @@
+"""Program runs: at most one per program, each a sandboxed worker with its RunHost; status
+with the current block and the output since a given line, for polling and the WebSocket."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import itertools
+import logging
+import time
+
+from runtime.kit.client import ServiceClient
+from runtime.kit.errors import Conflict, NotFound
+from runtime.kit.websocket import Fanout
+from runtime.program.host import RunHost
+from runtime.program.library import ProgramLibrary
+from runtime.program.models import ErrorInfo, OutputEntry, RunRequest, RunStatus
+from runtime.variable_storage.client import StorageClient
+from sandbox.supervisor import ProgramRun, RunLimits
+
+log = logging.getLogger(__name__)
+
+PUSHED_OUTPUT = 100
+
+
+class Active:
+    def __init__(self, number: int, run: ProgramRun, host: RunHost) -> None:
+        self.number = number
+        self.run = run
+        self.host = host
+        self.received_stop: float | None = None
+
+
+class Runs:
+    def __init__(
+        self,
+        library: ProgramLibrary,
+        devices: ServiceClient,
+        motion: ServiceClient,
+        storage: StorageClient,
+        fanout: Fanout,
+    ) -> None:
+        self.library = library
+        self.devices = devices
+        self.motion = motion
+        self.storage = storage
+        self.fanout = fanout
+        self.runs: dict[str, Active] = {}
+        self._numbers = itertools.count(1)
+        self._watchers: set[asyncio.Task[None]] = set()
+
+    async def start(self, name: str, request: RunRequest) -> RunStatus:
+        current = self.runs.get(name)
+        if current is not None and not current.run.ended_state:
+            raise Conflict(f"{name} is running; stop it first", code="busy")
+        program = await self.library.get(name)
+        host = RunHost(
+            f"program {name}",
+            self.devices,
+            self.motion,
+            self.storage,
+            robot=request.robot,
+            leases=request.leases,
+        )
+        limits = RunLimits(wall_seconds=request.time_limit or RunLimits.wall_seconds)
+        number = next(self._numbers)
+        run = ProgramRun(
+            program.python,
+            host,
+            limits=limits,
+            breakpoints=set(request.breakpoints),
+            listener=lambda: self._publish(name),
+        )
+        active = Active(number, run, host)
+        self.runs[name] = active
+        await run.start()
+        watcher = asyncio.create_task(self._finish(active))
+        self._watchers.add(watcher)
+        watcher.add_done_callback(self._watchers.discard)
+        return self.status(name)
+
+    async def _finish(self, active: Active) -> None:
+        await active.run.wait()
+        await active.host.close()
+        await active.run.close()
+
+    def _active(self, name: str) -> Active:
+        active = self.runs.get(name)
+        if active is None:
+            raise NotFound(f"{name} has not run since the service started", code="not_running")
+        return active
+
+    def _live(self, name: str) -> ProgramRun:
+        run = self._active(name).run
+        if run.ended_state:
+            raise Conflict(f"{name} is not running ({run.state})", code="not_running")
+        return run
+
+    async def pause(self, name: str) -> RunStatus:
+        await self._live(name).pause()
+        return self.status(name)
+
+    async def resume(self, name: str) -> RunStatus:
+        await self._live(name).resume()
+        return self.status(name)
+
+    async def step(self, name: str) -> RunStatus:
+        await self._live(name).step()
+        return self.status(name)
+
+    async def stop(self, name: str) -> RunStatus:
+        active = self._active(name)
+        active.received_stop = time.time()
+        await active.run.stop()
+        return self.status(name)
+
+    async def stop_all(self) -> None:
+        for active in list(self.runs.values()):
+            with contextlib.suppress(Exception):
+                await active.run.stop("the program service is shutting down")
+
+    async def breakpoints(self, name: str, ids: list[str]) -> RunStatus:
+        await self._active(name).run.set_breakpoints(set(ids))
+        return self.status(name)
+
+    def status(self, name: str, after: int = 0) -> RunStatus:
+        active = self.runs.get(name)
+        if active is None:
+            return RunStatus(program=name, state="idle")
+        run = active.run
+        error = None
+        if run.error is not None:
+            e = run.error
+            error = ErrorInfo(
+                message=e.message, kind=e.kind, line=e.line, block=e.block, code=e.code
+            )
+        return RunStatus(
+            program=name,
+            run=active.number,
+            state=run.state.value,
+            block=run.block,
+            pause_reason=run.pause_reason,
+            message=run.message,
+            output=[
+                OutputEntry(seq=o.seq, text=o.text, stream=o.stream, block=o.block, ts=o.ts)
+                for o in run.output
+                if o.seq > after
+            ],
+            error=error,
+            robots=list(active.host.commanded),
+            isolation=run.isolation,
+            started=run.started,
+            ended=run.ended,
+        )
+
+    def _publish(self, name: str) -> None:
+        """Each change, coalesced per program for slow clients; the latest output lines
+        only (the rest is in GET status with `after`)."""
+        if self.fanout.subscribers:
+            status = self.status(name)
+            status.output = status.output[-PUSHED_OUTPUT:]
+            self.fanout.publish(status.model_dump_json(), key=name)

@@ -1,0 +1,141 @@
+"""The program service: /programs/… to save (generating the Python), load, list, rename,
+duplicate and delete programs, and to run, pause, resume, step and stop them."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from collections.abc import AsyncIterator
+from typing import Any
+
+from fastapi import APIRouter, FastAPI, Request, Response, WebSocket
+
+from blockly_blocks.catalog import definitions, toolbox
+from blockly_blocks.workspace import MAX_WORKSPACE_BYTES, allow_deep_json
+from runtime.kit.app import create_app
+from runtime.kit.client import ServiceClient
+from runtime.kit.errors import InvalidValue
+from runtime.kit.settings import RuntimeSettings
+from runtime.kit.websocket import Fanout
+from runtime.program.library import ProgramLibrary, generate_checked
+from runtime.program.models import (
+    BreakpointsRequest,
+    Program,
+    ProgramSummary,
+    RenameRequest,
+    RunRequest,
+    RunStatus,
+    Saved,
+)
+from runtime.program.runs import Runs
+from runtime.variable_storage.client import StorageClient
+
+
+async def read_body(request: Request) -> bytes:
+    body = b""
+    async for chunk in request.stream():
+        body += chunk
+        if len(body) > MAX_WORKSPACE_BYTES + 1024:
+            raise InvalidValue(f"the body is larger than {MAX_WORKSPACE_BYTES} bytes")
+    return body
+
+
+def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRouter:
+    router = APIRouter(prefix="/programs")
+
+    @router.get("/_blocks")
+    async def blocks() -> dict[str, Any]:
+        """Block definitions by category and the toolbox, for the editor."""
+        return {"definitions": definitions(), "toolbox": toolbox()}
+
+    @router.post("/_generate")
+    async def preview(request: Request) -> dict[str, Any]:
+        """The Python of a workspace (its JSON as the body), without saving it."""
+        generated = await asyncio.to_thread(generate_checked, await read_body(request))
+        return {"python": generated.python, "blocks": generated.blocks}
+
+    @router.websocket("/_ws")
+    async def live(ws: WebSocket) -> None:
+        """Every run's status as it changes."""
+        initial = [runs.status(name).model_dump_json() for name in runs.runs]
+        await fanout.serve(ws, initial)
+
+    @router.get("")
+    async def listing() -> list[ProgramSummary]:
+        return await library.list()
+
+    @router.get("/{name}")
+    async def get(name: str) -> Program:
+        return await library.get(name)
+
+    @router.put("/{name}")
+    async def save(name: str, request: Request) -> Saved:
+        """Body {"workspace": <Blockly JSON>} or {"python": "<code>"}; returns the Python."""
+        return await library.save(name, await read_body(request))
+
+    @router.delete("/{name}", status_code=204)
+    async def delete(name: str) -> Response:
+        await library.delete(name)
+        return Response(status_code=204)
+
+    @router.post("/{name}/rename")
+    async def rename(name: str, body: RenameRequest) -> Program:
+        return await library.rename(name, body.to)
+
+    @router.post("/{name}/duplicate", status_code=201)
+    async def duplicate(name: str, body: RenameRequest) -> Program:
+        return await library.duplicate(name, body.to)
+
+    @router.post("/{name}/run", status_code=202)
+    async def run(name: str, body: RunRequest | None = None) -> RunStatus:
+        return await runs.start(name, body or RunRequest())
+
+    @router.post("/{name}/pause")
+    async def pause(name: str) -> RunStatus:
+        return await runs.pause(name)
+
+    @router.post("/{name}/resume")
+    async def resume(name: str) -> RunStatus:
+        return await runs.resume(name)
+
+    @router.post("/{name}/step")
+    async def step(name: str) -> RunStatus:
+        return await runs.step(name)
+
+    @router.post("/{name}/stop")
+    async def stop(name: str) -> RunStatus:
+        return await runs.stop(name)
+
+    @router.put("/{name}/breakpoints")
+    async def breakpoints(name: str, body: BreakpointsRequest) -> RunStatus:
+        return await runs.breakpoints(name, body.ids)
+
+    @router.get("/{name}/status")
+    async def status(name: str, after: int = 0) -> RunStatus:
+        return runs.status(name, after)
+
+    return router
+
+
+def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
+    allow_deep_json()
+    storage = StorageClient(urls["variable_storage"])
+    devices = ServiceClient(urls["device_manager"], timeout=3.0, name="device manager")
+    motion = ServiceClient(urls["motion"], timeout=10.0, name="motion")
+    library = ProgramLibrary(storage)
+    fanout = Fanout()
+    runs = Runs(library, devices, motion, storage, fanout)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        try:
+            yield
+        finally:
+            await runs.stop_all()
+            await devices.aclose()
+            await motion.aclose()
+            await storage.aclose()
+
+    app = create_app("program", lifespan=lifespan)
+    app.include_router(program_router(library, runs, fanout))
+    return app

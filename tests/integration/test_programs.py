@@ -1,0 +1,370 @@
+"""Blockly programs through the program service against the simulated UR5: a pick-and-place
+program saved through the API runs to completion with its output and block ids streaming;
+pause, step, resume and stop behave, a stop during a long move halts the robot at once;
+bad programs and targets are refused with the block named, and the robot stays put."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+
+from runtime.robot_info import load_robot_info
+from tests.support.blocks import (
+    block,
+    ids_of,
+    number,
+    stack,
+    text,
+    var,
+    waypoint,
+    workspace,
+)
+from tests.support.jog import Cell
+from tests.support.processes import Runtime, wait_for
+
+INFO = load_robot_info("ur5")
+HOME = INFO.home
+ABOVE_PICK = [0.6, -1.3, 1.6, -1.87, -1.57, 0.0]
+PICK = [0.6, -1.15, 1.75, -2.17, -1.57, 0.0]
+ABOVE_PLACE = [-0.6, -1.3, 1.6, -1.87, -1.57, 0.0]
+PLACE = [-0.6, -1.15, 1.75, -2.17, -1.57, 0.0]
+FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]
+
+
+@pytest.fixture(scope="module")
+def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cell]:
+    runtime = Runtime(tmp_path_factory.mktemp("programs"))
+    runtime.wait_ready()
+    try:
+        cell = Cell(runtime)
+        for name, joints in (
+            ("above_pick", ABOVE_PICK),
+            ("pick", PICK),
+            ("above_place", ABOVE_PLACE),
+            ("place", PLACE),
+            ("far", FAR),
+            ("home_pose", HOME),
+        ):
+            runtime.api(
+                "PUT",
+                f"/variables/{name}",
+                json={"type": "joint_waypoint", "value": {"joints": joints, "robot": "robot"}},
+            )
+        yield cell
+    finally:
+        runtime.stop()
+    assert runtime.service_errors() == []
+
+
+@pytest.fixture
+def ready(cell: Cell) -> Cell:
+    cell.ready()
+    if np.abs(cell.robot.q() - np.array(HOME)).max() > 1e-3:
+        cell.place(HOME)
+    return cell
+
+
+def save(cell: Cell, name: str, ws: dict[str, Any]) -> str:
+    response = cell.runtime.api("PUT", f"/programs/{name}", json={"workspace": ws})
+    assert response.status_code == 200, response.text
+    python: str = response.json()["python"]
+    return python
+
+
+def run(cell: Cell, name: str, **options: Any) -> dict[str, Any]:
+    body = {"leases": {"robot": cell.token}, **options}
+    response = cell.runtime.api("POST", f"/programs/{name}/run", json=body)
+    assert response.status_code == 202, response.text
+    status: dict[str, Any] = response.json()
+    return status
+
+
+def status(cell: Cell, name: str, after: int = 0) -> dict[str, Any]:
+    found: dict[str, Any] = cell.runtime.api(
+        "GET", f"/programs/{name}/status", params={"after": after}
+    ).json()
+    return found
+
+
+def watch(cell: Cell, name: str, until: tuple[str, ...], timeout: float = 60.0) -> dict[str, Any]:
+    """Poll the status until one of `until`; returns the last status with every block seen."""
+    seen: list[str] = []
+    deadline = time.monotonic() + timeout
+    while True:
+        current = status(cell, name)
+        if current["block"] and (not seen or seen[-1] != current["block"]):
+            seen.append(current["block"])
+        if current["state"] in until:
+            current["seen"] = seen
+            return current
+        assert time.monotonic() < deadline, current
+        time.sleep(0.02)
+
+
+def pick_and_place() -> tuple[dict[str, Any], dict[str, Any]]:
+    pairs = block("lists_create_with", None, ADD0=text("pick"), ADD1=text("place"))
+    pairs["extraState"] = {"itemCount": 2}
+    body = stack(
+        block(
+            "controls_if",
+            IF0=block("logic_compare", {"OP": "EQ"}, A=var("spot"), B=text("pick")),
+            DO0=stack(
+                block("robot_move_joint", TARGET=waypoint("above_pick")),
+                block("robot_move_linear", TARGET=waypoint("pick")),
+                block("robot_tool", {"ACTION": "CLOSE"}),
+                block(
+                    "io_set_output",
+                    {"NAME": "robot.do1"},
+                    VALUE=block("logic_boolean", {"BOOL": "TRUE"}),
+                ),
+                block("robot_move_linear", TARGET=waypoint("above_pick")),
+            ),
+            ELSE=stack(
+                block("robot_move_joint", TARGET=waypoint("above_place")),
+                block("robot_move_linear", TARGET=waypoint("place")),
+                block("robot_tool", {"ACTION": "OPEN"}),
+                block(
+                    "robot_move_relative", {"FRAME": "base"}, X=number(0), Y=number(0), Z=number(40)
+                ),
+            ),
+        ),
+        block("time_wait", SECONDS=number(0.2)),
+        block("text_print", TEXT=block("text_join", None, ADD0=text("done "), ADD1=var("spot"))),
+    )
+    body["extraState"] = {"hasElse": True}
+    main = stack(
+        block("robot_use", {"ROBOT": "robot"}),
+        block("robot_set_speed", SPEED=number(100)),
+        block("robot_tool", {"ACTION": "OPEN"}),
+        block("controls_forEach", {"VAR": {"id": "spot"}}, LIST=pairs, DO=body),
+        block("program_log", {"LEVEL": "info"}, TEXT=text("cycle complete")),
+    )
+    return workspace(main, variables=("spot",)), main
+
+
+def test_a_pick_and_place_program_runs_to_completion(ready: Cell) -> None:
+    ws, main = pick_and_place()
+    python = save(ready, "pick_and_place", ws)
+    assert "move_linear(waypoint('pick'))" in python
+    assert "for spot in ['pick', 'place']:" in python.replace('"', "'")
+    stored = ready.runtime.api("GET", "/programs/pick_and_place").json()
+    assert stored["workspace"] == ws and stored["python"] == python
+
+    before = ready.robot.last_command_seq()
+    started = run(ready, "pick_and_place")
+    assert started["state"] in ("starting", "running")
+    final = watch(ready, "pick_and_place", ("finished", "error", "stopped"))
+    assert final["state"] == "finished", final
+    outputs = [(o["text"], o["block"]) for o in final["output"]]
+    printed = [t for t, _ in outputs]
+    assert printed == ["done pick", "done place", "cycle complete"]
+    # Every output line names the block it came from, and the highlight moved through the
+    # program's blocks.
+    block_ids = set(ids_of(main))
+    assert all(b in block_ids for _, b in outputs)
+    assert len(set(final["seen"])) >= 6
+    assert set(final["seen"]) <= block_ids
+
+    assert ready.robot.stopped()
+    end = ready.robot.state()
+    assert end["tool_open"] is True
+    assert end["digital_outputs"][1] is True
+    # 40 mm straight up from the place waypoint.
+    place_tcp = ready.runtime.api(
+        "POST", "/motion/robots/robot/plan", json={"kind": "joint", "target": {"joints": PLACE}}
+    ).json()["tcp_path"][-1]
+    assert np.linalg.norm(np.array(end["tcp_pose"]["position"]) - place_tcp - [0, 0, 0.04]) < 2e-3
+    kinds = [c["type"] for c in ready.robot.commands(before)]
+    assert kinds.count("tool:close") == 1 and kinds.count("tool:open") == 2
+    assert kinds.index("tool:close") < len(kinds) - 1 - kinds[::-1].index("tool:open")
+
+
+def counting_loop() -> tuple[dict[str, Any], list[str]]:
+    steps = [
+        block("text_print", TEXT=var("i")),
+        block("time_wait", SECONDS=number(0.15)),
+    ]
+    loop = block(
+        "controls_for",
+        {"VAR": {"id": "i"}},
+        FROM=number(1),
+        TO=number(30),
+        BY=number(1),
+        DO=stack(*steps),
+    )
+    return workspace(loop, variables=("i",)), [loop["id"], *[s["id"] for s in steps]]
+
+
+def test_pause_step_resume(ready: Cell) -> None:
+    ws, ids = counting_loop()
+    save(ready, "counting", ws)
+    run(ready, "counting")
+    wait_for(lambda: len(status(ready, "counting")["output"]) >= 2, 10)
+    ready.runtime.api("POST", "/programs/counting/pause")
+    paused = watch(ready, "counting", ("paused",), 5)
+    assert paused["block"] in ids and paused["pause_reason"] == "pause"
+    printed = len(paused["output"])
+    time.sleep(0.5)
+    assert len(status(ready, "counting")["output"]) == printed  # nothing runs while paused
+
+    # Each step runs one block and pauses again at the next.
+    blocks = [paused["block"]]
+    for _ in range(4):
+        ready.runtime.api("POST", "/programs/counting/step")
+
+        def next_pause(previous: str = blocks[-1]) -> dict[str, Any] | None:
+            current = status(ready, "counting")
+            moved = current["state"] == "paused" and current["block"] != previous
+            return current if moved else None
+
+        blocks.append(wait_for(next_pause, 5, what="the step's pause")["block"])
+    assert all(b in ids for b in blocks)
+    assert len(set(blocks)) == 3  # the loop, the print and the wait, in turn
+    assert len(status(ready, "counting")["output"]) in (printed + 1, printed + 2)
+
+    ready.runtime.api("POST", "/programs/counting/resume")
+    assert watch(ready, "counting", ("finished", "error"), 30)["state"] == "finished"
+    assert [o["text"] for o in status(ready, "counting")["output"]] == [
+        str(i) for i in range(1, 31)
+    ]
+
+
+def test_a_breakpoint_pauses_before_its_block(ready: Cell) -> None:
+    ws, ids = counting_loop()
+    save(ready, "breaking", ws)
+    run(ready, "breaking", breakpoints=[ids[2]])  # the wait
+    paused = watch(ready, "breaking", ("paused",), 10)
+    assert paused["block"] == ids[2] and paused["pause_reason"] == "breakpoint"
+    assert [o["text"] for o in paused["output"]] == ["1"]
+    ready.runtime.api("PUT", "/programs/breaking/breakpoints", json={"ids": []})
+    ready.runtime.api("POST", "/programs/breaking/resume")
+    assert watch(ready, "breaking", ("finished", "error"), 30)["state"] == "finished"
+
+
+def test_stop_during_a_long_move_halts_the_robot(ready: Cell) -> None:
+    ws = workspace(
+        stack(
+            block("robot_set_speed", SPEED=number(10)),
+            block("robot_move_joint", TARGET=waypoint("far")),
+            block("text_print", TEXT=text("never")),
+        )
+    )
+    save(ready, "long_move", ws)
+    run(ready, "long_move")
+    wait_for(lambda: not ready.robot.stopped(), 10, what="the robot moving")
+    time.sleep(0.3)
+    before = ready.robot.last_command_seq()
+    stopped = ready.runtime.api("POST", "/programs/long_move/stop").json()
+    assert stopped["state"] == "stopped" and stopped["robots"] == ["robot"]
+    commands = [c["type"] for c in ready.robot.commands(before)]
+    assert "halt" in commands
+    ready.robot.wait_stopped(2.0)
+    q = ready.robot.q()
+    time.sleep(0.5)
+    assert np.abs(ready.robot.q() - q).max() < 1e-9  # nothing resumes after the stop
+    assert np.abs(q - np.array(FAR)).max() > 0.1
+    assert all(o["text"] != "never" for o in status(ready, "long_move")["output"])
+
+
+BAD_TARGETS = {
+    "joint limit": ("move_joint([999, 0, 0, 0, 0, 0])", "limit"),
+    "NaN": ("move_joint([float('nan'), 0, 0, 0, 0, 0])", "finite"),
+    "unreachable pose": ("move_joint(pose(5000, 0, 0, 180, 0, 0))", "reach"),
+    "unknown waypoint": ("move_joint(waypoint('nowhere'))", "nowhere"),
+    "unknown robot": ("use_robot('ghost')", "ghost"),
+}
+
+
+@pytest.mark.parametrize(("call", "expected"), BAD_TARGETS.values(), ids=BAD_TARGETS.keys())
+def test_bad_targets_are_refused_at_their_block_and_nothing_moves(
+    ready: Cell, call: str, expected: str
+) -> None:
+    source = f"at_block('first')\nprint('start')\nat_block('bad')\n{call}\nprint('after')\n"
+    response = ready.runtime.api("PUT", "/programs/bad_target", json={"python": source})
+    assert response.status_code == 200, response.text
+    q = ready.robot.q()
+    before = ready.robot.last_command_seq()
+    run(ready, "bad_target")
+    final = watch(ready, "bad_target", ("finished", "error", "stopped"), 30)
+    assert final["state"] == "error"
+    assert final["error"]["block"] == "bad" and final["error"]["line"] == 4
+    assert expected in final["error"]["message"].lower()
+    printed = [o["text"] for o in final["output"] if o["stream"] == "out"]
+    assert printed == ["start"]
+    moves = [c for c in ready.robot.commands(before) if c["type"] in ("trajectory",)]
+    assert moves == []
+    assert np.abs(ready.robot.q() - q).max() < 1e-9
+    assert ready.runtime.api("GET", "/programs/bad_target/status").status_code == 200
+
+
+def test_attacks_through_the_service_leave_the_runtime_healthy(ready: Cell) -> None:
+    attacks = [
+        "x = ().__class__",
+        "import os",
+    ]
+    for source in attacks:
+        response = ready.runtime.api("PUT", "/programs/attack", json={"python": source})
+        assert response.status_code == 422, response.text
+        assert response.json()["error"]["code"] == "invalid_program"
+    response = ready.runtime.api("PUT", "/programs/attack", json={"python": "while True:\n  pass"})
+    assert response.status_code == 200
+    run(ready, "attack")
+    time.sleep(1.0)
+    assert status(ready, "attack")["state"] == "running"
+    health = ready.runtime.api("GET", "/health")
+    assert health.status_code == 200
+    assert ready.runtime.api("POST", "/programs/attack/stop").json()["state"] == "stopped"
+
+
+def test_malformed_workspaces_are_refused_and_nothing_is_saved(ready: Cell) -> None:
+    cases = [
+        (
+            {"workspace": {"blocks": {"blocks": [{"type": "os_system", "id": "x"}]}}},
+            "unknown block type",
+        ),
+        (
+            {"workspace": {"blocks": {"blocks": [{"type": "logic_boolean", "id": "x"}]}}},
+            "lacks its BOOL",
+        ),
+        ({"workspace": {"blocks": "nope"}}, "must be an object"),
+        ({"nothing": 1}, "send"),
+    ]
+    for body, expected in cases:
+        response = ready.runtime.api("PUT", "/programs/malformed", json=body)
+        assert response.status_code == 422, response.text
+        assert expected in response.json()["error"]["message"]
+    deep = '{"workspace": ' + "[" * 200_000 + "]" * 200_000 + "}"
+    response = ready.runtime.api(
+        "PUT", "/programs/malformed", content=deep, headers={"content-type": "application/json"}
+    )
+    assert response.status_code == 422, response.text
+    assert ready.runtime.api("GET", "/programs/malformed").status_code == 404
+    assert ready.runtime.api("POST", "/programs/malformed/run", json={}).status_code == 404
+
+
+def test_a_program_needs_the_robots_control_lease(ready: Cell) -> None:
+    save(ready, "no_lease", workspace(block("robot_move_joint", TARGET=waypoint("above_pick"))))
+    response = ready.runtime.api("POST", "/programs/no_lease/run", json={})
+    assert response.status_code == 202
+    final = watch(ready, "no_lease", ("finished", "error"), 20)
+    assert final["state"] == "error"
+    assert final["error"]["code"] == "lease_held" and "tests" in final["error"]["message"]
+    assert ready.robot.stopped()
+
+
+def test_programs_are_listed_renamed_duplicated_and_deleted(ready: Cell) -> None:
+    save(ready, "original", workspace(block("text_print", TEXT=text("hi"))))
+    copy = ready.runtime.api("POST", "/programs/original/duplicate", json={"to": "copy"})
+    assert copy.status_code == 201
+    renamed = ready.runtime.api("POST", "/programs/copy/rename", json={"to": "renamed"})
+    assert renamed.json()["name"] == "renamed"
+    names = {p["name"] for p in ready.runtime.api("GET", "/programs").json()}
+    assert {"original", "renamed"} <= names and "copy" not in names
+    assert ready.runtime.api("DELETE", "/programs/renamed").status_code == 204
+    assert ready.runtime.api("GET", "/programs/renamed").status_code == 404
+    history = ready.runtime.api("GET", "/variables/program.renamed/history").json()
+    assert history[0]["deleted"] is True  # deleted, but its history keeps it
