@@ -51,19 +51,32 @@ class Workspace:
     count: int
 
 
+def allow_deep_json() -> None:
+    """Let this process read and write workspaces with long stacks."""
+    if sys.getrecursionlimit() < JSON_RECURSION_LIMIT:
+        sys.setrecursionlimit(JSON_RECURSION_LIMIT)
+
+
 def parse_json(raw: bytes | str) -> Any:
     if len(raw) > MAX_WORKSPACE_BYTES:
         raise WorkspaceError(f"the workspace is larger than {MAX_WORKSPACE_BYTES} bytes")
-    limit = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(limit, JSON_RECURSION_LIMIT))
+    allow_deep_json()
     try:
         return json.loads(raw, parse_constant=_no_constant)
     except RecursionError:
         raise WorkspaceError("the workspace is nested too deeply") from None
     except ValueError as exc:
         raise WorkspaceError(f"the workspace is not JSON: {exc}") from None
-    finally:
-        sys.setrecursionlimit(limit)
+
+
+def dump_json(data: Any) -> str:
+    allow_deep_json()
+    try:
+        return json.dumps(data, separators=(",", ":"), allow_nan=False)
+    except RecursionError:
+        raise WorkspaceError("the workspace is nested too deeply") from None
+    except ValueError as exc:
+        raise WorkspaceError(f"the workspace is not JSON: {exc}") from None
 
 
 class Reader:

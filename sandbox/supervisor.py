@@ -81,6 +81,62 @@ class RunError:
 
 
 Listener = Callable[[], None]
+Process = asyncio.subprocess.Process
+
+
+async def spawn_worker(limits: str) -> Process:
+    return await asyncio.create_subprocess_exec(
+        sys.executable,
+        "-m",
+        "sandbox.worker",
+        limits,
+        stdin=asyncio.subprocess.PIPE,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+        limit=MAX_LINE_BYTES + 1,
+    )
+
+
+class WorkerPool:
+    """One worker started ahead: Python's start-up and imports take ~100 ms, which a run
+    request should not wait for. A spare holds no program until it is taken."""
+
+    def __init__(self) -> None:
+        self._spare: tuple[str, Process] | None = None
+        self._refill: asyncio.Task[None] | None = None
+
+    async def take(self, limits: str) -> Process:
+        spare, self._spare = self._spare, None
+        if spare is not None and spare[0] == limits and spare[1].returncode is None:
+            process = spare[1]
+        else:
+            if spare is not None:
+                _kill(spare[1])
+            process = await spawn_worker(limits)
+        self._refill = asyncio.ensure_future(self._fill(limits))
+        return process
+
+    async def _fill(self, limits: str) -> None:
+        process = await spawn_worker(limits)
+        if self._spare is None:
+            self._spare = (limits, process)
+        else:
+            _kill(process)
+
+    async def close(self) -> None:
+        if self._refill is not None:
+            self._refill.cancel()
+        if self._spare is not None:
+            _kill(self._spare[1])
+            with contextlib.suppress(Exception):
+                await asyncio.wait_for(self._spare[1].wait(), 2.0)
+            self._spare = None
+
+
+def _kill(process: Process) -> None:
+    if process.returncode is None:
+        with contextlib.suppress(ProcessLookupError):
+            process.kill()
 
 
 class ProgramRun:
@@ -92,7 +148,9 @@ class ProgramRun:
         limits: RunLimits | None = None,
         breakpoints: set[str] | None = None,
         listener: Listener | None = None,
+        pool: WorkerPool | None = None,
     ) -> None:
+        self.pool = pool
         self.source = source
         self.host = host
         self.limits = limits or RunLimits()
@@ -108,7 +166,7 @@ class ProgramRun:
         self.started = time.time()
         self.ended: float | None = None
         self._seq = itertools.count(1)
-        self._process: asyncio.subprocess.Process | None = None
+        self._process: Process | None = None
         self._tasks: set[asyncio.Task[Any]] = set()
         self._done = asyncio.Event()
         self._stopping = False
@@ -118,16 +176,8 @@ class ProgramRun:
 
     async def start(self) -> None:
         limits = {"memory_mb": self.limits.memory_mb, "cpu_seconds": self.limits.cpu_seconds}
-        self._process = await asyncio.create_subprocess_exec(
-            sys.executable,
-            "-m",
-            "sandbox.worker",
-            json.dumps(limits),
-            stdin=asyncio.subprocess.PIPE,
-            stdout=asyncio.subprocess.PIPE,
-            stderr=asyncio.subprocess.PIPE,
-            limit=MAX_LINE_BYTES + 1,
-        )
+        text = json.dumps(limits, sort_keys=True)
+        self._process = await (self.pool.take(text) if self.pool else spawn_worker(text))
         await self._send(
             {"t": "start", "source": self.source, "breakpoints": sorted(self.breakpoints)}
         )
@@ -314,9 +364,8 @@ class ProgramRun:
         )
 
     def _kill(self) -> None:
-        if self._process is not None and self._process.returncode is None:
-            with contextlib.suppress(ProcessLookupError):
-                self._process.kill()
+        if self._process is not None:
+            _kill(self._process)
 
     def _end(self, state: RunState, message: str) -> None:
         if self.ended_state:

@@ -157,6 +157,7 @@ class RunHost:
         if driver is None:
             details = await self.devices.get(f"/devices/{robot}")
             driver = ServiceClient(details["url"], timeout=3.0, name=f"robot {robot}")
+            await driver.get("/health")  # a connection kept open, for a stop at once
             self._drivers[robot] = driver
         return driver
 

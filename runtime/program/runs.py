@@ -16,7 +16,7 @@ from runtime.program.host import RunHost
 from runtime.program.library import ProgramLibrary
 from runtime.program.models import ErrorInfo, OutputEntry, RunRequest, RunStatus
 from runtime.variable_storage.client import StorageClient
-from sandbox.supervisor import ProgramRun, RunLimits
+from sandbox.supervisor import ProgramRun, RunLimits, WorkerPool
 
 log = logging.getLogger(__name__)
 
@@ -48,6 +48,7 @@ class Runs:
         self.runs: dict[str, Active] = {}
         self._numbers = itertools.count(1)
         self._watchers: set[asyncio.Task[None]] = set()
+        self.pool = WorkerPool()
 
     async def start(self, name: str, request: RunRequest) -> RunStatus:
         current = self.runs.get(name)
@@ -70,6 +71,7 @@ class Runs:
             limits=limits,
             breakpoints=set(request.breakpoints),
             listener=lambda: self._publish(name),
+            pool=self.pool,
         )
         active = Active(number, run, host)
         self.runs[name] = active
@@ -118,6 +120,7 @@ class Runs:
         for active in list(self.runs.values()):
             with contextlib.suppress(Exception):
                 await active.run.stop("the program service is shutting down")
+        await self.pool.close()
 
     async def breakpoints(self, name: str, ids: list[str]) -> RunStatus:
         await self._active(name).run.set_breakpoints(set(ids))
@@ -151,6 +154,7 @@ class Runs:
             isolation=run.isolation,
             started=run.started,
             ended=run.ended,
+            stop_received=active.received_stop,
         )
 
     def _publish(self, name: str) -> None:
