@@ -34,7 +34,14 @@ def health(runtime: Runtime) -> dict[str, dict[str, Any]]:
 def test_health_reports_every_service(runtime: Runtime) -> None:
     body = runtime.api("GET", "/health").json()
     assert body["status"] == "ok"
-    assert set(body["services"]) == {"webui", "variable_storage", "device_manager", "jog", "motion"}
+    assert set(body["services"]) == {
+        "webui",
+        "variable_storage",
+        "device_manager",
+        "jog",
+        "motion",
+        "program",
+    }
     assert all(s["status"] == "ok" for s in body["services"].values())
 
 

@@ -47,6 +47,11 @@ ROUND_TRIP: dict[str, Any] = {
         "keep_out": False,
         "color": "#8a94a6",
     },
+    "program": {
+        "source": "blocks",
+        "workspace_json": '{"blocks":{"blocks":[]}}',
+        "python": "print('hi')\n",
+    },
 }
 
 # Values each type must refuse.
@@ -79,6 +84,8 @@ REJECT: list[tuple[str, Any]] = [
     ("scene_object", {"shape": "box", "size": [0.1, 0.2]}),
     ("scene_object", {"shape": "sphere", "size": [-0.1]}),
     ("scene_object", {"shape": "box", "size": [0.1, 0.1, 0.1], "mesh": "package://x/y.stl"}),
+    ("program", {"source": "cobol", "python": ""}),
+    ("program", {"source": "python"}),
     ("no_such_type", 1),
 ]
 
