@@ -6,7 +6,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import itertools
-import logging
 import time
 
 from runtime.kit.client import ServiceClient
@@ -17,8 +16,6 @@ from runtime.program.library import ProgramLibrary
 from runtime.program.models import ErrorInfo, OutputEntry, RunRequest, RunStatus
 from runtime.variable_storage.client import StorageClient
 from sandbox.supervisor import ProgramRun, RunLimits, WorkerPool
-
-log = logging.getLogger(__name__)
 
 PUSHED_OUTPUT = 100
 
@@ -74,8 +71,13 @@ class Runs:
             pool=self.pool,
         )
         active = Active(number, run, host)
+        try:
+            await run.start()
+        except BaseException:
+            await run.close()
+            await host.close()
+            raise
         self.runs[name] = active
-        await run.start()
         watcher = asyncio.create_task(self._finish(active))
         self._watchers.add(watcher)
         watcher.add_done_callback(self._watchers.discard)
