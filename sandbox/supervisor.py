@@ -243,11 +243,13 @@ class ProgramRun:
                     break
                 await self._handle(decode(line))
         except ProtocolError as exc:
-            await self._fail(RunError(f"the program broke the worker protocol: {exc}", "protocol"))
+            await self._halt_and_fail(
+                RunError(f"the program broke the worker protocol: {exc}", "protocol")
+            )
             return
         await self._process.wait()
         if not self.ended_state:
-            await self._fail(self._worker_death())
+            await self._halt_and_fail(self._worker_death())
 
     async def _handle(self, message: dict[str, Any]) -> None:
         kind = message["t"]
@@ -276,7 +278,7 @@ class ProgramRun:
                 block=_block(message.get("block")),
                 code=str(message["code"]) if message.get("code") else None,
             )
-            await self._fail(error)
+            await self._halt_and_fail(error)
         elif kind == "done":
             stopped = bool(message.get("stopped"))
             self._end(RunState.finished, "ended by stop program" if stopped else "finished")
@@ -313,9 +315,6 @@ class ProgramRun:
         if not self.ended_state:
             limit = self.limits.wall_seconds
             await self._halt_and_fail(RunError(f"the run took longer than {limit:g} s", "timeout"))
-
-    async def _fail(self, error: RunError) -> None:
-        await self._halt_and_fail(error)
 
     async def _halt_and_fail(self, error: RunError) -> None:
         if self.ended_state or self._stopping:

@@ -87,12 +87,14 @@ class ProgramLibrary:
         return Saved(name=name, python=python, version=variable.version, blocks=blocks)
 
     async def get(self, name: str) -> Program:
+        return _program(name, await self._variable(name))
+
+    async def _variable(self, name: str) -> Variable:
         check_program_name(name)
         try:
-            variable = await self.storage.get(PREFIX + name)
+            return await self.storage.get(PREFIX + name)
         except NotFound:
             raise NotFound(f"no program {name!r}", code="unknown_program") from None
-        return _program(name, variable)
 
     async def list(self) -> list[ProgramSummary]:
         found = await self.storage.query(type_name="program")
@@ -119,12 +121,11 @@ class ProgramLibrary:
 
     async def duplicate(self, name: str, to: str) -> Program:
         check_program_name(to)
-        program = await self.get(name)
+        original = await self._variable(name)
         if await self._exists(to):
             raise InvalidValue(f"a program named {to!r} exists already", code="exists")
-        stored = await self.storage.get(PREFIX + name)
-        await self.storage.put(PREFIX + to, "program", stored.value, tags=[TAG])
-        return program.model_copy(update={"name": to})
+        copy = await self.storage.put(PREFIX + to, "program", original.value, tags=[TAG])
+        return _program(to, copy)
 
     async def _exists(self, name: str) -> bool:
         try:

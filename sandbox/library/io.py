@@ -6,14 +6,12 @@ from __future__ import annotations
 from typing import Any
 
 from sandbox.library.base import (
-    ProgramError,
     bool_arg,
     host,
-    number_arg,
     sandbox_function,
     text_arg,
 )
-from sandbox.library.timing import POLL
+from sandbox.library.timing import poll_until
 
 
 @sandbox_function
@@ -38,10 +36,4 @@ def get_output(name: str) -> bool:
 def wait_for_input(name: str, value: Any, timeout: Any) -> None:
     """Wait until the input reads `value`; fail after `timeout` seconds."""
     wanted = bool_arg(value, "value")
-    limit = number_arg(timeout, "timeout", low=0, high=24 * 3600.0)
-    waited = 0.0
-    while get_input(name) is not wanted:
-        if waited >= limit:
-            raise ProgramError(f"{name} did not turn {wanted} within {limit:g} s", "timeout")
-        host().sleep(POLL)
-        waited += POLL
+    poll_until(lambda: get_input(name) is wanted, timeout, f"{name} did not turn {wanted}")

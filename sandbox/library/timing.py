@@ -24,11 +24,16 @@ def wait_until(condition: Callable[[], Any], timeout: Any) -> None:
     """Wait until `condition()` is true; fail after `timeout` seconds."""
     if not callable(condition):
         raise SandboxError("wait until needs a condition")
+    poll_until(condition, timeout, "the condition was not met")
+
+
+def poll_until(condition: Callable[[], Any], timeout: Any, failure: str) -> None:
+    """Check every POLL s (pausable) until `condition()` is true; fail after `timeout` s."""
     limit = number_arg(timeout, "timeout", low=0, high=MAX_WAIT)
     waited = 0.0
     while not condition():
         if waited >= limit:
-            raise ProgramError(f"the condition was not met within {limit:g} s", "timeout")
+            raise ProgramError(f"{failure} within {limit:g} s", "timeout")
         host().sleep(POLL)
         waited += POLL
 
