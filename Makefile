@@ -10,7 +10,7 @@ PY_STAMP := $(VENV)/.installed
 NPM_STAMP := $(UI)/node_modules/.installed
 UI_BUILT := $(UI)/dist/index.html
 UI_SOURCES := $(shell find $(UI)/src $(UI)/public -type f 2>/dev/null) \
-	$(UI)/index.html $(UI)/vite.config.ts $(UI)/tsconfig.json
+	$(UI)/index.html $(UI)/vite.config.ts $(UI)/tsconfig.json $(UI)/tsconfig.node.json
 ARGS ?=
 
 .PHONY: setup run test lint bench ui clean

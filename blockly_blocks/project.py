@@ -15,7 +15,9 @@ def _choice(block: Block, g: Generator, name: str) -> str:
     if options is not None:
         return g.option(block, name, options)
     text = g.text_field(block, name)
-    if not 0 < len(text) <= MAX_NAME or not text.isprintable():
+    if not text:
+        raise WorkspaceError(f"block {block.type}: no {name.lower()} chosen", block.id)
+    if not len(text) <= MAX_NAME or not text.isprintable():
         raise WorkspaceError(f"block {block.type}: {name} must be a short name", block.id)
     return text
 

@@ -37,6 +37,24 @@ def compile_error(exc: ProgramCompileError) -> InvalidValue:
     )
 
 
+def read_request(body: bytes) -> dict[str, Any]:
+    """A save or preview body: {"workspace": <Blockly JSON>} or {"python": "<code>"}."""
+    try:
+        data = parse_json(body)
+    except WorkspaceError as exc:
+        raise workspace_error(exc) from None
+    if not isinstance(data, dict) or ("workspace" in data) == ("python" in data):
+        raise InvalidValue('send {"workspace": <Blockly JSON>} or {"python": "<code>"}')
+    return data
+
+
+def workspace_text(data: dict[str, Any]) -> str:
+    try:
+        return dump_json(data["workspace"])
+    except WorkspaceError as exc:
+        raise workspace_error(exc) from None
+
+
 def generate_checked(raw: bytes | str) -> Generated:
     """Parse, generate and compile a workspace; any problem is an InvalidValue."""
     try:
@@ -56,12 +74,7 @@ class ProgramLibrary:
     async def save(self, name: str, body: bytes) -> Saved:
         """Body: {"workspace": <Blockly JSON>} or {"python": "<code>"}."""
         check_program_name(name)
-        try:
-            data = parse_json(body)
-        except WorkspaceError as exc:
-            raise workspace_error(exc) from None
-        if not isinstance(data, dict) or ("workspace" in data) == ("python" in data):
-            raise InvalidValue('send {"workspace": <Blockly JSON>} or {"python": "<code>"}')
+        data = read_request(body)
         if "python" in data:
             python = data["python"]
             if not isinstance(python, str):
@@ -73,10 +86,7 @@ class ProgramLibrary:
             stored = StoredProgram(source="python", python=python)
             blocks = 0
         else:
-            try:
-                workspace_json = dump_json(data["workspace"])
-            except WorkspaceError as exc:
-                raise workspace_error(exc) from None
+            workspace_json = workspace_text(data)
             # Generation is CPU work (a 5,000-block workspace takes a while): off the loop.
             generated = await asyncio.to_thread(generate_checked, workspace_json)
             stored = StoredProgram(

@@ -17,7 +17,12 @@ from runtime.kit.client import ServiceClient
 from runtime.kit.errors import InvalidValue
 from runtime.kit.settings import RuntimeSettings
 from runtime.kit.websocket import Fanout
-from runtime.program.library import ProgramLibrary, generate_checked
+from runtime.program.library import (
+    ProgramLibrary,
+    generate_checked,
+    read_request,
+    workspace_text,
+)
 from runtime.program.models import (
     BreakpointsRequest,
     Program,
@@ -50,8 +55,11 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
 
     @router.post("/_generate")
     async def preview(request: Request) -> dict[str, Any]:
-        """The Python of a workspace (its JSON as the body), without saving it."""
-        generated = await asyncio.to_thread(generate_checked, await read_body(request))
+        """The Python of {"workspace": <Blockly JSON>}, as saving it would give; nothing kept."""
+        data = read_request(await read_body(request))
+        if "workspace" not in data:
+            raise InvalidValue('send {"workspace": <Blockly JSON>}')
+        generated = await asyncio.to_thread(generate_checked, workspace_text(data))
         return {"python": generated.python, "blocks": generated.blocks}
 
     @router.websocket("/_ws")

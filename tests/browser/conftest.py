@@ -10,14 +10,16 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import (
     BrowserContext,
+    CDPSession,
     ConsoleMessage,
+    Locator,
     Page,
     Playwright,
     ViewportSize,
     sync_playwright,
 )
 
-from tests.support.processes import Runtime, child_env
+from tests.support.processes import Runtime, child_env, wait_for
 
 pytestmark = pytest.mark.browser
 
@@ -91,6 +93,41 @@ def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
     assert proc.service_errors() == []
 
 
+class Finger:
+    """A real touch: Chromium turns these into the same pointer events a finger makes."""
+
+    def __init__(self, page: Page) -> None:
+        self.cdp: CDPSession = page.context.new_cdp_session(page)
+
+    def down(self, target: Locator) -> None:
+        target.scroll_into_view_if_needed()
+        box = target.bounding_box()
+        assert box is not None
+        point = {"x": box["x"] + box["width"] / 2, "y": box["y"] + box["height"] / 2}
+        self.cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [point]})
+
+    def move(self, x: float, y: float) -> None:
+        self.cdp.send(
+            "Input.dispatchTouchEvent", {"type": "touchMove", "touchPoints": [{"x": x, "y": y}]}
+        )
+
+    def drag(self, source: Locator, x: float, y: float, steps: int = 12) -> None:
+        """Press on `source`, slide to (x, y) in steps, lift."""
+        source.scroll_into_view_if_needed()
+        box = source.bounding_box()
+        assert box is not None
+        x0, y0 = box["x"] + 10, box["y"] + box["height"] / 2
+        self.cdp.send(
+            "Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [{"x": x0, "y": y0}]}
+        )
+        for i in range(1, steps + 1):
+            self.move(x0 + (x - x0) * i / steps, y0 + (y - y0) * i / steps)
+        self.up()
+
+    def up(self) -> None:
+        self.cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
+
+
 class PageErrors:
     """Console errors and uncaught exceptions of a page: a test fails on any."""
 
@@ -108,3 +145,19 @@ class PageErrors:
 def artifacts(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Where a test leaves its screenshots."""
     return tmp_path_factory.mktemp(f"shots-{request.node.name}"[:60])
+
+
+def add_robot(runtime: Runtime, name: str = "robot") -> str:
+    """Adds the simulated robot the runtime discovers, and waits until it is connected."""
+    sim = wait_for(lambda: runtime.api("GET", "/devices/detected").json(), 10)[0]
+    runtime.api("POST", "/devices", json={"uuid": sim["uuid"], "local_name": name})
+    wait_for(lambda: runtime.api("GET", f"/devices/{name}").json()["status"] == "connected", 10)
+    return name
+
+
+def fits_the_screen(page: Page) -> bool:
+    """Nothing wider than the screen. A phone browser widens the page to fit what overflows
+    (window.innerWidth grows), so the check is against the device's own width."""
+    width = page.viewport_size["width"] if page.viewport_size else 0
+    layout: list[int] = page.evaluate("[window.innerWidth, document.documentElement.scrollWidth]")
+    return bool(layout[0] == width and layout[1] <= width)

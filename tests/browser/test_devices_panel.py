@@ -9,7 +9,7 @@ from pathlib import Path
 import httpx
 from playwright.sync_api import BrowserContext, expect
 
-from tests.browser.conftest import PageErrors
+from tests.browser.conftest import PageErrors, fits_the_screen
 from tests.support.processes import Runtime, SimRobotProc
 
 
@@ -95,7 +95,7 @@ def test_phone_layout_has_big_targets_and_no_sideways_scroll(
     nav = page.get_by_test_id("nav-devices").bounding_box()
     assert nav is not None
     assert nav["y"] > 844 / 2  # the navigation sits at the bottom on a phone
-    assert page.evaluate("document.documentElement.scrollWidth <= window.innerWidth")
+    assert fits_the_screen(page)
     page.screenshot(path=artifacts / "phone.png", full_page=True)
 
 

@@ -10,41 +10,16 @@ from typing import Any
 
 import numpy as np
 import pytest
-from playwright.sync_api import BrowserContext, CDPSession, Locator, Page, expect
+from playwright.sync_api import BrowserContext, expect
 
-from tests.browser.conftest import PageErrors
+from tests.browser.conftest import Finger, PageErrors, add_robot, fits_the_screen
 from tests.support.png import decode
 from tests.support.processes import Runtime, wait_for
 
 
-class Finger:
-    """A real touch: Chromium turns these into the same pointer events a finger makes."""
-
-    def __init__(self, page: Page) -> None:
-        self.cdp: CDPSession = page.context.new_cdp_session(page)
-
-    def down(self, target: Locator) -> None:
-        target.scroll_into_view_if_needed()
-        box = target.bounding_box()
-        assert box is not None
-        point = {"x": box["x"] + box["width"] / 2, "y": box["y"] + box["height"] / 2}
-        self.cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [point]})
-
-    def move(self, x: float, y: float) -> None:
-        self.cdp.send(
-            "Input.dispatchTouchEvent", {"type": "touchMove", "touchPoints": [{"x": x, "y": y}]}
-        )
-
-    def up(self) -> None:
-        self.cdp.send("Input.dispatchTouchEvent", {"type": "touchEnd", "touchPoints": []})
-
-
 @pytest.fixture(scope="module")
 def robot(runtime: Runtime) -> str:
-    sim = wait_for(lambda: runtime.api("GET", "/devices/detected").json(), 10)[0]
-    runtime.api("POST", "/devices", json={"uuid": sim["uuid"], "local_name": "robot"})
-    wait_for(lambda: runtime.api("GET", "/devices").json()[0]["status"] == "connected", 10)
-    return "robot"
+    return add_robot(runtime)
 
 
 def state(runtime: Runtime) -> dict[str, Any]:
@@ -185,4 +160,4 @@ def test_without_control_the_pad_does_nothing(
     expect(page.get_by_test_id("lease")).to_contain_text("Controlled by Pendant on the cell")
     plus = page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus] button")
     expect(plus).to_be_disabled()
-    assert page.evaluate("document.documentElement.scrollWidth <= window.innerWidth")
+    assert fits_the_screen(page)

@@ -13,7 +13,7 @@ from playwright.sync_api import BrowserContext, expect
 
 from runtime.kinematics import Kinematics
 from runtime.robot_info import load_robot_info
-from tests.browser.conftest import PageErrors
+from tests.browser.conftest import PageErrors, add_robot, fits_the_screen
 from tests.support.png import decode
 from tests.support.processes import Runtime, wait_for
 
@@ -24,9 +24,7 @@ RIGHT = [-1.0, -1.0, 1.8, -2.37, -1.57, 0.0]
 
 @pytest.fixture(scope="module")
 def robot(runtime: Runtime) -> str:
-    sim = wait_for(lambda: runtime.api("GET", "/devices/detected").json(), 10)[0]
-    runtime.api("POST", "/devices", json={"uuid": sim["uuid"], "local_name": "robot"})
-    wait_for(lambda: runtime.api("GET", "/devices").json()[0]["status"] == "connected", 10)
+    add_robot(runtime)
     token = runtime.api("POST", "/devices/robot/lease", json={"holder": "setup"}).json()["token"]
     headers = {"X-Lease-Token": token}
     assert runtime.api("POST", "/jog/robots/robot/enable", headers=headers).status_code == 200
@@ -122,4 +120,4 @@ def test_the_scene_panel_fits_a_phone(runtime: Runtime, robot: str, phone: Brows
     page = phone.new_page()
     page.goto(f"{runtime.url}/#/scene")
     expect(page.get_by_test_id("add-box")).to_be_visible()
-    assert page.evaluate("document.documentElement.scrollWidth <= window.innerWidth")
+    assert fits_the_screen(page)

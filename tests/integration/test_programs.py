@@ -12,7 +12,6 @@ from typing import Any
 import numpy as np
 import pytest
 
-from runtime.robot_info import load_robot_info
 from tests.support.blocks import (
     block,
     ids_of,
@@ -25,13 +24,8 @@ from tests.support.blocks import (
 )
 from tests.support.jog import Cell
 from tests.support.processes import Runtime, wait_for
+from tests.support.programs import HOME, PICK_AND_PLACE_WAYPOINTS, PLACE, pick_and_place, teach
 
-INFO = load_robot_info("ur5")
-HOME = INFO.home
-ABOVE_PICK = [0.6, -1.3, 1.6, -1.87, -1.57, 0.0]
-PICK = [0.6, -1.15, 1.75, -2.17, -1.57, 0.0]
-ABOVE_PLACE = [-0.6, -1.3, 1.6, -1.87, -1.57, 0.0]
-PLACE = [-0.6, -1.15, 1.75, -2.17, -1.57, 0.0]
 FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]
 
 
@@ -41,19 +35,7 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cell]:
     runtime.wait_ready()
     try:
         cell = Cell(runtime)
-        for name, joints in (
-            ("above_pick", ABOVE_PICK),
-            ("pick", PICK),
-            ("above_place", ABOVE_PLACE),
-            ("place", PLACE),
-            ("far", FAR),
-            ("home_pose", HOME),
-        ):
-            runtime.api(
-                "PUT",
-                f"/variables/{name}",
-                json={"type": "joint_waypoint", "value": {"joints": joints, "robot": "robot"}},
-            )
+        teach(runtime, {**PICK_AND_PLACE_WAYPOINTS, "far": FAR, "home_pose": HOME})
         yield cell
     finally:
         runtime.stop()
@@ -103,47 +85,6 @@ def watch(cell: Cell, name: str, until: tuple[str, ...], timeout: float = 60.0) 
             return current
         assert time.monotonic() < deadline, current
         time.sleep(0.02)
-
-
-def pick_and_place() -> tuple[dict[str, Any], dict[str, Any]]:
-    pairs = block("lists_create_with", None, ADD0=text("pick"), ADD1=text("place"))
-    pairs["extraState"] = {"itemCount": 2}
-    body = stack(
-        block(
-            "controls_if",
-            IF0=block("logic_compare", {"OP": "EQ"}, A=var("spot"), B=text("pick")),
-            DO0=stack(
-                block("robot_move_joint", TARGET=waypoint("above_pick")),
-                block("robot_move_linear", TARGET=waypoint("pick")),
-                block("robot_tool", {"ACTION": "CLOSE"}),
-                block(
-                    "io_set_output",
-                    {"NAME": "robot.do1"},
-                    VALUE=block("logic_boolean", {"BOOL": "TRUE"}),
-                ),
-                block("robot_move_linear", TARGET=waypoint("above_pick")),
-            ),
-            ELSE=stack(
-                block("robot_move_joint", TARGET=waypoint("above_place")),
-                block("robot_move_linear", TARGET=waypoint("place")),
-                block("robot_tool", {"ACTION": "OPEN"}),
-                block(
-                    "robot_move_relative", {"FRAME": "base"}, X=number(0), Y=number(0), Z=number(40)
-                ),
-            ),
-        ),
-        block("time_wait", SECONDS=number(0.2)),
-        block("text_print", TEXT=block("text_join", None, ADD0=text("done "), ADD1=var("spot"))),
-    )
-    body["extraState"] = {"hasElse": True}
-    main = stack(
-        block("robot_use", {"ROBOT": "robot"}),
-        block("robot_set_speed", SPEED=number(100)),
-        block("robot_tool", {"ACTION": "OPEN"}),
-        block("controls_forEach", {"VAR": {"id": "spot"}}, LIST=pairs, DO=body),
-        block("program_log", {"LEVEL": "info"}, TEXT=text("cycle complete")),
-    )
-    return workspace(main, variables=("spot",)), main
 
 
 def test_a_pick_and_place_program_runs_to_completion(ready: Cell) -> None:
@@ -334,9 +275,10 @@ def test_malformed_workspaces_are_refused_and_nothing_is_saved(ready: Cell) -> N
         ({"nothing": 1}, "send"),
     ]
     for body, expected in cases:
-        response = ready.runtime.api("PUT", "/programs/malformed", json=body)
-        assert response.status_code == 422, response.text
-        assert expected in response.json()["error"]["message"]
+        for method, path in (("PUT", "/programs/malformed"), ("POST", "/programs/_generate")):
+            response = ready.runtime.api(method, path, json=body)
+            assert response.status_code == 422, response.text
+            assert expected in response.json()["error"]["message"]
     deep = '{"workspace": ' + "[" * 200_000 + "]" * 200_000 + "}"
     response = ready.runtime.api(
         "PUT", "/programs/malformed", content=deep, headers={"content-type": "application/json"}
@@ -344,6 +286,17 @@ def test_malformed_workspaces_are_refused_and_nothing_is_saved(ready: Cell) -> N
     assert response.status_code == 422, response.text
     assert ready.runtime.api("GET", "/programs/malformed").status_code == 404
     assert ready.runtime.api("POST", "/programs/malformed/run", json={}).status_code == 404
+
+
+def test_the_preview_gives_the_python_saving_would_and_keeps_nothing(ready: Cell) -> None:
+    ws, _ = pick_and_place()
+    preview = ready.runtime.api("POST", "/programs/_generate", json={"workspace": ws})
+    assert preview.status_code == 200, preview.text
+    assert ready.runtime.api("GET", "/programs/previewed").status_code == 404
+    assert preview.json()["python"] == save(ready, "previewed", ws)
+    assert preview.json()["blocks"] > 20
+    python_only = ready.runtime.api("POST", "/programs/_generate", json={"python": "x = 1"})
+    assert python_only.status_code == 422
 
 
 def test_a_program_needs_the_robots_control_lease(ready: Cell) -> None:

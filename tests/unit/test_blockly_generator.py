@@ -99,7 +99,9 @@ def instance(entry: dict[str, Any], fields: dict[str, Any]) -> dict[str, Any]:
     block = copy.deepcopy(entry)
     block.pop("kind", None)
     block["id"] = f"b{next(ids)}"
-    block["fields"] = {**block.get("fields", {}), **fields}
+    # Blockly saves every field; one the toolbox leaves unset holds its first option.
+    defaults = {name: values[0] for name, values in field_options(block["type"]).items()}
+    block["fields"] = {**defaults, **block.get("fields", {}), **fields}
     if block["type"] in VARIABLE_FIELDS:
         block["fields"]["VAR"] = {"id": "var1"}
     for connection in block.get("inputs", {}).values():

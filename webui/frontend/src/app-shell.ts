@@ -71,9 +71,16 @@ export class OpApp extends LitElement {
           border-top: 1px solid var(--line);
           padding: 6px;
         }
+        nav {
+          gap: 4px;
+          padding: 4px;
+        }
         nav button {
           flex: 1;
+          min-width: 0;
           min-height: 64px;
+          padding: 4px 2px;
+          font-size: 13px;
         }
         main {
           padding: 10px;

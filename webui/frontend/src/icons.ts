@@ -16,6 +16,9 @@ export const icons = {
   scene: icon(
     svg`<path d="M12 3l8 4.5v9L12 21l-8-4.5v-9z"/><path d="M12 12l8-4.5M12 12v9M12 12L4 7.5"/>`,
   ),
+  program: icon(
+    svg`<rect x="3" y="3" width="8" height="6" rx="1.5"/><rect x="7" y="11" width="10" height="5" rx="1.5"/><rect x="3" y="18" width="8" height="3" rx="1"/><path d="M5 9v9"/>`,
+  ),
   robot: icon(
     svg`<path d="M4 20h8M8 20v-4l6-6M14 10l3-5M17 5l3 2"/><circle cx="8" cy="16" r="1.5"/><circle cx="14" cy="10" r="1.5"/>`,
   ),

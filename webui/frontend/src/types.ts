@@ -72,6 +72,8 @@ export interface RobotInfo {
   description: string;
   joints: JointLimits[];
   capabilities: string[];
+  digital_inputs?: number;
+  digital_outputs?: number;
 }
 
 export interface DeviceDetails extends AddedDevice {

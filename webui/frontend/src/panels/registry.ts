@@ -3,6 +3,7 @@ import { html, type SVGTemplateResult, type TemplateResult } from "lit";
 import { icons } from "../icons";
 import "./devices-panel";
 import "./jog-panel";
+import "./program-panel";
 import "./scene-panel";
 import "./system-panel";
 
@@ -19,6 +20,12 @@ export const panels: Panel[] = [
     title: "Jog",
     icon: icons.jog,
     render: () => html`<op-jog-panel></op-jog-panel>`,
+  },
+  {
+    id: "program",
+    title: "Program",
+    icon: icons.program,
+    render: () => html`<op-program-panel></op-program-panel>`,
   },
   {
     id: "scene",

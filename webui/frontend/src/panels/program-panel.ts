@@ -1,0 +1,850 @@
+import { LitElement, css, html, nothing } from "lit";
+import { api, ApiError, errorText } from "../api";
+import { control } from "../control";
+import { FeedController, feed } from "../live";
+import { shared } from "../styles";
+import type { DeviceDetails } from "../types";
+import type { ProgramEditor } from "../program/editor";
+import type { BlockCatalog } from "../program/catalog";
+import { RunFeed } from "../program/run-feed";
+import {
+  LIVE_STATES,
+  type Generated,
+  type OutputEntry,
+  type Program,
+  type ProgramSummary,
+  type RunStatus,
+  type Saved,
+} from "../program/types";
+import "../components/modal";
+import "../components/name-dialog";
+
+const PROGRAM_NAME = /^[A-Za-z][A-Za-z0-9_-]{0,63}$/;
+const PREVIEW_DELAY_MS = 400;
+
+type Dialog = null | "new" | "rename" | "duplicate" | "delete";
+
+// What was on the editor when the panel was left: coming back shows it as it was.
+interface Draft {
+  name: string;
+  state: object;
+  saved: string;
+  breakpoints: string[];
+}
+let draft: Draft | null = null;
+
+const runs = new RunFeed();
+
+/** The robot names and what each has, for the dropdowns of the robot and I/O blocks. */
+async function refreshChoices(): Promise<void> {
+  const { choices } = await import("../program/catalog");
+  const robots = feed.robots().map((r) => r.local_name);
+  choices.robots = robots;
+  const details = await Promise.all(
+    robots.map((r) =>
+      api<DeviceDetails>("GET", `/api/devices/${encodeURIComponent(r)}`).catch(() => null),
+    ),
+  );
+  const inputs: string[] = [];
+  const outputs: string[] = [];
+  for (const d of details) {
+    const info = d?.info?.info;
+    if (!d || !info) continue;
+    for (let i = 0; i < (info.digital_inputs ?? 0); i++) inputs.push(`${d.local_name}.di${i}`);
+    for (let i = 0; i < (info.digital_outputs ?? 0); i++) outputs.push(`${d.local_name}.do${i}`);
+  }
+  choices.inputs = inputs;
+  choices.outputs = outputs;
+  const lists = await Promise.all(
+    ["joint_waypoint", "pose_waypoint"].map((type) =>
+      api<{ name: string }[]>("GET", `/api/variables?type=${type}`).catch(() => []),
+    ),
+  );
+  choices.waypoints = lists.flat().map((v) => v.name);
+}
+
+// Programs as blocks: edit, save and load, run with the running block highlighted, pause,
+// step, stop, breakpoints, the output and the generated Python.
+export class OpProgramPanel extends LitElement {
+  static properties = {
+    programs: { state: true },
+    name: { state: true },
+    source: { state: true },
+    python: { state: true },
+    problem: { state: true },
+    dirty: { state: true },
+    loading: { state: true },
+    busy: { state: true },
+    notice: { state: true },
+    dialog: { state: true },
+    dialogError: { state: true },
+    tab: { state: true },
+    robot: { state: true },
+    history: { state: true },
+    selected: { state: true },
+  };
+  declare programs: ProgramSummary[];
+  declare name: string; // "" until a new program is first saved
+  declare source: "blocks" | "python";
+  declare python: string;
+  declare problem: string; // why the blocks do not generate, if they do not
+  declare dirty: boolean;
+  declare loading: boolean;
+  declare busy: boolean;
+  declare notice: string;
+  declare dialog: Dialog;
+  declare dialogError: string;
+  declare tab: "output" | "python";
+  declare robot: string;
+  declare history: { undo: boolean; redo: boolean };
+  declare selected: string | null;
+
+  private editor: ProgramEditor | null = null;
+  private saved = "";
+  private previewTimer = 0;
+  private previewing = 0;
+  private highlighted: string | null = null;
+
+  static styles = [
+    shared,
+    css`
+      :host {
+        display: grid;
+        grid-template-rows: auto 1fr;
+        gap: 10px;
+        height: 100%;
+        min-height: 0;
+      }
+      .bar {
+        display: flex;
+        flex-wrap: wrap;
+        gap: 8px;
+        align-items: center;
+      }
+      .bar button {
+        padding: 0 16px;
+      }
+      select {
+        min-height: var(--touch);
+        min-width: 180px;
+        max-width: 320px;
+        padding: 0 12px;
+        border-radius: 10px;
+        border: 2px solid var(--line);
+        background: var(--bg);
+        color: var(--text);
+        font: inherit;
+      }
+      .spacer {
+        flex: 1;
+      }
+      .dirty {
+        color: var(--warn);
+        font-size: 15px;
+      }
+      button.run {
+        background: var(--ok);
+        border-color: var(--ok);
+        color: #06210e;
+        min-height: 64px;
+        font-size: 20px;
+      }
+      button.stop {
+        background: var(--bad);
+        border-color: var(--bad);
+        color: #fff;
+        min-height: 64px;
+        font-size: 20px;
+      }
+      button.on {
+        border-color: var(--bad);
+        color: #ffd7d5;
+      }
+      .work {
+        display: grid;
+        grid-template-columns: minmax(0, 1fr) 360px;
+        gap: 10px;
+        min-height: 0;
+      }
+      .blockly {
+        position: relative;
+        min-height: 0;
+        border: 1px solid var(--line);
+        border-radius: 12px;
+        overflow: hidden;
+      }
+      .blockly .host {
+        position: absolute;
+        inset: 0;
+      }
+      .blockly .cover {
+        position: absolute;
+        inset: 0;
+        display: flex;
+        align-items: center;
+        justify-content: center;
+        text-align: center;
+        padding: 24px;
+        background: var(--bg);
+      }
+      .side {
+        display: flex;
+        flex-direction: column;
+        gap: 8px;
+        min-height: 0;
+      }
+      .runpad {
+        display: grid;
+        grid-template-columns: 1fr 1fr;
+        gap: 8px;
+      }
+      .runpad .wide {
+        grid-column: span 2;
+      }
+      .tabs {
+        display: flex;
+        gap: 6px;
+      }
+      .tabs button {
+        flex: 1;
+      }
+      .tabs button[aria-selected="true"] {
+        border-color: var(--accent);
+        color: var(--accent);
+      }
+      .pane {
+        flex: 1;
+        overflow: auto;
+        min-height: 0;
+        background: var(--panel);
+        border: 1px solid var(--line);
+        border-radius: 12px;
+        padding: 10px;
+        font-size: 15px;
+      }
+      pre {
+        margin: 0;
+        font: 14px/1.45 ui-monospace, "DejaVu Sans Mono", monospace;
+        white-space: pre-wrap;
+        overflow-wrap: anywhere;
+      }
+      .line {
+        display: block;
+        width: 100%;
+        min-height: 40px;
+        padding: 6px 8px;
+        text-align: left;
+        font: 14px/1.4 ui-monospace, "DejaVu Sans Mono", monospace;
+        font-weight: 400;
+        border: none;
+        border-bottom: 1px solid var(--line);
+        border-radius: 0;
+        background: transparent;
+        white-space: pre-wrap;
+        overflow-wrap: anywhere;
+      }
+      .line.stderr,
+      .line.error {
+        color: #ffb4ae;
+      }
+      .status {
+        display: flex;
+        flex-wrap: wrap;
+        gap: 8px;
+        align-items: center;
+        font-size: 15px;
+      }
+      .confirm {
+        display: flex;
+        gap: 12px;
+        align-items: center;
+        flex-wrap: wrap;
+        padding: 10px 14px;
+        border: 2px solid var(--accent);
+        border-radius: 12px;
+        background: #2b2410;
+      }
+      .actions {
+        display: flex;
+        gap: 12px;
+        justify-content: flex-end;
+        margin-top: 16px;
+      }
+      /* Blockly draws inside this shadow root: its own CSS lands here, and so can ours. */
+      .blocklyToolboxCategory {
+        min-height: 46px;
+        display: flex;
+        align-items: center;
+      }
+      .blocklyToolboxCategoryLabel {
+        font-size: 18px;
+        padding: 0 10px;
+      }
+      .blocklyToolbox {
+        min-width: 140px;
+      }
+      .opBreakpoint > .blocklyPath {
+        stroke: #f85149 !important;
+        stroke-width: 5px !important;
+        stroke-dasharray: 8 4;
+      }
+      .blocklyHighlighted > .blocklyPath {
+        stroke: #f5a524 !important;
+        stroke-width: 6px !important;
+      }
+      @media (max-width: 700px) {
+        :host {
+          height: auto;
+        }
+        .work {
+          grid-template-columns: minmax(0, 1fr);
+        }
+        .bar button {
+          padding: 0 12px;
+        }
+        .bar .label {
+          display: none;
+        }
+        .blockly {
+          height: 62vh;
+        }
+        .pane {
+          max-height: 40vh;
+        }
+        select {
+          min-width: 0;
+          flex: 1;
+        }
+        .blocklyToolbox {
+          min-width: 0;
+        }
+        .blocklyToolboxCategoryLabel {
+          font-size: 16px;
+          padding: 0 4px;
+        }
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    this.programs = [];
+    this.name = "";
+    this.source = "blocks";
+    this.python = "";
+    this.problem = "";
+    this.dirty = false;
+    this.loading = true;
+    this.busy = false;
+    this.notice = "";
+    this.dialog = null;
+    this.dialogError = "";
+    this.tab = "output";
+    this.robot = "";
+    this.history = { undo: false, redo: false };
+    this.selected = null;
+    new FeedController(this);
+  }
+
+  private onRuns = (event: Event) => {
+    if ((event as CustomEvent<string>).detail === this.name) this.showRun();
+  };
+
+  private onUnload = (event: BeforeUnloadEvent) => {
+    if (this.dirty) event.preventDefault();
+  };
+
+  connectedCallback(): void {
+    super.connectedCallback();
+    runs.addEventListener("change", this.onRuns);
+    runs.start();
+    window.addEventListener("beforeunload", this.onUnload);
+  }
+
+  disconnectedCallback(): void {
+    runs.removeEventListener("change", this.onRuns);
+    runs.stop();
+    window.removeEventListener("beforeunload", this.onUnload);
+    window.clearTimeout(this.previewTimer);
+    if (this.editor) {
+      draft = {
+        name: this.name,
+        state: this.editor.state(),
+        saved: this.saved,
+        breakpoints: [...this.editor.breakpoints],
+      };
+      this.editor.dispose();
+      this.editor = null;
+    }
+    super.disconnectedCallback();
+  }
+
+  async firstUpdated(): Promise<void> {
+    try {
+      const [{ ProgramEditor }, catalog] = await Promise.all([
+        import("../program/editor"),
+        api<BlockCatalog>("GET", "/api/programs/_blocks"),
+        refreshChoices().catch(() => undefined),
+      ]);
+      const host = this.renderRoot.querySelector<HTMLElement>(".host");
+      if (!host || !this.isConnected) return;
+      const editor = new ProgramEditor(host, catalog, window.innerWidth < 700);
+      this.editor = editor;
+      editor.addEventListener("blocks", () => this.blocksChanged());
+      editor.addEventListener("history", () => this.historyChanged());
+      editor.addEventListener("selection", () => (this.selected = editor.selectedBlock()));
+      editor.addEventListener("breakpoints", () => this.breakpointsChanged());
+      await this.listPrograms();
+      if (draft) {
+        const kept = draft;
+        draft = null;
+        this.name = kept.name;
+        editor.load(kept.state);
+        this.saved = kept.saved;
+        for (const id of kept.breakpoints) editor.toggleBreakpoint(id);
+        this.source = "blocks";
+        this.blocksChanged();
+        if (kept.name) await this.fetchStatus(kept.name);
+      } else if (this.programs.length > 0) {
+        await this.open(this.programs[0].name);
+      } else {
+        this.startNew();
+      }
+    } catch (err) {
+      this.notice = `The program editor could not start: ${errorText(err)}`;
+    } finally {
+      this.loading = false;
+    }
+  }
+
+  updated(): void {
+    // After the options render: a value set before its option exists would not hold.
+    const select = this.renderRoot.querySelector<HTMLSelectElement>("[data-testid=program-select]");
+    if (select && select.value !== this.name) select.value = this.name;
+  }
+
+  // --- programs ---------------------------------------------------------------------------
+
+  private async listPrograms(): Promise<void> {
+    this.programs = await api<ProgramSummary[]>("GET", "/api/programs");
+  }
+
+  private async open(name: string): Promise<void> {
+    if (!this.editor || !(await this.confirmDiscard())) return;
+    try {
+      const program = await api<Program>("GET", `/api/programs/${encodeURIComponent(name)}`);
+      this.name = program.name;
+      this.source = program.source;
+      this.editor.load(program.source === "blocks" ? program.workspace : null);
+      this.saved = JSON.stringify(this.editor.state());
+      this.python = program.python;
+      this.problem = "";
+      this.dirty = false;
+      this.notice = "";
+      this.highlighted = null;
+      await this.fetchStatus(name);
+    } catch (err) {
+      this.notice = errorText(err);
+    }
+  }
+
+  private startNew(): void {
+    if (!this.editor) return;
+    this.name = "";
+    this.source = "blocks";
+    this.editor.load(null);
+    this.saved = JSON.stringify(this.editor.state());
+    this.python = "";
+    this.problem = "";
+    this.dirty = false;
+    this.highlighted = null;
+  }
+
+  private async confirmDiscard(): Promise<boolean> {
+    return !this.dirty || window.confirm("Discard the unsaved changes to this program?");
+  }
+
+  /** Saves the blocks; a new program asks for its name first. True when saved. */
+  private async save(): Promise<boolean> {
+    if (!this.editor || this.source !== "blocks") return false;
+    if (!this.name) {
+      this.dialog = "new";
+      return false;
+    }
+    return this.saveAs(this.name);
+  }
+
+  private async saveAs(name: string): Promise<boolean> {
+    if (!this.editor) return false;
+    const state = this.editor.state();
+    this.busy = true;
+    try {
+      const saved = await api<Saved>("PUT", `/api/programs/${encodeURIComponent(name)}`, {
+        workspace: state,
+      });
+      this.name = saved.name;
+      this.saved = JSON.stringify(state);
+      this.dirty = JSON.stringify(this.editor.state()) !== this.saved;
+      this.python = saved.python;
+      this.problem = "";
+      this.notice = "";
+      await this.listPrograms();
+      return true;
+    } catch (err) {
+      this.notice = `Not saved: ${errorText(err)}`;
+      this.tab = "python";
+      return false;
+    } finally {
+      this.busy = false;
+    }
+  }
+
+  private async nameChosen(name: string): Promise<void> {
+    if (!PROGRAM_NAME.test(name)) {
+      this.dialogError = "Program names start with a letter; letters, digits, _ and - only.";
+      return;
+    }
+    const dialog = this.dialog;
+    const exists = this.programs.some((p) => p.name === name);
+    this.busy = true;
+    try {
+      if (dialog === "new") {
+        if (exists) throw new ApiError(`There is already a program ${name}.`, "exists", 409);
+        if (!(await this.saveAs(name))) throw new Error(this.notice);
+      } else if (dialog === "rename") {
+        await api("POST", `/api/programs/${encodeURIComponent(this.name)}/rename`, { to: name });
+        this.name = name;
+        await this.listPrograms();
+      } else if (dialog === "duplicate") {
+        if (this.dirty && !(await this.saveAs(this.name))) throw new Error(this.notice);
+        await api("POST", `/api/programs/${encodeURIComponent(this.name)}/duplicate`, {
+          to: name,
+        });
+        await this.listPrograms();
+        await this.open(name);
+      }
+      this.dialog = null;
+    } catch (err) {
+      this.dialogError = errorText(err);
+    } finally {
+      this.busy = false;
+    }
+  }
+
+  private async deleteProgram(): Promise<void> {
+    const name = this.name;
+    this.busy = true;
+    try {
+      await api("DELETE", `/api/programs/${encodeURIComponent(name)}`);
+      this.dialog = null;
+      this.dirty = false;
+      await this.listPrograms();
+      if (this.programs.length > 0) await this.open(this.programs[0].name);
+      else this.startNew();
+    } catch (err) {
+      this.dialogError = errorText(err);
+    } finally {
+      this.busy = false;
+    }
+  }
+
+  // --- editing ----------------------------------------------------------------------------
+
+  private blocksChanged(): void {
+    if (!this.editor) return;
+    this.dirty = JSON.stringify(this.editor.state()) !== this.saved;
+    window.clearTimeout(this.previewTimer);
+    this.previewTimer = window.setTimeout(() => void this.preview(), PREVIEW_DELAY_MS);
+  }
+
+  private historyChanged(): void {
+    if (!this.editor) return;
+    this.history = { undo: this.editor.canUndo(), redo: this.editor.canRedo() };
+  }
+
+  /** The Python of the blocks as they are now, or why there is none. */
+  private async preview(): Promise<void> {
+    if (!this.editor || this.source !== "blocks") return;
+    const ticket = ++this.previewing;
+    try {
+      const generated = await api<Generated>("POST", "/api/programs/_generate", {
+        workspace: this.editor.state(),
+      });
+      if (ticket !== this.previewing) return;
+      this.python = generated.python;
+      this.problem = "";
+    } catch (err) {
+      if (ticket === this.previewing) this.problem = errorText(err);
+    }
+  }
+
+  private breakpointsChanged(): void {
+    this.requestUpdate();
+    const status = this.status();
+    if (this.editor && status && LIVE_STATES.includes(status.state)) {
+      void api("PUT", `/api/programs/${encodeURIComponent(this.name)}/breakpoints`, {
+        ids: this.editor.liveBreakpoints(),
+      }).catch((err: unknown) => (this.notice = errorText(err)));
+    }
+  }
+
+  // --- running ----------------------------------------------------------------------------
+
+  private status(): RunStatus | undefined {
+    return this.name ? runs.view(this.name)?.status : undefined;
+  }
+
+  private async fetchStatus(name: string): Promise<void> {
+    const status = await api<RunStatus>(
+      "GET",
+      `/api/programs/${encodeURIComponent(name)}/status`,
+    ).catch(() => null);
+    if (status) runs.answer(status);
+    this.showRun();
+  }
+
+  private async run(): Promise<void> {
+    if (!this.editor) return;
+    if (this.source === "blocks" && (this.dirty || !this.name) && !(await this.save())) return;
+    const robot = feed.pickRobot(this.robot);
+    const leases: Record<string, string> = {};
+    for (const r of feed.robots()) {
+      const token = control.token(r.local_name);
+      if (token) leases[r.local_name] = token;
+    }
+    this.busy = true;
+    try {
+      const status = await api<RunStatus>("POST", `/api/programs/${encodeURIComponent(this.name)}/run`, {
+        breakpoints: this.editor.liveBreakpoints(),
+        leases,
+        robot: robot || null,
+      });
+      this.notice = "";
+      this.tab = "output";
+      runs.answer(status);
+    } catch (err) {
+      this.notice = `Not started: ${errorText(err)}`;
+    } finally {
+      this.busy = false;
+    }
+  }
+
+  private async command(action: "pause" | "resume" | "step" | "stop"): Promise<void> {
+    try {
+      await api<RunStatus>("POST", `/api/programs/${encodeURIComponent(this.name)}/${action}`);
+    } catch (err) {
+      this.notice = errorText(err);
+    }
+  }
+
+  /** The run's block highlighted on the workspace. */
+  private showRun(): void {
+    const status = this.status();
+    const live = status !== undefined && LIVE_STATES.includes(status.state);
+    const block = live ? status.block : null;
+    if (block !== this.highlighted) {
+      this.highlighted = block;
+      this.editor?.highlight(block);
+    }
+    this.requestUpdate();
+    if (status?.state === "error" && status.error?.block) this.editor?.reveal(status.error.block);
+  }
+
+  // --- view -------------------------------------------------------------------------------
+
+  private renderProgramBar() {
+    const blocks = this.source === "blocks";
+    const live = LIVE_STATES.includes(this.status()?.state ?? "idle");
+    return html`<div class="bar">
+      <select
+        data-testid="program-select"
+        aria-label="Program"
+        @change=${(e: Event) => {
+          const select = e.target as HTMLSelectElement;
+          const wanted = select.value;
+          select.value = this.name;
+          void this.open(wanted);
+        }}
+      >
+        ${this.name ? nothing : html`<option value="">(new program)</option>`}
+        ${this.programs.map(
+          (p) => html`<option value=${p.name} ?selected=${p.name === this.name}>${p.name}</option>`,
+        )}
+      </select>
+      ${this.dirty ? html`<span class="dirty" data-testid="unsaved">unsaved</span>` : nothing}
+      <button data-testid="new" @click=${async () => (await this.confirmDiscard()) && this.startNew()}>
+        New
+      </button>
+      <button data-testid="save" class=${this.dirty || !this.name ? "primary" : ""}
+        ?disabled=${!blocks || this.busy} @click=${() => this.save()}>Save</button>
+      <button data-testid="rename" ?disabled=${!this.name || live}
+        @click=${() => this.openDialog("rename")}>Rename</button>
+      <button data-testid="duplicate" ?disabled=${!this.name}
+        @click=${() => this.openDialog("duplicate")}>Duplicate</button>
+      <button data-testid="delete" class="danger" ?disabled=${!this.name || live}
+        @click=${() => this.openDialog("delete")}>Delete</button>
+      <span class="spacer"></span>
+      <button data-testid="undo" aria-label="Undo" ?disabled=${!this.history.undo}
+        @click=${() => this.editor?.undo(false)}>↶<span class="label"> Undo</span></button>
+      <button data-testid="redo" aria-label="Redo" ?disabled=${!this.history.redo}
+        @click=${() => this.editor?.undo(true)}>↷<span class="label"> Redo</span></button>
+    </div>`;
+  }
+
+  private renderRunControls() {
+    const status = this.status();
+    const state = status?.state ?? "idle";
+    const live = LIVE_STATES.includes(state);
+    const robots = feed.robots();
+    const robot = feed.pickRobot(this.robot);
+    const onBreakpoint = this.selected !== null && this.editor?.breakpoints.has(this.selected);
+    return html`<div class="runpad">
+        ${live
+          ? html`<button class="stop wide" data-testid="stop" @click=${() => this.command("stop")}>
+              ■ Stop
+            </button>`
+          : html`<button class="run wide" data-testid="run"
+              ?disabled=${this.busy || this.loading || (this.source === "blocks" && this.problem !== "")}
+              @click=${() => this.run()}>▶ Run</button>`}
+        ${state === "paused"
+          ? html`<button data-testid="resume" @click=${() => this.command("resume")}>Resume</button>`
+          : html`<button data-testid="pause" ?disabled=${state !== "running"}
+              @click=${() => this.command("pause")}>Pause</button>`}
+        <button data-testid="step" ?disabled=${state !== "paused"}
+          @click=${() => this.command("step")}>Step</button>
+        <button data-testid="breakpoint" class="wide ${onBreakpoint ? "on" : ""}"
+          ?disabled=${this.selected === null}
+          @click=${() => this.selected && this.editor?.toggleBreakpoint(this.selected)}>
+          ${onBreakpoint ? "Clear breakpoint" : "Breakpoint on block"}
+        </button>
+      </div>
+      <div class="status">
+        <span class="chip ${stateClass(state)}" data-testid="run-state">${state}</span>
+        ${status?.block && live
+          ? html`<span class="muted" data-testid="run-block" data-block=${status.block}>
+              at “${this.editor?.describe(status.block) || status.block}”</span>`
+          : nothing}
+        <span class="spacer"></span>
+        ${robots.length > 1
+          ? html`<select aria-label="Robot" data-testid="run-robot" .value=${robot}
+              @change=${(e: Event) => (this.robot = (e.target as HTMLSelectElement).value)}>
+              ${robots.map((r) => html`<option value=${r.local_name}
+                ?selected=${r.local_name === robot}>${r.local_name}</option>`)}
+            </select>`
+          : html`<span class="muted">${robot || "no robot added"}</span>`}
+      </div>
+      ${state === "paused" && status?.pause_reason === "confirm"
+        ? html`<div class="confirm" role="alert" data-testid="confirm">
+            <strong>${status.message || "The program waits for you."}</strong>
+            <button class="primary" @click=${() => this.command("resume")}>Continue</button>
+          </div>`
+        : nothing}
+      ${this.notice
+        ? html`<p class="error" role="alert" data-testid="notice">${this.notice}</p>`
+        : nothing}`;
+  }
+
+  private renderOutput() {
+    const view = this.name ? runs.view(this.name) : undefined;
+    const status = view?.status;
+    const lines: (OutputEntry | null)[] = view?.output ?? [];
+    return html`<div class="pane" data-testid="output" role="log" aria-live="polite">
+      ${lines.length === 0 && !status?.error
+        ? html`<p class="muted">The program's output shows here when it runs.</p>`
+        : nothing}
+      ${lines.map(
+        (line) => line && html`<button class="line ${line.stream}" data-block=${line.block ?? ""}
+          @click=${() => line.block && this.editor?.reveal(line.block)}>${line.text}</button>`,
+      )}
+      ${status?.error
+        ? html`<button class="line error" data-testid="run-error"
+            @click=${() => status.error?.block && this.editor?.reveal(status.error.block)}>
+            ${status.error.message}${status.error.line ? ` (line ${status.error.line})` : ""}
+          </button>`
+        : nothing}
+      ${status && !status.error && status.message && !LIVE_STATES.includes(status.state)
+        ? html`<p class="muted">${status.message}</p>`
+        : nothing}
+    </div>`;
+  }
+
+  private renderPython() {
+    return html`<div class="pane" data-testid="python">
+      ${this.problem
+        ? html`<p class="error" role="alert" data-testid="problem">${this.problem}</p>`
+        : nothing}
+      <pre>${this.python || "# The Python of the blocks shows here."}</pre>
+    </div>`;
+  }
+
+  private renderDialog() {
+    const close = () => (this.dialog = null);
+    if (this.dialog === "delete") {
+      return html`<op-modal heading="Delete ${this.name}?" @close=${close}>
+        <p>The program is removed from the list. Its saved versions stay in the variable
+          history.</p>
+        ${this.dialogError ? html`<p class="error" role="alert">${this.dialogError}</p>` : nothing}
+        <div class="actions">
+          <button @click=${close}>Cancel</button>
+          <button class="danger" data-testid="delete-confirm" ?disabled=${this.busy}
+            @click=${() => this.deleteProgram()}>Delete</button>
+        </div>
+      </op-modal>`;
+    }
+    const heading = { new: "Save the new program as", rename: `Rename ${this.name}`,
+      duplicate: `Duplicate ${this.name} as` }[this.dialog ?? "new"];
+    return html`<op-name-dialog
+      heading=${heading}
+      value=${this.dialog === "duplicate" ? `${this.name}_copy` : this.name}
+      confirmLabel=${this.dialog === "duplicate" ? "Duplicate" : "Save"}
+      error=${this.dialogError}
+      ?busy=${this.busy}
+      @confirm=${(e: CustomEvent<{ name: string }>) => this.nameChosen(e.detail.name)}
+      @close=${close}
+    ></op-name-dialog>`;
+  }
+
+  private openDialog(dialog: Exclude<Dialog, null>): void {
+    this.dialogError = "";
+    this.dialog = dialog;
+  }
+
+  render() {
+    return html`
+      ${this.renderProgramBar()}
+      <div class="work">
+        <div class="blockly">
+          <div class="host" data-testid="workspace"></div>
+          ${this.loading
+            ? html`<div class="cover" role="progressbar" aria-label="Loading the editor">
+                Loading the block editor…</div>`
+            : nothing}
+          ${!this.loading && this.source === "python"
+            ? html`<div class="cover"><p>${this.name} is written in Python: it runs as it is and
+                is not edited as blocks. Its code is under “Python”.</p></div>`
+            : nothing}
+        </div>
+        <div class="side">
+          ${this.renderRunControls()}
+          <div class="tabs" role="tablist">
+            <button role="tab" data-testid="tab-output" aria-selected=${this.tab === "output"}
+              @click=${() => (this.tab = "output")}>Output</button>
+            <button role="tab" data-testid="tab-python" aria-selected=${this.tab === "python"}
+              @click=${() => (this.tab = "python")}>Python${this.problem ? " ⚠" : ""}</button>
+          </div>
+          ${this.tab === "output" ? this.renderOutput() : this.renderPython()}
+        </div>
+      </div>
+      ${this.dialog ? this.renderDialog() : nothing}
+    `;
+  }
+}
+
+function stateClass(state: string): string {
+  if (state === "running" || state === "finished") return "ok";
+  if (state === "paused" || state === "starting") return "warn";
+  if (state === "error") return "bad";
+  return "";
+}
+
+customElements.define("op-program-panel", OpProgramPanel);

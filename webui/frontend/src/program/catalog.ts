@@ -1,0 +1,98 @@
+// The runtime's blocks in Blockly: definitions and toolbox from GET /api/programs/_blocks, and
+// the dropdowns that list what the system has (robots, waypoints, I/O names).
+
+import * as Blockly from "blockly";
+
+type BlockJson = { type: string } & Record<string, unknown>;
+type FieldJson = { type?: string; options?: unknown; op_options?: ChoiceKind } & Record<
+  string,
+  unknown
+>;
+
+export interface BlockCatalog {
+  definitions: Record<string, BlockJson[]>;
+  toolbox: Blockly.utils.toolbox.ToolboxDefinition;
+}
+
+export type ChoiceKind = "robots" | "waypoints" | "inputs" | "outputs";
+
+const EMPTY_LABEL: Record<ChoiceKind, string> = {
+  robots: "(no robot added)",
+  waypoints: "(no waypoint taught)",
+  inputs: "(no inputs)",
+  outputs: "(no outputs)",
+};
+
+/** What the runtime has now; the panel keeps these current. */
+export const choices: Record<ChoiceKind, string[]> = {
+  robots: [],
+  waypoints: [],
+  inputs: [],
+  outputs: [],
+};
+
+// Names used by loaded programs stay selectable even when the system no longer has them:
+// a program naming a removed robot loads as it was saved, and its run reports the name.
+const used: Record<ChoiceKind, Set<string>> = {
+  robots: new Set(),
+  waypoints: new Set(),
+  inputs: new Set(),
+  outputs: new Set(),
+};
+
+const dynamicFields = new Map<string, ChoiceKind>(); // "<block type>/<field name>" -> kind
+
+function menu(kind: ChoiceKind): Blockly.MenuGeneratorFunction {
+  return function (this: Blockly.FieldDropdown): Blockly.MenuOption[] {
+    const names = new Set([...choices[kind], ...used[kind]]);
+    const current = this.getValue();
+    if (current) names.add(current);
+    if (names.size === 0) return [[EMPTY_LABEL[kind], ""]];
+    return [...names].sort().map((name) => [name, name]);
+  };
+}
+
+let defined = false;
+
+/** Registers the project's blocks with Blockly (once; the standard ones come with it). */
+export function defineBlocks(catalog: BlockCatalog): void {
+  if (defined) return;
+  for (const definition of Object.values(catalog.definitions).flat()) {
+    const json = structuredClone(definition);
+    for (const [key, args] of Object.entries(json)) {
+      if (!key.startsWith("args") || !Array.isArray(args)) continue;
+      for (const field of args as FieldJson[]) {
+        if (field.op_options === undefined) continue;
+        dynamicFields.set(`${json.type}/${String(field.name)}`, field.op_options);
+        field.options = menu(field.op_options);
+        delete field.op_options;
+      }
+    }
+    Blockly.Blocks[json.type] = {
+      init(this: Blockly.Block) {
+        this.jsonInit(json);
+      },
+    };
+  }
+  defined = true;
+}
+
+/** Before loading a saved workspace: its robot, waypoint and I/O names become options. */
+export function rememberNames(state: unknown): void {
+  const visit = (node: unknown): void => {
+    if (Array.isArray(node)) {
+      node.forEach(visit);
+      return;
+    }
+    if (node === null || typeof node !== "object") return;
+    const block = node as { type?: unknown; fields?: Record<string, unknown> };
+    if (typeof block.type === "string" && block.fields) {
+      for (const [field, value] of Object.entries(block.fields)) {
+        const kind = dynamicFields.get(`${block.type}/${field}`);
+        if (kind && typeof value === "string" && value) used[kind].add(value);
+      }
+    }
+    Object.values(node).forEach(visit);
+  };
+  visit(state);
+}

@@ -1,0 +1,84 @@
+// The program service's run statuses over one WebSocket: the latest status of each program
+// and the output of its current run, gaps filled from GET status?after=N. Reconnects itself.
+
+import { api } from "../api";
+import type { OutputEntry, RunStatus } from "./types";
+
+const MAX_KEPT_OUTPUT = 2000;
+
+export interface RunView {
+  status: RunStatus;
+  output: OutputEntry[];
+}
+
+export class RunFeed extends EventTarget {
+  private readonly views = new Map<string, RunView>();
+  private socket: WebSocket | null = null;
+  private retry = 0;
+  private stopped = true;
+
+  view(program: string): RunView | undefined {
+    return this.views.get(program);
+  }
+
+  start(): void {
+    this.stopped = false;
+    if (this.socket) return;
+    const scheme = location.protocol === "https:" ? "wss" : "ws";
+    const socket = new WebSocket(`${scheme}://${location.host}/api/programs/_ws`);
+    this.socket = socket;
+    socket.onopen = () => (this.retry = 0);
+    socket.onmessage = (event) => {
+      try {
+        this.receive(JSON.parse(event.data as string) as RunStatus);
+      } catch {
+        // Not a status: nothing to show.
+      }
+    };
+    socket.onclose = () => {
+      this.socket = null;
+      if (this.stopped) return;
+      window.setTimeout(() => this.start(), Math.min(500 * 2 ** this.retry++, 5000));
+    };
+  }
+
+  stop(): void {
+    this.stopped = true;
+    this.socket?.close();
+    this.socket = null;
+  }
+
+  /** The answer to a run request: the new run shows at once. Answers about a run already
+   * shown are left to the push, which is in order (an answer can cross a newer push). */
+  answer(status: RunStatus): void {
+    if (this.views.get(status.program)?.status.run !== status.run) this.receive(status);
+  }
+
+  private receive(status: RunStatus): void {
+    if (typeof status.program !== "string" || typeof status.state !== "string") return;
+    const known = this.views.get(status.program);
+    const sameRun = known !== undefined && known.status.run === status.run;
+    const output = sameRun ? known.output : [];
+    const last = output.at(-1)?.seq ?? 0;
+    const first = status.output[0]?.seq;
+    if (first !== undefined && first > last + 1) void this.fill(status.program, status.run, last);
+    for (const line of status.output) if (line.seq > (output.at(-1)?.seq ?? 0)) output.push(line);
+    if (output.length > MAX_KEPT_OUTPUT) output.splice(0, output.length - MAX_KEPT_OUTPUT);
+    this.views.set(status.program, { status: { ...status, output: [] }, output });
+    this.dispatchEvent(new CustomEvent("change", { detail: status.program }));
+  }
+
+  /** Lines the push left out (it carries the latest ones only). */
+  private async fill(program: string, run: number, after: number): Promise<void> {
+    const status = await api<RunStatus>(
+      "GET",
+      `/api/programs/${encodeURIComponent(program)}/status?after=${after}`,
+    ).catch(() => null);
+    const view = this.views.get(program);
+    if (!status || !view || view.status.run !== run || status.run !== run) return;
+    const merged = new Map(view.output.map((o) => [o.seq, o]));
+    for (const line of status.output) merged.set(line.seq, line);
+    view.output = [...merged.values()].sort((a, b) => a.seq - b.seq).slice(-MAX_KEPT_OUTPUT);
+    this.dispatchEvent(new CustomEvent("change", { detail: program }));
+  }
+}
