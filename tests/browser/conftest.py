@@ -99,11 +99,13 @@ class Finger:
     def __init__(self, page: Page) -> None:
         self.cdp: CDPSession = page.context.new_cdp_session(page)
 
-    def down(self, target: Locator) -> None:
+    def down(self, target: Locator, offset: tuple[float, float] | None = None) -> None:
+        """A finger on the target's centre, or `offset` from its top-left corner."""
         target.scroll_into_view_if_needed()
         box = target.bounding_box()
         assert box is not None
-        point = {"x": box["x"] + box["width"] / 2, "y": box["y"] + box["height"] / 2}
+        dx, dy = offset or (box["width"] / 2, box["height"] / 2)
+        point = {"x": box["x"] + dx, "y": box["y"] + dy}
         self.cdp.send("Input.dispatchTouchEvent", {"type": "touchStart", "touchPoints": [point]})
 
     def move(self, x: float, y: float) -> None:

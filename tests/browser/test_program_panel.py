@@ -232,6 +232,15 @@ def test_duplicate_rename_and_delete_a_program(
     expect(select).to_have_value("cycle_b")
     expect(block_of(page, cell["id"])).to_be_visible()
 
+    # A long press on a block opens its menu, with the breakpoint toggle.
+    wait_block = next(i for i in ids_of(cell) if i.startswith("time_wait"))
+    finger = Finger(page)
+    finger.down(block_of(page, wait_block).locator("> .blocklyPath"), offset=(12, 12))
+    page.wait_for_timeout(1200)
+    finger.up()
+    page.get_by_role("menuitem", name="Add breakpoint").tap()
+    expect(block_of(page, wait_block)).to_have_class(re.compile("opBreakpoint"))
+
     page.get_by_test_id("rename").tap()
     page.get_by_test_id("name-input").fill("cycle")
     page.get_by_test_id("name-confirm").tap()
