@@ -1,9 +1,11 @@
-"""Collision checking of a joint path by conservative advancement: at each checked
-configuration the clearance d says how far any body point may travel before it could touch
-something, and the next check comes before that (or after `resolution` of travel when d is
-smaller), so no body can pass through anything thicker than twice `resolution` unseen.
-The robot's own links are checked against each other too; both may move toward each other,
-so their clearance counts half."""
+"""Collision checking of a joint path by conservative advancement: a checked configuration's
+clearance says how far any body point may travel before it could touch something else (its
+room), and how far each pair of the robot's own links may move relative to each other before
+they could touch; the next check comes when the travel since the last one could have used up
+any of that room (or after `resolution` of travel when the room is smaller), so nothing
+thicker than twice `resolution` is passed through unseen. A pair of links that a joint moves
+as one (every link, for the base joint) has travelled nothing relative to each other: a
+swing of the base alone is checked against the world only."""
 
 from __future__ import annotations
 
@@ -42,56 +44,64 @@ class PathChecker:
         self.world = world
         self.robot = robot
         self.margin = margin
-        self.bounds = world.robot(robot).reach_bounds()
+        body = world.robot(robot)
+        self.bounds = body.reach_bounds()
+        self.pair_bounds = body.self_pair_bounds()
         self.checks = 0
 
     def configuration(self, q: FloatArray) -> Collision | None:
-        hit, _ = self._check(q)
+        hit, _, _ = self._check(q)
         return None if hit is None else _collision(hit, q, 0)
 
-    def _check(self, q: FloatArray) -> tuple[Contact | None, float]:
+    def _check(self, q: FloatArray) -> tuple[Contact | None, float, FloatArray]:
         """The contact that collides at `q` (nearer than the margin to anything else, or
-        touching another link of the robot), if any, and how far any body point may travel
-        from `q` before a contact could close."""
-        outer = self.world.nearest(self.robot, q)
-        inner = self.world.nearest_self(self.robot)  # placed at q just now
+        touching another link of the robot), if any; the room: how far any body point may
+        travel from `q` before it could come within the margin of anything else, and how far
+        each self pair's links may move relative to each other before they could touch."""
         self.checks += 1
-        clearance = np.inf
+        outer = self.world.nearest(self.robot, q)  # places the robot at q
+        room = np.inf
         if outer is not None:
-            clearance = outer.proximity.distance - self.margin
-            if clearance <= 0:
-                return outer, clearance
-        if inner is not None:
-            # The margin is for the scene: some links of a robot are closer than a margin
-            # of a few cm at every pose (a UR5's forearm and wrist 2: 14 mm at home).
-            if inner.proximity.distance <= 0:
-                return inner, 0.0
-            clearance = min(clearance, inner.proximity.distance / 2)
-        return None, clearance
+            room = outer.proximity.distance - self.margin
+            if room <= 0:
+                return outer, room, np.zeros(len(self.pair_bounds))
+        # The margin is for the scene: some links of a robot are closer than a margin of a
+        # few cm at every pose (a UR5's forearm and wrist 2: 14 mm at home).
+        inner, pair_room = self.world.self_clearances(self.robot)
+        return inner, room, pair_room
 
     def path(self, samples: FloatArray) -> Collision | None:
         """The first collision along the polyline through `samples` (rows of joints)."""
-        if len(samples) == 1:
-            return self.configuration(samples[0])
+        hit, room, pair_room = self._check(samples[0])
+        if hit is not None:
+            return _collision(hit, samples[0], 0)
         for k in range(len(samples) - 1):
-            hit = self._segment(samples[k], samples[k + 1])
-            if hit is not None:
-                return _with_index(hit, k)
+            a = samples[k]
+            delta = samples[k + 1] - a
+            step = np.abs(delta)
+            rate = float(self.bounds @ step)  # worst body-point travel over the segment
+            pair_rate = self.pair_bounds @ step  # worst relative travel of each self pair
+            s = 0.0
+            while True:
+                ahead = _covered(room, pair_room, rate, pair_rate)
+                if s + ahead >= 1.0:  # the room lasts past the segment's end: carry it on
+                    room -= rate * (1.0 - s)
+                    pair_room = pair_room - pair_rate * (1.0 - s)
+                    break
+                s = min(1.0, s + max(ahead, RESOLUTION / rate))
+                q = a + s * delta
+                hit, room, pair_room = self._check(q)
+                if hit is not None:
+                    return _collision(hit, q, k)
+                if s >= 1.0:
+                    break
         return None
 
-    def _segment(self, a: FloatArray, b: FloatArray) -> Collision | None:
-        delta = b - a
-        travel = float(self.bounds @ np.abs(delta))  # worst body-point travel over a→b
-        s = 0.0
-        while True:
-            q = a + s * delta
-            hit, clearance = self._check(q)
-            if hit is not None:
-                return _collision(hit, q, 0)
-            if s >= 1.0 or travel == 0.0:
-                return None
-            s = min(1.0, s + max(clearance, RESOLUTION) / travel)
 
-
-def _with_index(hit: Collision, index: int) -> Collision:
-    return Collision(hit.robot_part, hit.other, hit.distance, hit.position, hit.point, index)
+def _covered(room: float, pair_room: FloatArray, rate: float, pair_rate: FloatArray) -> float:
+    """The fraction of a segment the room lasts for (inf when the segment moves nothing)."""
+    ahead = room / rate if rate > 0 else np.inf
+    moving = pair_rate > 0
+    if moving.any():
+        ahead = min(ahead, float(np.min(pair_room[moving] / pair_rate[moving])))
+    return ahead

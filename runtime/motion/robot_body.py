@@ -155,20 +155,40 @@ class RobotBody:
     def reach_bounds(self) -> FloatArray:
         """For each joint, a bound on the distance from its axis to any point it moves: a
         joint step δq moves no body point further than Σ bound_j |δq_j|."""
-        model = self.model
-        order = self.kinematics.order
-        joint_of_q = {model.joints[j].idx_q: j for j in range(1, model.njoints)}
-        joints = [joint_of_q[i] for i in order]
-        bounds = np.zeros(len(joints))
-        for k, j in enumerate(joints):
+        bounds = np.zeros(len(self.kinematics.order))
+        for k, j in enumerate(self._joints()):
             for part in self.moving:
                 chain = self._chain_length(j, part.joint)
-                if chain is None:
-                    continue
-                placement = model.frames[part.frame].placement * part.shape.local
-                reach = np.linalg.norm(placement.act(part.shape.center)) + part.shape.radius
-                bounds[k] = max(bounds[k], chain + reach)
+                if chain is not None:
+                    bounds[k] = max(bounds[k], chain + self._reach(part))
         return bounds
+
+    def self_pair_bounds(self) -> FloatArray:
+        """For each of `self_pairs` and each joint, a bound on how far the joint moves a point
+        of one link of the pair relative to the other: a joint step δq changes the pair's
+        distance by at most Σ bound_j |δq_j|. A joint that moves both links (or neither)
+        moves them as one and counts zero."""
+        bounds = np.zeros((len(self.self_pairs), len(self.kinematics.order)))
+        for k, j in enumerate(self._joints()):
+            for p, (a, b) in enumerate(self.self_pairs):
+                to_a, to_b = self._chain_length(j, a.joint), self._chain_length(j, b.joint)
+                if (to_a is None) == (to_b is None):
+                    continue
+                moved, chain = (a, to_a) if to_a is not None else (b, to_b)
+                assert chain is not None
+                bounds[p, k] = chain + self._reach(moved)
+        return bounds
+
+    def _joints(self) -> list[int]:
+        """Model joint indices in robot-info order."""
+        model = self.model
+        joint_of_q = {model.joints[j].idx_q: j for j in range(1, model.njoints)}
+        return [joint_of_q[i] for i in self.kinematics.order]
+
+    def _reach(self, part: BodyPart) -> float:
+        """How far any point of the part lies from its joint's origin."""
+        placement = self.model.frames[part.frame].placement * part.shape.local
+        return float(np.linalg.norm(placement.act(part.shape.center))) + part.shape.radius
 
     def _chain_length(self, ancestor: int, joint: int) -> float | None:
         """Sum of the joint offsets from `ancestor` down to `joint`, or None when `joint`

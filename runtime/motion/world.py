@@ -19,6 +19,10 @@ from runtime.motion.geometry import Proximity, Shape, proximity
 from runtime.motion.robot_body import BodyPart, RobotBody
 from runtime.paths import resolve_package_uri
 
+# Self pairs whose bounding spheres come this near get their exact distance (m): elsewhere the
+# spheres' gap is a good enough lower bound.
+NEAR_SELF = 0.05
+
 
 def scene_shape(name: str, obj: SceneObject) -> Shape:
     """The collision shape of a scene object, `local` being its pose (world or TCP frame)."""
@@ -139,21 +143,27 @@ class World:
                 best = Contact(parts[i], near)
         return best
 
-    def nearest_self(self, robot: str, q: FloatArray | None = None) -> Contact | None:
-        """The closest pair of the robot's own links that can hit each other."""
-        body = self.robot(robot)
-        if q is not None:
-            body.place(q)
-        best: Contact | None = None
-        gaps = [(geometry.sphere_gap(a.shape, b.shape), a, b) for a, b in body.self_pairs]
-        # Pairs in order of their lower bound; stop once no remaining pair can be nearer.
-        for gap, a, b in sorted(gaps, key=lambda g: g[0]):
-            if best is not None and gap >= best.proximity.distance:
-                break
-            near = proximity(a.shape, b.shape)
-            if best is None or near.distance < best.proximity.distance:
-                best = Contact(a, near)
-        return best
+    def self_clearances(self, robot: str) -> tuple[Contact | None, FloatArray]:
+        """At the robot's current placement: the distance of each of its self pairs (exact
+        where their bounding spheres come within NEAR_SELF, else the spheres' gap, a lower
+        bound), and the pair in contact, if any."""
+        pairs = self.robot(robot).self_pairs
+        if not pairs:
+            return None, np.zeros(0)
+        a = np.array([x.shape.world_center for x, _ in pairs])
+        b = np.array([y.shape.world_center for _, y in pairs])
+        radii = np.array([x.shape.radius + y.shape.radius for x, y in pairs])
+        distances: FloatArray = np.linalg.norm(a - b, axis=1) - radii
+        touching: Contact | None = None
+        for i in np.nonzero(distances < NEAR_SELF)[0]:
+            x, y = pairs[i]
+            near = proximity(x.shape, y.shape)
+            distances[i] = near.distance
+            if near.distance <= 0 and (
+                touching is None or near.distance < touching.proximity.distance
+            ):
+                touching = Contact(x, near)
+        return touching, distances
 
     def _pairs(
         self, robot: str, q: FloatArray | None

@@ -12,6 +12,7 @@ import pytest
 
 from runtime.interfaces.scene import SceneObject
 from runtime.motion.checker import PathChecker
+from runtime.motion.geometry import proximity
 from runtime.motion.models import MoveRequest
 from runtime.motion.moves import MovePlanner, Point
 from runtime.motion.paths import PathError, sample_tcp_path
@@ -107,6 +108,63 @@ def test_a_move_folding_the_arm_into_itself_is_refused_with_the_pair() -> None:
     assert checker.configuration(start) is None and checker.configuration(end) is None
     hit = checker.path(np.array([start, end]))
     assert hit is not None and hit.robot_part.startswith("r/") and hit.other.startswith("r/")
+
+
+def test_self_pair_bounds_bound_how_far_a_joint_step_moves_one_link_from_the_other() -> None:
+    world = world_with({})
+    body = world.robot("r")
+    bounds = body.self_pair_bounds()
+    assert bounds.shape == (len(body.self_pairs), 6)
+    # The base joint turns every link but the base link as one.
+    for p, (a, b) in enumerate(body.self_pairs):
+        assert (bounds[p, 0] > 0) == (0 in (a.joint, b.joint))
+
+    def exact() -> np.ndarray[Any, Any]:
+        return np.array([proximity(a.shape, b.shape).distance for a, b in body.self_pairs])
+
+    rng = np.random.default_rng(7)
+    lower = np.array([j.lower for j in INFO.joints])
+    upper = np.array([j.upper for j in INFO.joints])
+    for _ in range(200):
+        q = rng.uniform(np.maximum(lower, -3.0), np.minimum(upper, 3.0))
+        dq = rng.normal(0.0, 0.05, 6)
+        body.place(q)
+        before = exact()
+        # The distances the checker works from never overstate the exact ones.
+        assert np.all(world.self_clearances("r")[1] <= before + 1e-9)
+        body.place(q + dq)
+        assert np.all(np.abs(exact() - before) <= bounds @ np.abs(dq) + 1e-5)
+
+
+def test_no_collision_dense_sampling_finds_is_missed_by_the_checker() -> None:
+    """Random joint moves through the cluttered scene, each cut short where 400 evenly spaced
+    samples first find the robot touching itself or anything else: the move ends just
+    touching, and the path check still finds the collision."""
+    world = world_with(cluttered())
+    checker = PathChecker(world, "r")
+    rng = np.random.default_rng(11)
+    lower = np.array([j.lower for j in INFO.joints])
+    upper = np.array([j.upper for j in INFO.joints])
+
+    def touching(q: np.ndarray[Any, Any]) -> bool:
+        outer = world.nearest("r", q)
+        inner, _ = world.self_clearances("r")
+        return inner is not None or (outer is not None and outer.proximity.distance <= 0)
+
+    missed, tried = [], 0
+    while tried < 25:
+        a = rng.uniform(np.maximum(lower, -3.2), np.minimum(upper, 3.2))
+        b = rng.uniform(np.maximum(lower, -3.2), np.minimum(upper, 3.2))
+        if touching(a):
+            continue
+        first = next((s for s in np.linspace(0.0, 1.0, 400) if touching(a + s * (b - a))), None)
+        if first is None:
+            continue
+        tried += 1
+        end = a + first * (b - a)
+        if checker.path(np.array([a, end])) is None:
+            missed.append((a, end))
+    assert missed == []
 
 
 def test_the_planner_finds_a_collision_free_path_in_a_cluttered_scene() -> None:
