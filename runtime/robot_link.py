@@ -64,28 +64,38 @@ class RobotLink:
 
     # Commands -------------------------------------------------------------------------------
 
+    async def open_commands(self) -> None:
+        """Opens the command stream ahead of need, so the first command (a halt) is one
+        message and not a connection set-up."""
+        async with self._command_lock:
+            await self._stream()
+
     async def send(self, command: dict[str, Any]) -> None:
         """One streamed command; refusals come back through `on_error`."""
         if command.get("type") == "halt":
             self._mode = None
         async with self._command_lock:
-            if self._commands is None:
-                try:
-                    self._commands = await websockets.connect(
-                        f"{self._ws_url}/command/ws", open_timeout=2.0, close_timeout=1.0
-                    )
-                except (OSError, websockets.WebSocketException, TimeoutError) as exc:
-                    raise Unavailable(
-                        f"cannot reach {self.name}: {exc}", code="device_disconnected"
-                    ) from exc
-                self._tasks.append(asyncio.create_task(self._read_errors(self._commands)))
+            stream = await self._stream()
             try:
-                await self._commands.send(json.dumps(command))
+                await stream.send(json.dumps(command))
             except websockets.WebSocketException as exc:
                 self._commands = None
                 raise Unavailable(
                     f"lost the command stream to {self.name}", code="device_disconnected"
                 ) from exc
+
+    async def _stream(self) -> websockets.ClientConnection:
+        if self._commands is None:
+            try:
+                self._commands = await websockets.connect(
+                    f"{self._ws_url}/command/ws", open_timeout=2.0, close_timeout=1.0
+                )
+            except (OSError, websockets.WebSocketException, TimeoutError) as exc:
+                raise Unavailable(
+                    f"cannot reach {self.name}: {exc}", code="device_disconnected"
+                ) from exc
+            self._tasks.append(asyncio.create_task(self._read_errors(self._commands)))
+        return self._commands
 
     async def _read_errors(self, ws: websockets.ClientConnection) -> None:
         with contextlib.suppress(websockets.WebSocketException, OSError):

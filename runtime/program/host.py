@@ -12,8 +12,10 @@ import re
 from collections.abc import Awaitable, Callable
 from typing import Any
 
+from runtime.interfaces.robot import RobotInfo
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import NotFound, OpenPendantError
+from runtime.robot_link import RobotLink
 from runtime.variable_storage.client import StorageClient
 from sandbox.supervisor import CallRefused
 
@@ -27,6 +29,34 @@ MAX_STORED = 256 * 1024
 Handler = Callable[[dict[str, Any]], Awaitable[Any]]
 
 
+class DriverLinks:
+    """The program service's links to robot drivers, shared by its runs and kept open: the
+    command stream (a stop is one message on it) and HTTP (tool, I/O)."""
+
+    def __init__(self, devices: ServiceClient) -> None:
+        self.devices = devices
+        self.links: dict[str, RobotLink] = {}
+
+    async def get(self, robot: str) -> RobotLink:
+        details = await self.devices.get(f"/devices/{robot}")
+        link = self.links.get(robot)
+        if link is not None and link.url == details["url"].rstrip("/"):
+            await link.open_commands()  # again, if the stream dropped since
+            return link
+        if link is not None:  # the robot was added again, elsewhere
+            await link.close()
+        link = RobotLink(robot, details["url"], RobotInfo.model_validate(details["info"]["info"]))
+        self.links[robot] = link
+        await link.open_commands()
+        await link.http.get("/health")
+        return link
+
+    async def close(self) -> None:
+        for link in self.links.values():
+            await link.close()
+        self.links.clear()
+
+
 class RunHost:
     def __init__(
         self,
@@ -34,11 +64,13 @@ class RunHost:
         devices: ServiceClient,
         motion: ServiceClient,
         storage: StorageClient,
+        links: DriverLinks,
         *,
         robot: str | None,
         leases: dict[str, str],
     ) -> None:
         self.holder = holder
+        self.links = links
         self.devices = devices
         self.motion = motion
         self.storage = storage
@@ -47,7 +79,7 @@ class RunHost:
         self.acquired: dict[str, str] = {}
         self.commanded: list[str] = []
         self.speed = 0.5
-        self._drivers: dict[str, ServiceClient] = {}
+        self._drivers: dict[str, RobotLink] = {}
         self._renewer: asyncio.Task[None] | None = None
         self.handlers: dict[str, Handler] = {
             "robot.use": self._use,
@@ -84,7 +116,8 @@ class RunHost:
         driver = self._drivers.get(robot)
         calls = [self.motion.post(f"/motion/robots/{robot}/stop")]
         if driver is not None:
-            calls.insert(0, driver.post("/halt"))
+            # One message on a stream opened ahead: within a control cycle of the stop.
+            calls.insert(0, driver.halt(f"{self.holder} stopped"))
         for result in await asyncio.gather(*calls, return_exceptions=True):
             if isinstance(result, Exception):
                 log.warning("halting %s: %s", robot, result)
@@ -97,8 +130,6 @@ class RunHost:
                 await self.devices.delete(
                     f"/devices/{robot}/lease", headers={"X-Lease-Token": token}
                 )
-        for driver in self._drivers.values():
-            await driver.aclose()
 
     # Robots ---------------------------------------------------------------------------------
 
@@ -151,26 +182,33 @@ class RunHost:
                         f"/devices/{robot}/lease/check", headers={"X-Lease-Token": token}
                     )
 
-    async def _driver(self, robot: str, token: str) -> ServiceClient:
+    async def _driver(self, robot: str, token: str) -> RobotLink:
         await self.devices.post(f"/devices/{robot}/lease/check", headers={"X-Lease-Token": token})
         driver = self._drivers.get(robot)
         if driver is None:
-            details = await self.devices.get(f"/devices/{robot}")
-            driver = ServiceClient(details["url"], timeout=3.0, name=f"robot {robot}")
-            await driver.get("/health")  # a connection kept open, for a stop at once
-            self._drivers[robot] = driver
+            driver = self._drivers[robot] = await self.links.get(robot)
         return driver
+
+    async def _ready_to_halt(self, robot: str, token: str) -> None:
+        """The driver's command stream open for a stop at once; until it is, a stop halts
+        through the motion service."""
+        try:
+            await self._driver(robot, token)
+        except OpenPendantError as exc:
+            log.warning("no command stream to %s: %s", robot, exc)
 
     async def _run_move(self, request: dict[str, Any]) -> None:
         robot = await self._active()
         token = await self._token(robot)
-        if robot not in self._drivers:
-            await self._driver(robot, token)  # ready for a stop at once
         request.setdefault("speed", self.speed)
         request.setdefault("acceleration", self.speed)
-        status = await self.motion.post(
+        start = self.motion.post(
             f"/motion/robots/{robot}/moves", json=request, headers={"X-Lease-Token": token}
         )
+        if robot in self._drivers:
+            status = await start
+        else:  # the link is made while the move is planned, not before
+            status, _ = await asyncio.gather(start, self._ready_to_halt(robot, token))
         while status["state"] in ("planning", "running"):
             status = await self.motion.get(
                 f"/motion/moves/{status['id']}",
@@ -220,7 +258,7 @@ class RunHost:
     async def _tool(self, args: dict[str, Any]) -> None:
         robot = await self._active()
         driver = await self._driver(robot, await self._token(robot))
-        await driver.post("/tool", json={"open": bool(args["open"])})
+        await driver.http.post("/tool", json={"open": bool(args["open"])})
 
     # Waypoints, I/O, stored values ----------------------------------------------------------
 
@@ -247,7 +285,7 @@ class RunHost:
         if kind != "do":
             raise CallRefused(f"{args['name']} is an input; only outputs can be set", "read_only")
         driver = await self._driver(robot, await self._token(robot))
-        await driver.put(f"/digital_outputs/{index}", json={"value": bool(args["value"])})
+        await driver.http.put(f"/digital_outputs/{index}", json={"value": bool(args["value"])})
 
     async def _io_get(self, args: dict[str, Any]) -> bool:
         robot, kind, index = self._io(str(args["name"]))

@@ -11,7 +11,7 @@ import time
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import Conflict, NotFound
 from runtime.kit.websocket import Fanout
-from runtime.program.host import RunHost
+from runtime.program.host import DriverLinks, RunHost
 from runtime.program.library import ProgramLibrary
 from runtime.program.models import ErrorInfo, OutputEntry, RunRequest, RunStatus
 from runtime.variable_storage.client import StorageClient
@@ -46,6 +46,7 @@ class Runs:
         self._numbers = itertools.count(1)
         self._watchers: set[asyncio.Task[None]] = set()
         self.pool = WorkerPool()
+        self.links = DriverLinks(devices)
 
     async def start(self, name: str, request: RunRequest) -> RunStatus:
         current = self.runs.get(name)
@@ -57,6 +58,7 @@ class Runs:
             self.devices,
             self.motion,
             self.storage,
+            self.links,
             robot=request.robot,
             leases=request.leases,
         )
@@ -123,6 +125,7 @@ class Runs:
             with contextlib.suppress(Exception):
                 await active.run.stop("the program service is shutting down")
         await self.pool.close()
+        await self.links.close()
 
     async def breakpoints(self, name: str, ids: list[str]) -> RunStatus:
         await self._active(name).run.set_breakpoints(set(ids))
