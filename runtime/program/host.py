@@ -36,8 +36,13 @@ class DriverLinks:
     def __init__(self, devices: ServiceClient) -> None:
         self.devices = devices
         self.links: dict[str, RobotLink] = {}
+        self._lock = asyncio.Lock()  # two runs starting at once make one link, not two
 
     async def get(self, robot: str) -> RobotLink:
+        async with self._lock:
+            return await self._get(robot)
+
+    async def _get(self, robot: str) -> RobotLink:
         details = await self.devices.get(f"/devices/{robot}")
         link = self.links.get(robot)
         if link is not None and link.url == details["url"].rstrip("/"):
