@@ -46,7 +46,7 @@ class PathChecker:
         self.margin = margin
         body = world.robot(robot)
         self.bounds = body.reach_bounds()
-        self.pair_bounds = body.self_pair_bounds()
+        self.pair_bounds = body.self_pair_bounds
         self.checks = 0
 
     def configuration(self, q: FloatArray) -> Collision | None:

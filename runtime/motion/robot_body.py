@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -163,11 +164,12 @@ class RobotBody:
                     bounds[k] = max(bounds[k], chain + self._reach(part))
         return bounds
 
+    @cached_property
     def self_pair_bounds(self) -> FloatArray:
         """For each of `self_pairs` and each joint, a bound on how far the joint moves a point
         of one link of the pair relative to the other: a joint step δq changes the pair's
         distance by at most Σ bound_j |δq_j|. A joint that moves both links (or neither)
-        moves them as one and counts zero."""
+        moves them as one and counts zero. Fixed by the links' geometry: worked out once."""
         bounds = np.zeros((len(self.self_pairs), len(self.kinematics.order)))
         for k, j in enumerate(self._joints()):
             for p, (a, b) in enumerate(self.self_pairs):

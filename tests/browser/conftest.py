@@ -6,7 +6,9 @@ import shutil
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
+import numpy as np
 import pytest
 from playwright.sync_api import (
     BrowserContext,
@@ -147,6 +149,18 @@ class PageErrors:
 def artifacts(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Where a test leaves its screenshots."""
     return tmp_path_factory.mktemp(f"shots-{request.node.name}"[:60])
+
+
+def robot_state(runtime: Runtime, name: str = "robot") -> dict[str, Any]:
+    return runtime.api("GET", f"/devices/{name}/state").json()  # type: ignore[no-any-return]
+
+
+def robot_joints(runtime: Runtime, name: str = "robot") -> np.ndarray[Any, Any]:
+    return np.array(robot_state(runtime, name)["joint_position"])
+
+
+def robot_at_rest(runtime: Runtime, name: str = "robot") -> bool:
+    return bool(np.allclose(robot_state(runtime, name)["joint_velocity"], 0.0))
 
 
 def add_robot(runtime: Runtime, name: str = "robot") -> str:

@@ -6,13 +6,19 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, expect
 
-from tests.browser.conftest import Finger, PageErrors, add_robot, fits_the_screen
+from tests.browser.conftest import (
+    Finger,
+    PageErrors,
+    add_robot,
+    fits_the_screen,
+    robot_at_rest,
+    robot_joints,
+)
 from tests.support.png import decode
 from tests.support.processes import Runtime, wait_for
 
@@ -20,18 +26,6 @@ from tests.support.processes import Runtime, wait_for
 @pytest.fixture(scope="module")
 def robot(runtime: Runtime) -> str:
     return add_robot(runtime)
-
-
-def state(runtime: Runtime) -> dict[str, Any]:
-    return runtime.api("GET", "/devices/robot/state").json()  # type: ignore[no-any-return]
-
-
-def joints(runtime: Runtime) -> np.ndarray[Any, Any]:
-    return np.array(state(runtime)["joint_position"])
-
-
-def at_rest(runtime: Runtime) -> bool:
-    return bool(np.allclose(state(runtime)["joint_velocity"], 0.0))
 
 
 def robot_pixels(png: bytes) -> int:
@@ -65,18 +59,18 @@ def test_jog_teach_and_move_to_by_touch(
     j1_plus = page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus]")
 
     # Hold J1 +: it moves while held...
-    before = joints(runtime)
+    before = robot_joints(runtime)
     finger.down(j1_plus)
     try:
-        wait_for(lambda: joints(runtime)[0] > before[0] + 0.05, 5, what="J1 moving")
+        wait_for(lambda: robot_joints(runtime)[0] > before[0] + 0.05, 5, what="J1 moving")
         expect(page.get_by_test_id("deadman")).to_contain_text("Moving")
     finally:
         finger.up()
     # ... and stops when the finger lifts.
-    wait_for(lambda: at_rest(runtime), 3, what="stopped on release")
-    stopped = joints(runtime)
+    wait_for(lambda: robot_at_rest(runtime), 3, what="stopped on release")
+    stopped = robot_joints(runtime)
     time.sleep(0.3)
-    assert np.array_equal(joints(runtime), stopped)
+    assert np.array_equal(robot_joints(runtime), stopped)
     moved = stopped - before
     assert moved[0] > 0.05
     assert np.abs(moved[1:]).max() < 1e-9
@@ -99,11 +93,11 @@ def test_jog_teach_and_move_to_by_touch(
     j2_minus = page.locator("[data-testid=jog-row][data-axis='1'] [data-testid=jog-minus]")
     finger.down(j2_minus)
     try:
-        wait_for(lambda: joints(runtime)[1] < stopped[1] - 0.05, 5, what="J2 moving")
+        wait_for(lambda: robot_joints(runtime)[1] < stopped[1] - 0.05, 5, what="J2 moving")
     finally:
         finger.up()
-    wait_for(lambda: at_rest(runtime), 3)
-    assert np.abs(joints(runtime) - taught).max() > 0.05
+    wait_for(lambda: robot_at_rest(runtime), 3)
+    assert np.abs(robot_joints(runtime) - taught).max() > 0.05
 
     # ... then hold "move to" until it arrives.
     finger.down(waypoint.get_by_test_id("move-to"))
@@ -111,7 +105,7 @@ def test_jog_teach_and_move_to_by_touch(
         expect(page.get_by_test_id("deadman")).to_contain_text("Arrived", timeout=20_000)
     finally:
         finger.up()
-    assert np.allclose(joints(runtime), taught, atol=1e-6)
+    assert np.allclose(robot_joints(runtime), taught, atol=1e-6)
     page.screenshot(path=artifacts / "3-arrived.png")
 
     # Done: hand control back, so another pendant may take it.
@@ -131,12 +125,12 @@ def test_sliding_off_a_held_button_stops_the_robot(
     expect(page.get_by_test_id("disable")).to_be_visible()  # still enabled from before
     finger = Finger(page)
     button = page.locator("[data-testid=jog-row][data-axis='5'] [data-testid=jog-plus]")
-    before = joints(runtime)
+    before = robot_joints(runtime)
     finger.down(button)
     try:
-        wait_for(lambda: joints(runtime)[5] > before[5] + 0.03, 5, what="J6 moving")
+        wait_for(lambda: robot_joints(runtime)[5] > before[5] + 0.03, 5, what="J6 moving")
         finger.move(200, 150)  # the finger slides off the button, still on the glass
-        wait_for(lambda: at_rest(runtime), 3, what="stopped when the finger left the button")
+        wait_for(lambda: robot_at_rest(runtime), 3, what="stopped when the finger left the button")
     finally:
         finger.up()
     expect(page.get_by_test_id("deadman")).to_contain_text("Stopped")

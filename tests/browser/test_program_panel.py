@@ -14,7 +14,14 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
 
-from tests.browser.conftest import Finger, PageErrors, add_robot, fits_the_screen
+from tests.browser.conftest import (
+    Finger,
+    PageErrors,
+    add_robot,
+    fits_the_screen,
+    robot_at_rest,
+    robot_joints,
+)
 from tests.support.blocks import ids_of
 from tests.support.processes import Runtime, wait_for
 from tests.support.programs import (
@@ -34,15 +41,6 @@ def cell(runtime: Runtime) -> dict[str, Any]:
     saved = runtime.api("PUT", "/programs/cycle", json={"workspace": ws})
     assert saved.status_code == 200, saved.text
     return main
-
-
-def joints(runtime: Runtime) -> np.ndarray[Any, Any]:
-    return np.array(runtime.api("GET", "/devices/robot/state").json()["joint_position"])
-
-
-def at_rest(runtime: Runtime) -> bool:
-    state = runtime.api("GET", "/devices/robot/state").json()
-    return bool(np.allclose(state["joint_velocity"], 0.0))
 
 
 def number(block_id: str) -> int:
@@ -96,7 +94,7 @@ def test_run_a_saved_program_with_a_breakpoint_then_pause_and_stop(
     expect(block_of(page, wait_block)).to_have_class(re.compile("opBreakpoint"))
 
     # Run: the highlight follows the program and the robot moves, up to the breakpoint.
-    start = joints(runtime)
+    start = robot_joints(runtime)
     page.get_by_test_id("run").tap()
     seen: list[str] = []
     deadline = time.monotonic() + 60
@@ -112,7 +110,7 @@ def test_run_a_saved_program_with_a_breakpoint_then_pause_and_stop(
     moves = sorted((i for i in ids if i.startswith("robot_move_")), key=number)
     assert [i for i in seen if i in moves] == moves[:3], seen
     assert set(seen) <= set(ids)
-    assert np.abs(joints(runtime) - start).max() > 0.3  # it went to the pick waypoints
+    assert np.abs(robot_joints(runtime) - start).max() > 0.3  # it went to the pick waypoints
     expect(page.get_by_test_id("run-block")).to_have_attribute("data-block", wait_block)
     assert highlighted(page) == [wait_block]
     page.screenshot(path=artifacts / "2-breakpoint.png")
@@ -136,23 +134,23 @@ def test_run_a_saved_program_with_a_breakpoint_then_pause_and_stop(
 
     # Run again and pause: the robot comes to rest and stays there until resumed.
     page.get_by_test_id("run").tap()
-    wait_for(lambda: not at_rest(runtime), 20, what="the robot moving")
+    wait_for(lambda: not robot_at_rest(runtime), 20, what="the robot moving")
     page.get_by_test_id("pause").tap()
     expect(state).to_have_text("paused", timeout=20_000)
-    wait_for(lambda: at_rest(runtime), 20, what="the robot at rest while paused")
-    paused_at = joints(runtime)
+    wait_for(lambda: robot_at_rest(runtime), 20, what="the robot at rest while paused")
+    paused_at = robot_joints(runtime)
     time.sleep(0.5)
-    assert np.array_equal(joints(runtime), paused_at)
+    assert np.array_equal(robot_joints(runtime), paused_at)
 
     # Resume, then stop during a move: the robot halts and the run ends.
     page.get_by_test_id("resume").tap()
-    wait_for(lambda: not at_rest(runtime), 20, what="the robot moving again")
+    wait_for(lambda: not robot_at_rest(runtime), 20, what="the robot moving again")
     page.get_by_test_id("stop").tap()
     expect(state).to_have_text("stopped")
-    wait_for(lambda: at_rest(runtime), 2, what="the robot halted")
-    halted = joints(runtime)
+    wait_for(lambda: robot_at_rest(runtime), 2, what="the robot halted")
+    halted = robot_joints(runtime)
     time.sleep(0.5)
-    assert np.array_equal(joints(runtime), halted)
+    assert np.array_equal(robot_joints(runtime), halted)
     page.screenshot(path=artifacts / "4-stopped.png")
 
     page.get_by_test_id("nav-jog").tap()
@@ -211,7 +209,7 @@ def test_drag_a_block_from_the_toolbox_save_and_run_on_a_phone(
 
     page.get_by_test_id("run").tap()
     expect(page.get_by_test_id("run-state")).to_have_text("finished", timeout=60_000)
-    assert np.abs(joints(runtime) - np.array(HOME)).max() < 1e-3
+    assert np.abs(robot_joints(runtime) - np.array(HOME)).max() < 1e-3
     assert fits_the_screen(page)
     page.screenshot(path=artifacts / "phone.png")
     assert errors.errors == []

@@ -113,7 +113,7 @@ def test_a_move_folding_the_arm_into_itself_is_refused_with_the_pair() -> None:
 def test_self_pair_bounds_bound_how_far_a_joint_step_moves_one_link_from_the_other() -> None:
     world = world_with({})
     body = world.robot("r")
-    bounds = body.self_pair_bounds()
+    bounds = body.self_pair_bounds
     assert bounds.shape == (len(body.self_pairs), 6)
     # The base joint turns every link but the base link as one.
     for p, (a, b) in enumerate(body.self_pairs):

@@ -1,4 +1,5 @@
 import { changeHeld } from "./activity";
+import { socketUrl } from "./socket";
 
 // The jog socket: hold-to-run presses with heartbeats, releases, stops and 3D-mouse
 // bindings. The server halts the robot if heartbeats stop or this socket closes.
@@ -31,8 +32,7 @@ export class JogSocket extends EventTarget {
 
   connect(): void {
     if (this.socket || this.closed) return;
-    const scheme = location.protocol === "https:" ? "wss" : "ws";
-    const socket = new WebSocket(`${scheme}://${location.host}/api/jog/ws`);
+    const socket = new WebSocket(socketUrl("/api/jog/ws"));
     this.socket = socket;
     socket.onopen = () => {
       this.online = true;

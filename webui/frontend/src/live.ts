@@ -2,6 +2,7 @@
 // and the live state of each. Reconnects by itself; views re-render once per frame at most.
 
 import type { ReactiveController, ReactiveControllerHost } from "lit";
+import { retryDelay, socketUrl } from "./socket";
 import type { AddedDevice, DetectedDevice, RobotState } from "./types";
 
 type Message =
@@ -36,8 +37,7 @@ export class DeviceFeed extends EventTarget {
 
   start(): void {
     if (this.socket) return;
-    const scheme = location.protocol === "https:" ? "wss" : "ws";
-    const socket = new WebSocket(`${scheme}://${location.host}${this.path}`);
+    const socket = new WebSocket(socketUrl(this.path));
     this.socket = socket;
     socket.onopen = () => {
       this.online = true;
@@ -50,8 +50,7 @@ export class DeviceFeed extends EventTarget {
       this.online = false;
       this.states.clear();
       this.changed();
-      const delay = Math.min(500 * 2 ** this.retry++, 5000);
-      window.setTimeout(() => this.start(), delay);
+      window.setTimeout(() => this.start(), retryDelay(this.retry++));
     };
   }
 

@@ -2,6 +2,7 @@
 // and the output of its current run, gaps filled from GET status?after=N. Reconnects itself.
 
 import { api } from "../api";
+import { retryDelay, socketUrl } from "../socket";
 import type { OutputEntry, RunStatus } from "./types";
 
 const MAX_KEPT_OUTPUT = 2000;
@@ -24,8 +25,7 @@ export class RunFeed extends EventTarget {
   start(): void {
     this.stopped = false;
     if (this.socket) return;
-    const scheme = location.protocol === "https:" ? "wss" : "ws";
-    const socket = new WebSocket(`${scheme}://${location.host}/api/programs/_ws`);
+    const socket = new WebSocket(socketUrl("/api/programs/_ws"));
     this.socket = socket;
     socket.onopen = () => (this.retry = 0);
     socket.onmessage = (event) => {
@@ -38,7 +38,7 @@ export class RunFeed extends EventTarget {
     socket.onclose = () => {
       this.socket = null;
       if (this.stopped) return;
-      window.setTimeout(() => this.start(), Math.min(500 * 2 ** this.retry++, 5000));
+      window.setTimeout(() => this.start(), retryDelay(this.retry++));
     };
   }
 
