@@ -97,6 +97,10 @@ async def spawn_worker(limits: str) -> Process:
     )
 
 
+# A new worker's start-up is ~100 ms of CPU: not while the run just taken makes its first move.
+REFILL_DELAY = 0.5  # s
+
+
 class WorkerPool:
     """One worker started ahead: Python's start-up and imports take ~100 ms, which a run
     request should not wait for. A spare holds no program until it is taken."""
@@ -117,6 +121,7 @@ class WorkerPool:
         return process
 
     async def _fill(self, limits: str) -> None:
+        await asyncio.sleep(REFILL_DELAY)
         process = await spawn_worker(limits)
         if self._spare is None:
             self._spare = (limits, process)

@@ -43,9 +43,10 @@ def check_faults(state: RobotState) -> None:
 
 
 class Execution:
-    def __init__(self, link: RobotLink, timed: TimedPath) -> None:
+    def __init__(self, link: RobotLink, timed: TimedPath, *, mode_ready: bool = False) -> None:
         self.link = link
         self.timed = timed
+        self.mode_ready = mode_ready  # the driver was put in trajectory mode for this move
         self.progress = 0.0
         self._cancel = asyncio.Event()
 
@@ -61,8 +62,14 @@ class Execution:
         if len(self.timed.times) < 2:  # already there
             self.progress = 1.0
             return
-        await self.link.call("PUT", "/command_mode", {"mode": CommandMode.trajectory.value})
-        accepted = await self.link.call("POST", "/trajectory", waypoints(self.timed))
+        if not self.mode_ready:
+            await self.link.call("PUT", "/command_mode", {"mode": CommandMode.trajectory.value})
+        try:
+            accepted = await self.link.call("POST", "/trajectory", waypoints(self.timed))
+        except RobotError as exc:
+            if exc.code == "wrong_mode":  # something else took the robot since it was set
+                raise MoveFailed(f"{exc.message}; plan again", code="wrong_mode") from exc
+            raise
         trajectory_id = accepted["id"]
         started = time.monotonic()
         try:

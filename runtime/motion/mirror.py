@@ -9,9 +9,12 @@ import asyncio
 import contextlib
 import logging
 import time
+from collections.abc import Iterable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 
 from runtime.device_manager.client import robot_info
 from runtime.interfaces.limits import FloatArray
@@ -47,13 +50,39 @@ async def scene_objects(storage: StorageClient) -> dict[str, SceneObject]:
     return {v.name: SceneObject.model_validate(v.value) for v in objects}
 
 
-async def sync_bases(world: World, storage: StorageClient) -> None:
+async def robot_bases(storage: StorageClient, robots: Iterable[str]) -> dict[str, pin.SE3]:
     """Each robot's base as the stored frame `frames.<robot>` places it (identity without
     one), the same frame the jog service uses for world-frame waypoints."""
-    for name, body in world.robots.items():
-        base = await base_in_world(storage, name)
-        if not body.world_base.isApprox(base):
-            body.set_base(base)
+    names = list(robots)
+    bases = await asyncio.gather(*(base_in_world(storage, name) for name in names))
+    return dict(zip(names, bases, strict=True))
+
+
+@dataclass
+class CellReading:
+    """The connected robots, the scene and the bases, read at once (one round of requests,
+    not one after another: this is on the way to every move)."""
+
+    robots: dict[str, dict[str, Any]]
+    scene: dict[str, SceneObject]
+    bases: dict[str, pin.SE3]
+
+    @classmethod
+    async def read(
+        cls, devices: ServiceClient, storage: StorageClient, known: Iterable[str]
+    ) -> CellReading:
+        robots, scene, bases = await asyncio.gather(
+            connected_robots(devices), scene_objects(storage), robot_bases(storage, known)
+        )
+        return cls(robots, scene, bases)
+
+    async def place_bases(self, world: World, storage: StorageClient) -> None:
+        """Every robot of the world on its base (reading those of robots new to it)."""
+        new = [name for name in world.robots if name not in self.bases]
+        self.bases.update(await robot_bases(storage, new))
+        for name, body in world.robots.items():
+            if not body.world_base.isApprox(self.bases[name]):
+                body.set_base(self.bases[name])
 
 
 class WorldMirror:
@@ -86,18 +115,17 @@ class WorldMirror:
             await asyncio.sleep(REFRESH)
 
     async def refresh(self) -> None:
-        robots = await connected_robots(self.devices)
-        for name in [n for n in self.feeds if n not in robots]:
+        cell = await CellReading.read(self.devices, self.storage, self.world.robots)
+        for name in [n for n in self.feeds if n not in cell.robots]:
             await self.feeds.pop(name).close()
             self.world.remove_robot(name)
-        for name, device in robots.items():
+        for name, device in cell.robots.items():
             await self._ensure(name, device)
-        await sync_bases(self.world, self.storage)
-        scene = await scene_objects(self.storage)
-        if scene != self.world.objects:
+        await cell.place_bases(self.world, self.storage)
+        if cell.scene != self.world.objects:
             # Built off the loop, swapped in on it: a control cycle never sees half a scene.
-            obstacles = await asyncio.to_thread(build_obstacles, scene)
-            self.world.set_objects(scene, obstacles)
+            obstacles = await asyncio.to_thread(build_obstacles, cell.scene)
+            self.world.set_objects(cell.scene, obstacles)
 
     async def _ensure(self, name: str, device: dict[str, Any]) -> None:
         feed = self.feeds.get(name)

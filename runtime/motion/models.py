@@ -106,3 +106,4 @@ class MoveStatus(BaseModel):
     message: str = ""
     progress: float = 0.0
     plan: PlanReport | None = None
+    caller: str | None = None  # who asked for it (X-Caller), e.g. a program run

@@ -15,7 +15,7 @@ from runtime.device_manager.client import check_lease, open_robot_link, require_
 from runtime.interfaces.common import Pose
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import NotFound
-from runtime.motion.mirror import connected_robots, scene_objects, sync_bases
+from runtime.motion.mirror import CellReading
 from runtime.motion.world import World
 from runtime.robot_link import RobotLink
 from runtime.variable_storage.client import StorageClient
@@ -58,16 +58,15 @@ class Robots:
 
     async def _sync(self) -> World:
         """Bring the world up to date: robots, their bases and joints, the scene objects."""
-        robots = await connected_robots(self.devices)
-        for name in [n for n in self.links if n not in robots]:
+        cell = await CellReading.read(self.devices, self.storage, self._world.robots)
+        for name in [n for n in self.links if n not in cell.robots]:
             await self.links.pop(name).close()
             self._world.remove_robot(name)
-        for name, device in robots.items():
+        for name, device in cell.robots.items():
             await self._ensure(name, device)
-        await sync_bases(self._world, self.storage)
-        scene = await scene_objects(self.storage)
-        if scene != self._world.objects:
-            self._world.set_objects(scene)
+        await cell.place_bases(self._world, self.storage)
+        if cell.scene != self._world.objects:
+            self._world.set_objects(cell.scene)
         for name, link in self.links.items():
             state = link.feed.state
             if state is not None:

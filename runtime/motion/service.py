@@ -6,14 +6,15 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import itertools
-from collections.abc import AsyncIterator
+from collections import OrderedDict
+from collections.abc import AsyncIterator, Awaitable
 from typing import Annotated, Any
 
 import numpy as np
 from fastapi import APIRouter, FastAPI, Header
 
 from runtime.interfaces.limits import JointLimitChecker
-from runtime.interfaces.robot import OperationalMode
+from runtime.interfaces.robot import CommandMode, OperationalMode
 from runtime.jog.velocity import MANUAL_TCP_SPEED, VelocityController
 from runtime.kit.app import create_app
 from runtime.kit.errors import Conflict, NotFound, OpenPendantError
@@ -36,7 +37,11 @@ from runtime.variable_storage.client import StorageClient
 from runtime.variable_storage.types import JointWaypoint, PoseWaypoint
 
 LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
+# Who asks for a move (a program run): a stop naming it refuses its later moves too, so a
+# move request still on its way when the stop arrives never runs.
+Caller = Annotated[str | None, Header(alias="X-Caller", max_length=64)]
 KEEP_FINISHED = 100
+KEEP_STOPPED_CALLERS = 1000
 
 
 class Moves:
@@ -48,6 +53,7 @@ class Moves:
         # Per robot: the move running on it, its execution and the task watching it.
         self.running: dict[str, tuple[str, Execution | ReactiveExecution, asyncio.Task[None]]] = {}
         self._ids = itertools.count(1)
+        self.stopped_callers: OrderedDict[str, None] = OrderedDict()
 
     async def plan(self, robot: str, request: MoveRequest) -> Plan:
         targets = [
@@ -84,24 +90,84 @@ class Moves:
             return Target(pose=pose.pose, frame=pose.frame, blend=target.blend)
         raise Refused(f"{stored.name} is a {stored.type}, not a waypoint")
 
-    async def start(self, robot: str, request: MoveRequest) -> MoveStatus:
-        if robot in self.running:
-            raise Conflict(f"{robot} is already moving; cancel that move first", code="busy")
+    async def start(
+        self,
+        robot: str,
+        request: MoveRequest,
+        authorised: Awaitable[object],
+        caller: str | None = None,
+    ) -> MoveStatus:
+        """Plans while `authorised` (the lease check) is answered; launches only once it is."""
+        lease = asyncio.ensure_future(authorised)
+        try:
+            self._check_caller(caller)
+            self._check_free(robot)
+        except BaseException:
+            lease.cancel()
+            raise
         move_id = f"move-{next(self._ids)}"
-        status = MoveStatus(id=move_id, robot=robot, state=MoveState.planning)
+        status = MoveStatus(id=move_id, robot=robot, state=MoveState.planning, caller=caller)
         self.status[move_id] = status
-        if request.kind is MoveKind.reactive:
-            return self._launch(status, await self._reactive(robot, request))
-        plan = await self.plan(robot, request)
+        try:
+            if request.kind is MoveKind.reactive:
+                execution: Execution | ReactiveExecution = await self._reactive(robot, request)
+                await lease
+                return self._launch(status, execution)
+            switched = asyncio.ensure_future(self._switch_to_trajectory(robot, lease))
+            try:
+                plan = await self.plan(robot, request)
+                await lease
+            except BaseException:
+                switched.cancel()
+                raise
+            mode_ready = await switched
+        except BaseException:
+            lease.cancel()
+            del self.status[move_id]  # nobody was given its id
+            raise
         status.plan = plan.report
         if not plan.report.ok or plan.timed is None:
             status.state, status.message = MoveState.failed, plan.report.message
             raise Refused(
                 plan.report.message, code=plan.report.code, details=plan.report.model_dump()
             )
-        return self._launch(status, Execution(self.robots.known_link(robot), plan.timed))
+        link = self.robots.known_link(robot)
+        return self._launch(status, Execution(link, plan.timed, mode_ready=mode_ready))
+
+    async def _switch_to_trajectory(self, robot: str, lease: asyncio.Future[object]) -> bool:
+        """The driver put in trajectory mode while the move is planned, once the lease is
+        confirmed, so the upload is the only round trip after planning. False when it was
+        not: the execution switches then, or fails with the driver's reason."""
+        link = self.robots.links.get(robot)
+        if link is None:  # the first move since the robot was added
+            return False
+        try:
+            await lease
+        except Exception:
+            return False  # refused: that is raised where the move awaits the lease
+        if link.current().command_mode is CommandMode.trajectory:
+            return True
+        try:
+            await link.call("PUT", "/command_mode", {"mode": CommandMode.trajectory.value})
+        except OpenPendantError:
+            return False
+        return True
+
+    def _check_caller(self, caller: str | None) -> None:
+        if caller is not None and caller in self.stopped_callers:
+            raise Conflict(f"{caller} was stopped; it moves nothing more", code="stopped")
+
+    def _check_free(self, robot: str) -> None:
+        if robot in self.running:
+            raise Conflict(f"{robot} is already moving; cancel that move first", code="busy")
 
     def _launch(self, status: MoveStatus, execution: Execution | ReactiveExecution) -> MoveStatus:
+        if status.state is not MoveState.planning:  # stopped or cancelled while planned
+            raise Conflict(status.message, code=status.code or "cancelled")
+        self._check_caller(status.caller)
+        if status.robot in self.running:  # another move started while this one was planned
+            status.state, status.message = MoveState.failed, "another move started first"
+            self._check_free(status.robot)
         task = asyncio.create_task(self._run(status, execution))
         self.running[status.robot] = (status.id, execution, task)
         status.state = MoveState.running
@@ -161,6 +227,8 @@ class Moves:
 
     async def cancel(self, move_id: str) -> MoveStatus:
         status = self.get(move_id)
+        if status.state is MoveState.planning:
+            self._drop_planned(status, "cancelled", "cancelled while it was planned")
         entry = self.running.get(status.robot)
         if entry is not None and entry[0] == move_id:
             _, execution, task = entry
@@ -169,13 +237,25 @@ class Moves:
                 await asyncio.wait_for(asyncio.shield(task), 2.0)
         return status
 
-    async def stop(self, robot: str) -> None:
-        """Stop wins: halt the robot at once, whatever is running."""
+    async def stop(self, robot: str, caller: str | None = None) -> None:
+        """Stop wins: halt the robot at once, whatever is running; a move still being
+        planned never starts, nor does any later move of `caller`."""
+        if caller is not None:
+            self.stopped_callers[caller] = None
+            while len(self.stopped_callers) > KEEP_STOPPED_CALLERS:
+                self.stopped_callers.popitem(last=False)
+        for status in list(self.status.values()):
+            if status.robot == robot and status.state is MoveState.planning:
+                self._drop_planned(status, "stopped", "stopped while it was planned")
         entry = self.running.get(robot)
         if entry is not None:
             entry[1].cancel()
         link = await self.robots.link(robot)
         await link.halt("motion: stop")
+
+    @staticmethod
+    def _drop_planned(status: MoveStatus, code: str, message: str) -> None:
+        status.state, status.code, status.message = MoveState.cancelled, code, message
 
     async def wait(self, move_id: str, timeout: float) -> MoveStatus:
         status = self.get(move_id)
@@ -219,17 +299,20 @@ def motion_router(moves: Moves, robots: Robots) -> APIRouter:
 
     @router.post("/robots/{robot}/moves", status_code=202)
     async def start(
-        robot: str, body: MoveRequest, token: LeaseToken = None, wait: float = 0.0
+        robot: str,
+        body: MoveRequest,
+        token: LeaseToken = None,
+        caller: Caller = None,
+        wait: float = 0.0,
     ) -> MoveStatus:
-        await robots.check_lease(robot, token)
-        status = await moves.start(robot, body)
+        status = await moves.start(robot, body, robots.check_lease(robot, token), caller)
         if wait > 0:
             return await moves.wait(status.id, min(wait, 600.0))
         return status
 
     @router.post("/robots/{robot}/stop")
-    async def stop(robot: str) -> dict[str, str]:
-        await moves.stop(robot)
+    async def stop(robot: str, caller: Caller = None) -> dict[str, str]:
+        await moves.stop(robot, caller)
         return {"robot": robot, "state": "halted"}
 
     @router.get("/robots/{robot}/clearance")

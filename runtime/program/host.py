@@ -9,6 +9,7 @@ import asyncio
 import contextlib
 import logging
 import re
+import uuid
 from collections.abc import Awaitable, Callable
 from typing import Any
 
@@ -84,6 +85,10 @@ class RunHost:
         self.acquired: dict[str, str] = {}
         self.commanded: list[str] = []
         self.speed = 0.5
+        # Named on each move: the motion service refuses the run's moves once it is stopped,
+        # even one whose request is still on its way when the stop arrives.
+        self.caller = f"run-{uuid.uuid4().hex}"
+        self.halted = False
         self._drivers: dict[str, RobotLink] = {}
         self._renewer: asyncio.Task[None] | None = None
         self.handlers: dict[str, Handler] = {
@@ -103,6 +108,8 @@ class RunHost:
         }
 
     async def call(self, fn: str, args: dict[str, Any]) -> Any:
+        if self.halted:
+            raise CallRefused("the program was stopped", "stopped")
         handler = self.handlers.get(fn)
         if handler is None:
             raise CallRefused(f"unknown program function {fn[:40]!r}", "unknown_function")
@@ -114,18 +121,35 @@ class RunHost:
             raise CallRefused(f"malformed request to {fn}: {exc}", "bad_call") from None
 
     async def halt(self) -> None:
-        """Stop wins: the driver halts at once; the motion service drops the move."""
-        await asyncio.gather(*(self._halt(robot) for robot in self.commanded))
-
-    async def _halt(self, robot: str) -> None:
-        driver = self._drivers.get(robot)
-        calls = [self.motion.post(f"/motion/robots/{robot}/stop")]
-        if driver is not None:
-            # One message on a stream opened ahead: within a control cycle of the stop.
-            calls.insert(0, driver.halt(f"{self.holder} stopped"))
+        """Stop wins: each driver halts at once; the motion service drops the move, and any
+        later one of this run."""
+        self.halted = True
+        robots = list(self.commanded)
+        tag = f"{self.holder} stopped"
+        unstreamed = []
+        # First one message on each stream opened ahead, no answer awaited: within a control
+        # cycle of the stop. Then the round trips.
+        for robot in robots:
+            driver = self._drivers.get(robot)
+            if driver is None:
+                continue
+            try:
+                await driver.send({"type": "halt", "tag": tag})
+            except OpenPendantError as exc:
+                log.warning("no command stream to halt %s: %s", robot, exc)
+                unstreamed.append(driver)
+        calls = [
+            self.motion.post(f"/motion/robots/{robot}/stop", headers=self._caller)
+            for robot in robots
+        ]
+        calls += [driver.http.post("/halt") for driver in unstreamed]
         for result in await asyncio.gather(*calls, return_exceptions=True):
             if isinstance(result, Exception):
-                log.warning("halting %s: %s", robot, result)
+                log.warning("halting: %s", result)
+
+    @property
+    def _caller(self) -> dict[str, str]:
+        return {"X-Caller": self.caller}
 
     async def close(self) -> None:
         if self._renewer is not None:
@@ -207,8 +231,12 @@ class RunHost:
         token = await self._token(robot)
         request.setdefault("speed", self.speed)
         request.setdefault("acceleration", self.speed)
+        if self.halted:  # stopped while the robot and its lease were looked up
+            raise CallRefused("the program was stopped", "stopped")
         start = self.motion.post(
-            f"/motion/robots/{robot}/moves", json=request, headers={"X-Lease-Token": token}
+            f"/motion/robots/{robot}/moves",
+            json=request,
+            headers={"X-Lease-Token": token, **self._caller},
         )
         if robot in self._drivers:
             status = await start

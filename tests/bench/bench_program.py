@@ -88,7 +88,8 @@ def first_motion(cell: Cell, trials: int) -> list[float]:
         name = "to_a" if k % 2 else "to_b"
         after = cell.robot.last_command_seq()
         sent = time.time()
-        http.post(f"/programs/{name}/run", json={"leases": {"robot": cell.token}})
+        # As the Program panel sends it: the robot chosen, the tab's leases.
+        http.post(f"/programs/{name}/run", json={"robot": "robot", "leases": {"robot": cell.token}})
         times.append((driver_entry(cell, after, "trajectory") - sent) * 1000)
         run_to_end(cell, name, start=False)
         time.sleep(0.3)  # the service's spare worker is ready again, as between real runs

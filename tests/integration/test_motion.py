@@ -5,7 +5,9 @@ found and run without touching them."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
@@ -17,17 +19,11 @@ from runtime.kinematics import Kinematics
 from runtime.motion.world import World
 from runtime.robot_info import load_robot_info
 from tests.support.jog import Cell
+from tests.support.posts import LEFT, RIGHT, SCENE, clear_posts, put_posts
 from tests.support.processes import Runtime
 
 INFO = load_robot_info("ur5")
 KINEMATICS = Kinematics(INFO)
-LEFT = [1.0, -1.0, 1.8, -2.37, -1.57, 0.0]
-RIGHT = [-1.0, -1.0, 1.8, -2.37, -1.57, 0.0]
-SCENE = {
-    "table": {"shape": "box", "size": [1.6, 1.6, 0.04], "pose": {"position": [0, 0, -0.02]}},
-    "post_a": {"shape": "cylinder", "size": [0.04, 0.5], "pose": {"position": [-0.5, 0.05, 0.25]}},
-    "post_b": {"shape": "cylinder", "size": [0.04, 0.5], "pose": {"position": [-0.4, -0.3, 0.25]}},
-}
 
 
 @pytest.fixture(scope="module")
@@ -45,8 +41,7 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cell]:
 @pytest.fixture
 def ready(cell: Cell) -> Cell:
     cell.ready()
-    for name in SCENE:
-        cell.runtime.api("DELETE", f"/variables/{name}")
+    clear_posts(cell.runtime)
     move(cell, {"kind": "joint", "target": {"joints": INFO.home}, "speed": 1.0})
     return cell
 
@@ -191,10 +186,7 @@ def test_relative_moves_in_base_and_tool_frames(ready: Cell) -> None:
 
 def test_a_colliding_move_is_refused_and_nothing_moves(ready: Cell) -> None:
     move(ready, {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0})
-    for name, value in SCENE.items():
-        ready.runtime.api(
-            "PUT", f"/variables/{name}", json={"type": "scene_object", "value": value}
-        )
+    put_posts(ready.runtime)
     before = ready.robot.q()
     request = {"kind": "joint", "target": {"joints": RIGHT}, "avoid_obstacles": False}
     response = ready.runtime.api(
@@ -210,10 +202,7 @@ def test_a_colliding_move_is_refused_and_nothing_moves(ready: Cell) -> None:
 
 def test_a_move_around_the_posts_never_touches_them(ready: Cell) -> None:
     move(ready, {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0})
-    for name, value in SCENE.items():
-        ready.runtime.api(
-            "PUT", f"/variables/{name}", json={"type": "scene_object", "value": value}
-        )
+    put_posts(ready.runtime)
     positions = setpoints_during(
         ready, {"kind": "joint", "target": {"joints": RIGHT}, "speed": 1.0, "acceleration": 1.0}
     )
@@ -226,7 +215,65 @@ def test_a_move_around_the_posts_never_touches_them(ready: Cell) -> None:
         assert contact is not None and contact.proximity.distance > 0, contact
 
 
+def test_a_stop_while_a_move_is_planned_means_it_never_starts(ready: Cell) -> None:
+    """Stop wins even over a move still being planned (around the posts: seconds)."""
+    move(ready, {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0})
+    put_posts(ready.runtime)
+    after = ready.robot.last_command_seq()
+    with ThreadPoolExecutor(1) as pool:
+        pending = pool.submit(
+            ready.runtime.api,
+            "POST",
+            "/motion/robots/robot/moves",
+            json={"kind": "joint", "target": {"joints": RIGHT}},
+            headers=ready.headers(),
+        )
+        time.sleep(0.2)
+        assert not pending.done(), "the plan ended before the stop: nothing was tested"
+        ready.runtime.api("POST", "/motion/robots/robot/stop").raise_for_status()
+        response = pending.result()
+    assert response.status_code == 409, response.text
+    assert response.json()["error"]["code"] == "stopped"
+    time.sleep(0.5)
+    assert "trajectory" not in [c["type"] for c in ready.robot.commands(after)]
+    assert np.allclose(ready.robot.q(), LEFT, atol=1e-6)
+
+
+def test_a_stop_naming_a_caller_refuses_its_later_moves(ready: Cell) -> None:
+    """A program's move request still on its way when its stop arrives must not run: the
+    stop names the run (X-Caller) and every later move of that run is refused."""
+    stopped = ready.runtime.api(
+        "POST", "/motion/robots/robot/stop", headers={"X-Caller": "run-stopped"}
+    )
+    assert stopped.status_code == 200, stopped.text
+    after = ready.robot.last_command_seq()
+    request = {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0}
+    late = ready.runtime.api(
+        "POST",
+        "/motion/robots/robot/moves",
+        json=request,
+        headers={**ready.headers(), "X-Caller": "run-stopped"},
+    )
+    assert late.status_code == 409, late.text
+    assert late.json()["error"]["code"] == "stopped"
+    assert "trajectory" not in [c["type"] for c in ready.robot.commands(after)]
+    response = ready.runtime.api(
+        "POST",
+        "/motion/robots/robot/moves",
+        json=request,
+        headers={**ready.headers(), "X-Caller": "run-other"},
+    )
+    assert response.status_code == 202, response.text
+    finish(ready, response.json())
+    assert np.allclose(ready.robot.q(), LEFT, atol=1e-6)
+
+
 def test_moving_needs_the_lease(ready: Cell) -> None:
+    """Planning may go on while the lease is checked; the driver hears nothing unless the
+    lease holds (not even the switch to trajectory mode made while planning)."""
+    ready.robot.http.put("/command_mode", json={"mode": "halt"}).raise_for_status()
+    after = ready.robot.last_command_seq()
+    before = ready.robot.q()
     response = ready.runtime.api(
         "POST",
         "/motion/robots/robot/moves",
@@ -238,6 +285,10 @@ def test_moving_needs_the_lease(ready: Cell) -> None:
         "POST", "/motion/robots/robot/moves", json={"kind": "joint", "target": {"joints": LEFT}}
     )
     assert response.json()["error"]["code"] == "lease_required"
+    time.sleep(0.2)
+    assert ready.robot.commands(after) == []
+    assert ready.robot.state()["command_mode"] == "halt"
+    assert np.allclose(ready.robot.q(), before)
 
 
 def test_cancel_halts_the_robot(ready: Cell) -> None:

@@ -5,6 +5,7 @@ bad programs and targets are refused with the block named, and the robot stays p
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -23,6 +24,7 @@ from tests.support.blocks import (
     workspace,
 )
 from tests.support.jog import Cell
+from tests.support.posts import LEFT, RIGHT, clear_posts, put_posts
 from tests.support.processes import Runtime, wait_for
 from tests.support.programs import HOME, PICK_AND_PLACE_WAYPOINTS, PLACE, pick_and_place, teach
 
@@ -55,6 +57,11 @@ def save(cell: Cell, name: str, ws: dict[str, Any]) -> str:
     assert response.status_code == 200, response.text
     python: str = response.json()["python"]
     return python
+
+
+def save_python(cell: Cell, name: str, source: str) -> None:
+    response = cell.runtime.api("PUT", f"/programs/{name}", json={"python": source})
+    assert response.status_code == 200, response.text
 
 
 def run(cell: Cell, name: str, **options: Any) -> dict[str, Any]:
@@ -209,6 +216,29 @@ def test_stop_during_a_long_move_halts_the_robot(ready: Cell) -> None:
     assert np.abs(ready.robot.q() - q).max() < 1e-9  # nothing resumes after the stop
     assert np.abs(q - np.array(FAR)).max() > 0.1
     assert all(o["text"] != "never" for o in status(ready, "long_move")["output"])
+
+
+def test_stop_while_a_move_is_planned_means_it_never_starts(ready: Cell) -> None:
+    ready.place(LEFT)
+    put_posts(ready.runtime)
+    try:
+        degrees = [round(math.degrees(v), 6) for v in RIGHT]
+        save_python(ready, "around_posts", f"move_joint({degrees!r})\nprint('never')")
+        before = ready.robot.last_command_seq()
+        run(ready, "around_posts")
+        time.sleep(0.3)  # the move is being planned around the posts (seconds)
+        assert "trajectory" not in [c["type"] for c in ready.robot.commands(before)]
+        stopped = ready.runtime.api("POST", "/programs/around_posts/stop").json()
+        assert stopped["state"] == "stopped", (stopped["error"], stopped["output"])
+        # The planner holds the world until it is done: a preview after it means it ended.
+        preview = {"kind": "joint", "target": {"joints": LEFT}}
+        ready.runtime.api("POST", "/motion/robots/robot/plan", json=preview).raise_for_status()
+        time.sleep(0.3)
+        assert "trajectory" not in [c["type"] for c in ready.robot.commands(before)]
+        assert np.allclose(ready.robot.q(), LEFT, atol=1e-6)
+        assert all(o["text"] != "never" for o in status(ready, "around_posts")["output"])
+    finally:
+        clear_posts(ready.runtime)
 
 
 BAD_TARGETS = {
