@@ -294,6 +294,7 @@ class JogSession:
         if held is None or held.timer is None:
             return
         held.timer.cancel()
+        held.last_beat = time.monotonic()
         held.timer = asyncio.get_running_loop().call_later(
             self.deadman, self._deadman_lapsed, press
         )

@@ -121,9 +121,6 @@ class RobotView:
         return int(log[-1]["seq"]) if log else 0
 
 
-_places = itertools.count(1)
-
-
 class Cell:
     def __init__(self, runtime: Runtime) -> None:
         self.runtime = runtime
@@ -150,22 +147,23 @@ class Cell:
         assert response.status_code == 200, response.text
 
     def place(self, joints: list[float] | np.ndarray[Any, Any]) -> None:
-        name = f"place{next(_places)}"
-        self.runtime.api(
-            "PUT",
-            f"/variables/{name}",
-            json={
-                "type": "joint_waypoint",
-                "value": {"joints": list(map(float, joints)), "robot": "robot"},
-            },
+        """A joint move there through the motion service: set-up, not the jog under test
+        (a hold-to-run move would halt whenever this test host stalls)."""
+        request = {
+            "kind": "joint",
+            "target": {"joints": list(map(float, joints))},
+            "speed": 1.0,
+            "acceleration": 1.0,
+        }
+        response = self.runtime.api(
+            "POST", "/motion/robots/robot/moves", json=request, headers=self.headers()
         )
-        jog = JogClient(self.runtime, token=self.token)
-        try:
-            for _ in range(5):  # halted by a stall of the host: press again, as a person would
-                if jog.move_to(name)["state"] == "done":
-                    break
-            else:
-                raise AssertionError(f"could not move to {list(joints)}")
-        finally:
-            jog.close()
+        assert response.status_code == 202, response.text
+        status = response.json()
+        deadline = time.monotonic() + 60
+        while status["state"] in ("planning", "running") and time.monotonic() < deadline:
+            status = self.runtime.api(
+                "GET", f"/motion/moves/{status['id']}", params={"wait": 5}
+            ).json()
+        assert status["state"] == "finished", f"could not move to {list(joints)}: {status}"
         self.robot.wait_stopped()
