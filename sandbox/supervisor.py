@@ -117,6 +117,8 @@ class WorkerPool:
             if spare is not None:
                 _kill(spare[1])
             process = await spawn_worker(limits)
+        if self._refill is not None:
+            self._refill.cancel()  # one refill at a time: close() must find every one
         self._refill = asyncio.ensure_future(self._fill(limits))
         return process
 
