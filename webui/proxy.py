@@ -11,10 +11,13 @@ from fastapi import Request, Response, WebSocket
 from starlette.websockets import WebSocketDisconnect
 
 from runtime.kit.app import error_response
+from runtime.kit.request_start import HEADER as REQUEST_START
+from runtime.kit.request_start import stamp
 from runtime.kit.websocket import until_either_ends
 
-# Hop-by-hop and length headers are the proxy's own business.
+# Hop-by-hop and length headers, and the arrival stamp, are the proxy's own business.
 _SKIP_REQUEST = {
+    REQUEST_START.lower(),
     "host",
     "connection",
     "content-length",
@@ -40,12 +43,16 @@ class ServiceProxy:
         return self.routes.get(prefix)
 
     async def forward(self, request: Request, prefix: str, path: str) -> Response:
+        received = stamp()
         target = self._target(prefix)
         if target is None:
             return error_response(404, "not_found", f"no service serves /api/{prefix}")
         service, base = target
         url = f"{base}/{prefix}" + (f"/{path}" if path else "")
         headers = {k: v for k, v in request.headers.items() if k.lower() not in _SKIP_REQUEST}
+        # When the request reached the runtime (a client's own value is replaced): services
+        # that promise a reaction time count from here, e.g. a program stop.
+        headers[REQUEST_START] = received
         try:
             upstream = await self.http.request(
                 request.method,

@@ -102,4 +102,4 @@ class RunStatus(BaseModel):
     isolation: list[str] = Field(default_factory=list)
     started: float | None = None
     ended: float | None = None
-    stop_received: float | None = None  # when the stop request reached this service
+    stop_received: float | None = None  # when the stop request reached the runtime

@@ -114,9 +114,10 @@ class Runs:
         await self._live(name).step()
         return self.status(name)
 
-    async def stop(self, name: str) -> RunStatus:
+    async def stop(self, name: str, arrived: float | None = None) -> RunStatus:
+        """`arrived`: when the stop reached the runtime (its front door), if not here."""
         active = self._active(name)
-        active.received_stop = time.time()
+        active.received_stop = arrived or time.time()
         await active.run.stop()
         return self.status(name)
 

@@ -15,6 +15,7 @@ from blockly_blocks.workspace import MAX_WORKSPACE_BYTES, allow_deep_json
 from runtime.kit.app import create_app
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import InvalidValue
+from runtime.kit.request_start import RequestStart, received_at
 from runtime.kit.settings import RuntimeSettings
 from runtime.kit.websocket import Fanout
 from runtime.program.library import (
@@ -64,9 +65,20 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
 
     @router.websocket("/_ws")
     async def live(ws: WebSocket) -> None:
-        """Every run's status as it changes."""
+        """Every run's status as it changes; a {"type": "stop", "program": name} message
+        stops a run (the pendant's Stop: no HTTP request on the way)."""
+
+        async def control(message: Any) -> None:
+            if not isinstance(message, dict) or message.get("type") != "stop":
+                expected = 'expected {"type": "stop", "program": <name>}'
+                raise InvalidValue(expected, code="bad_message")
+            name = message.get("program")
+            if not isinstance(name, str):
+                raise InvalidValue("which program to stop: a name", code="bad_message")
+            await runs.stop(name)
+
         initial = [runs.status(name).model_dump_json() for name in runs.runs]
-        await fanout.serve(ws, initial)
+        await fanout.serve(ws, initial, on_message=control)
 
     @router.get("")
     async def listing() -> list[ProgramSummary]:
@@ -111,8 +123,8 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
         return await runs.step(name)
 
     @router.post("/{name}/stop")
-    async def stop(name: str) -> RunStatus:
-        return await runs.stop(name)
+    async def stop(name: str, request_start: RequestStart = None) -> RunStatus:
+        return await runs.stop(name, arrived=received_at(request_start))
 
     @router.put("/{name}/breakpoints")
     async def breakpoints(name: str, body: BreakpointsRequest) -> RunStatus:

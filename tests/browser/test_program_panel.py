@@ -145,8 +145,11 @@ def test_run_a_saved_program_with_a_breakpoint_then_pause_and_stop(
     # Resume, then stop during a move: the robot halts and the run ends.
     page.get_by_test_id("resume").tap()
     wait_for(lambda: not robot_at_rest(runtime), 20, what="the robot moving again")
+    stop_requests: list[str] = []
+    page.on("request", lambda r: stop_requests.append(r.url) if r.url.endswith("/stop") else None)
     page.get_by_test_id("stop").tap()
     expect(state).to_have_text("stopped")
+    assert stop_requests == []  # the stop went over the program socket, not HTTP
     wait_for(lambda: robot_at_rest(runtime), 2, what="the robot halted")
     halted = robot_joints(runtime)
     time.sleep(0.5)

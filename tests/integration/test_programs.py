@@ -5,6 +5,7 @@ bad programs and targets are refused with the block named, and the robot stays p
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from collections.abc import Iterator
@@ -12,6 +13,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+from websockets.sync.client import connect
 
 from tests.support.blocks import (
     block,
@@ -29,6 +31,7 @@ from tests.support.processes import Runtime, wait_for
 from tests.support.programs import HOME, PICK_AND_PLACE_WAYPOINTS, PLACE, pick_and_place, teach
 
 FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]
+FAR_DEGREES = [round(math.degrees(v), 6) for v in FAR]
 
 
 @pytest.fixture(scope="module")
@@ -206,7 +209,12 @@ def test_stop_during_a_long_move_halts_the_robot(ready: Cell) -> None:
     wait_for(lambda: not ready.robot.stopped(), 10, what="the robot moving")
     time.sleep(0.3)
     before = ready.robot.last_command_seq()
-    stopped = ready.runtime.api("POST", "/programs/long_move/stop").json()
+    sent = time.time()
+    # The runtime's front door stamps when the stop arrived; a client's own stamp is replaced.
+    stopped = ready.runtime.api(
+        "POST", "/programs/long_move/stop", headers={"X-Request-Start": "1"}
+    ).json()
+    assert sent <= stopped["stop_received"] <= time.time()
     assert stopped["state"] == "stopped" and stopped["robots"] == ["robot"]
     commands = [c["type"] for c in ready.robot.commands(before)]
     assert "halt" in commands
@@ -216,6 +224,26 @@ def test_stop_during_a_long_move_halts_the_robot(ready: Cell) -> None:
     assert np.abs(ready.robot.q() - q).max() < 1e-9  # nothing resumes after the stop
     assert np.abs(q - np.array(FAR)).max() > 0.1
     assert all(o["text"] != "never" for o in status(ready, "long_move")["output"])
+
+
+def test_stop_over_the_program_socket_halts_the_robot(ready: Cell) -> None:
+    save_python(ready, "socket_stop", f"set_speed(10)\nmove_joint({FAR_DEGREES!r})")
+    url = ready.runtime.url.replace("http", "ws") + "/api/programs/_ws"
+    with connect(url) as socket:
+        socket.send(json.dumps({"type": "stop"}))
+        answers = iter(lambda: json.loads(socket.recv(timeout=5)), None)
+        refusal = next(a for a in answers if a.get("type") == "error")  # after the statuses
+        assert refusal["error"]["code"] == "bad_message"
+        run(ready, "socket_stop")
+        wait_for(lambda: not ready.robot.stopped(), 10, what="the robot moving")
+        before = ready.robot.last_command_seq()
+        socket.send(json.dumps({"type": "stop", "program": "socket_stop"}))
+        wait_for(lambda: status(ready, "socket_stop")["state"] == "stopped", 5, what="stopped")
+    assert "halt" in [c["type"] for c in ready.robot.commands(before)]
+    ready.robot.wait_stopped(2.0)
+    q = ready.robot.q()
+    time.sleep(0.3)
+    assert np.abs(ready.robot.q() - q).max() < 1e-9
 
 
 def test_stop_while_a_move_is_planned_means_it_never_starts(ready: Cell) -> None:

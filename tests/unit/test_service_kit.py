@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import time
 
+import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
 from runtime.interfaces.common import Pose, Strict
 from runtime.kit.app import create_app
 from runtime.kit.errors import Conflict
+from runtime.kit.request_start import received_at, stamp
 from runtime.kit.websocket import OutboxOverflow, Subscriber
 
 
@@ -133,3 +136,10 @@ def test_state_stream_repeats_a_quiet_state_and_skips_duplicates() -> None:
     received = asyncio.run(scenario())
     # 100 Hz for 0.625 s, but the state never changed: the first send and two keep-alives.
     assert 2 <= len(received) <= 4
+
+
+def test_the_request_start_stamp_is_read_only_when_it_is_a_recent_time() -> None:
+    now = time.time()
+    assert received_at(stamp()) == pytest.approx(now, abs=1.0)
+    for bad in (None, "", "soon", "nan", "inf", "1", str(now + 3600), str(now - 3600)):
+        assert received_at(bad) is None, bad

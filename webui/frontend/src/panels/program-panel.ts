@@ -630,6 +630,7 @@ export class OpProgramPanel extends LitElement {
   }
 
   private async command(action: "pause" | "resume" | "step" | "stop"): Promise<void> {
+    if (action === "stop" && runs.sendStop(this.name)) return; // its outcome is pushed
     try {
       await api<RunStatus>("POST", `/api/programs/${encodeURIComponent(this.name)}/${action}`);
     } catch (err) {

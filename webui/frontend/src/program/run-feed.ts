@@ -42,6 +42,14 @@ export class RunFeed extends EventTarget {
     };
   }
 
+  /** A program's stop over the open socket (no HTTP request on the way); false when the
+   * socket is not open, and the caller asks over HTTP. */
+  sendStop(program: string): boolean {
+    if (this.socket?.readyState !== WebSocket.OPEN) return false;
+    this.socket.send(JSON.stringify({ type: "stop", program }));
+    return true;
+  }
+
   stop(): void {
     this.stopped = true;
     this.socket?.close();
