@@ -259,3 +259,33 @@ def test_duplicate_rename_and_delete_a_program(
     assert runtime.api("GET", "/programs/cycle").status_code == 200
     # The one refused rename, which the browser logs as a failed request.
     assert len(errors.errors) == 1 and "409" in errors.errors[0], errors.errors
+
+
+def test_a_waypoint_taught_elsewhere_is_offered_at_once(
+    runtime: Runtime, cell: dict[str, Any], tablet: BrowserContext
+) -> None:
+    """The dropdowns follow the variable storage: taught or deleted on another pendant (here
+    the API) while this panel is open, a waypoint appears in or leaves the list."""
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/program")
+    expect(page.get_by_test_id("program-select")).to_have_value("cycle")
+    chooser = next(i for i in ids_of(cell) if i.startswith("waypoint_get"))
+    field = block_of(page, chooser).locator(".blocklyDropdownField").first
+    option = page.locator(".blocklyDropDownDiv .blocklyMenuItem", has_text="spot_taught_now")
+    expect(field).to_be_visible()
+
+    teach(runtime, {"spot_taught_now": HOME})
+    wait_for(lambda: (field.tap(), option.count() > 0)[1], 10, what="the new waypoint offered")
+    page.keyboard.press("Escape")
+
+    runtime.api("DELETE", "/variables/spot_taught_now").raise_for_status()
+
+    def gone() -> bool:
+        field.tap()
+        listed = option.count() > 0
+        page.keyboard.press("Escape")
+        return not listed
+
+    wait_for(gone, 10, what="the deleted waypoint gone from the list")
+    assert errors.errors == []

@@ -7,6 +7,7 @@ import type { DeviceDetails } from "../types";
 import type { ProgramEditor } from "../program/editor";
 import type { BlockCatalog } from "../program/catalog";
 import { RunFeed } from "../program/run-feed";
+import { type WaypointChange, WaypointFeed } from "../program/waypoint-feed";
 import {
   LIVE_STATES,
   type Generated,
@@ -34,6 +35,18 @@ interface Draft {
 let draft: Draft | null = null;
 
 const runs = new RunFeed();
+const waypointFeed = new WaypointFeed(
+  (change) => void applyWaypoint(change),
+  () => void refreshChoices().catch(() => undefined),
+);
+
+async function applyWaypoint({ name, present }: WaypointChange): Promise<void> {
+  const { choices } = await import("../program/catalog");
+  const names = new Set(choices.waypoints);
+  if (present) names.add(name);
+  else names.delete(name);
+  choices.waypoints = [...names];
+}
 
 /** The robot names and what each has, for the dropdowns of the robot and I/O blocks. */
 async function refreshChoices(): Promise<void> {
@@ -358,12 +371,14 @@ export class OpProgramPanel extends LitElement {
     super.connectedCallback();
     runs.addEventListener("change", this.onRuns);
     runs.start();
+    waypointFeed.start();
     window.addEventListener("beforeunload", this.onUnload);
   }
 
   disconnectedCallback(): void {
     runs.removeEventListener("change", this.onRuns);
     runs.stop();
+    waypointFeed.stop();
     window.removeEventListener("beforeunload", this.onUnload);
     window.clearTimeout(this.previewTimer);
     if (this.editor) {
