@@ -83,9 +83,18 @@ class JointTracker:
         )
 
     def hold(self) -> None:
-        """Come to a stop as fast as the limits allow (halt), then stay there."""
+        """Come to a stop (halt), then stay there: every joint slows down in step, as fast
+        as the slowest one allows, so the robot brakes along its path. Braking each joint
+        as fast as it can would turn the motion: joints whose motions cancel at the TCP
+        stop at different times, and the TCP could speed up while the robot halts."""
         n = len(self.position)
-        self._run([_VELOCITY] * n, self.position, np.zeros(n), self.max_velocity)
+        self._run(
+            [_VELOCITY] * n,
+            self.position,
+            np.zeros(n),
+            self.max_velocity,
+            synchronization=Synchronization.Phase,
+        )
 
     def step_velocity(self, velocity: FloatArray) -> None:
         """Move each joint at its commanded velocity. Near its position limit a moving joint
@@ -138,14 +147,17 @@ class JointTracker:
         target_velocity: FloatArray,
         max_velocity: FloatArray,
         target_acceleration: FloatArray | None = None,
+        synchronization: Synchronization = Synchronization.No,
     ) -> None:
         accel = np.zeros(len(interfaces)) if target_acceleration is None else target_acceleration
+        self._in.synchronization = synchronization
         self._update(interfaces, target_position, target_velocity, max_velocity, accel)
         unsafe = self._cannot_stop_in_limits()
         if unsafe.any():
             # Like a controller's joint-limit braking: those joints stop now, from the
             # previous state, which was checked to have a stop within the limits.
             self.guard_trips += 1
+            self._in.synchronization = Synchronization.No  # the limits win over the path
             interfaces = [_VELOCITY if u else i for u, i in zip(unsafe, interfaces, strict=True)]
             self._update(
                 interfaces,

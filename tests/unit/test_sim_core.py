@@ -10,6 +10,7 @@ import pytest
 
 from device_drivers.sim_robot.core import CYCLE, SimCore
 from device_drivers.sim_robot.driver import SimRobot
+from device_drivers.sim_robot.tracker import JointTracker
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.limits import FloatArray, JointLimitChecker
 from runtime.interfaces.robot import (
@@ -90,6 +91,41 @@ def test_jog_stops_when_commands_stop_arriving(core: SimCore) -> None:
     stopped_at = core.tracker.position.copy()
     clock.run(0.2)
     assert np.array_equal(core.tracker.position, stopped_at)
+    assert_within_limits(core)
+
+
+@pytest.mark.parametrize("elbow", [0.3, 0.6, 0.9, 1.2])
+def test_a_halt_brakes_along_the_path_and_the_tcp_never_speeds_up(
+    ur5: RobotInfo, elbow: float
+) -> None:
+    """A shoulder and an elbow moving so their motions nearly cancel at the TCP: stopped one
+    joint at a time, the TCP would speed up while halting (past the manual-mode cap, seen
+    at 0.27 m/s from 0.09); the halt slows every joint in step instead."""
+    core = SimCore(ur5, Kinematics(ur5))
+    core.tracker = JointTracker(ur5.joints, CYCLE, np.array([0.133, -0.6, elbow, -1.44, -1.57, 0]))
+    core.enable()
+    clock = Clock(core)
+    core.set_mode(CommandMode.velocity_command)
+    v = np.array([-0.094, 0.53, -1.161, 0.376, 0.008, -0.024])
+    clock.run(0.6, lambda now: core.stream(CommandMode.velocity_command, v, None, 0.2, now))
+    core.halt()
+    first = len(core.setpoints)
+    clock.run(0.6)
+    kinematics = Kinematics(ur5)
+    speeds = [
+        float(np.linalg.norm(kinematics.jacobian(s.position)[:3] @ s.velocity))
+        for s in list(core.setpoints)[first - 1 :]
+    ]
+    assert speeds[0] > 0.05 and speeds[-1] < 1e-9
+    assert max(speeds) <= speeds[0] * 1.01
+    # It keeps its direction while it matters (the last few mm/s drift as ruckig re-plans).
+    start = np.linalg.norm(core.setpoints[first].velocity)
+    directions = [
+        s.velocity / np.linalg.norm(s.velocity)
+        for s in list(core.setpoints)[first:]
+        if np.linalg.norm(s.velocity) > 0.25 * start
+    ]
+    assert min(float(d @ directions[0]) for d in directions) > 0.99
     assert_within_limits(core)
 
 
