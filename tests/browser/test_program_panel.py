@@ -275,17 +275,14 @@ def test_a_waypoint_taught_elsewhere_is_offered_at_once(
     option = page.locator(".blocklyDropDownDiv .blocklyMenuItem", has_text="spot_taught_now")
     expect(field).to_be_visible()
 
-    teach(runtime, {"spot_taught_now": HOME})
-    wait_for(lambda: (field.tap(), option.count() > 0)[1], 10, what="the new waypoint offered")
-    page.keyboard.press("Escape")
-
-    runtime.api("DELETE", "/variables/spot_taught_now").raise_for_status()
-
-    def gone() -> bool:
+    def offered() -> bool:
         field.tap()
         listed = option.count() > 0
         page.keyboard.press("Escape")
-        return not listed
+        return listed
 
-    wait_for(gone, 10, what="the deleted waypoint gone from the list")
+    teach(runtime, {"spot_taught_now": HOME})
+    wait_for(offered, 10, what="the new waypoint offered")
+    runtime.api("DELETE", "/variables/spot_taught_now").raise_for_status()
+    wait_for(lambda: not offered(), 10, what="the deleted waypoint gone from the list")
     assert errors.errors == []
