@@ -102,4 +102,5 @@ class RunStatus(BaseModel):
     isolation: list[str] = Field(default_factory=list)
     started: float | None = None
     ended: float | None = None
-    stop_received: float | None = None  # when the stop request reached the runtime
+    stop_received: float | None = None  # when the stop reached the program service
+    stop_request_start: float | None = None  # when it reached the webui (X-Request-Start)

@@ -26,6 +26,7 @@ class Active:
         self.run = run
         self.host = host
         self.received_stop: float | None = None
+        self.stop_request_start: float | None = None
 
 
 class Runs:
@@ -114,10 +115,11 @@ class Runs:
         await self._live(name).step()
         return self.status(name)
 
-    async def stop(self, name: str, arrived: float | None = None) -> RunStatus:
-        """`arrived`: when the stop reached the runtime (its front door), if not here."""
+    async def stop(self, name: str, request_start: float | None = None) -> RunStatus:
+        """`request_start`: when the stop reached the webui, if it came through it."""
         active = self._active(name)
-        active.received_stop = arrived or time.time()
+        active.received_stop = time.time()
+        active.stop_request_start = request_start
         await active.run.stop()
         return self.status(name)
 
@@ -161,6 +163,7 @@ class Runs:
             started=run.started,
             ended=run.ended,
             stop_received=active.received_stop,
+            stop_request_start=active.stop_request_start,
         )
 
     def _publish(self, name: str) -> None:

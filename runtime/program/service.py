@@ -124,7 +124,7 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
 
     @router.post("/{name}/stop")
     async def stop(name: str, request_start: RequestStart = None) -> RunStatus:
-        return await runs.stop(name, arrived=received_at(request_start))
+        return await runs.stop(name, request_start=received_at(request_start))
 
     @router.put("/{name}/breakpoints")
     async def breakpoints(name: str, body: BreakpointsRequest) -> RunStatus:
