@@ -1,5 +1,5 @@
-// WebSockets to the runtime: the URL for a path on this page's host, and the wait before a
-// dropped socket tries again (doubling from 0.5 s, at most 5 s).
+// WebSockets to the runtime: the URL for a path on this page's host, the wait before a
+// dropped socket tries again (doubling from 0.5 s, at most 5 s), and a socket that does so.
 
 export function socketUrl(path: string): string {
   const scheme = location.protocol === "https:" ? "wss" : "ws";
@@ -8,4 +8,47 @@ export function socketUrl(path: string): string {
 
 export function retryDelay(attempt: number): number {
   return Math.min(500 * 2 ** attempt, 5000);
+}
+
+/** A socket to a path on this host that reconnects itself until stopped. */
+export class ReconnectingSocket {
+  private socket: WebSocket | null = null;
+  private retry = 0;
+  private stopped = true;
+
+  constructor(
+    private readonly path: string,
+    private readonly onMessage: (data: string) => void,
+    private readonly onOpen: () => void = () => undefined,
+  ) {}
+
+  start(): void {
+    this.stopped = false;
+    if (this.socket) return;
+    const socket = new WebSocket(socketUrl(this.path));
+    this.socket = socket;
+    socket.onopen = () => {
+      this.retry = 0;
+      this.onOpen();
+    };
+    socket.onmessage = (event) => this.onMessage(String(event.data));
+    socket.onclose = () => {
+      this.socket = null;
+      if (this.stopped) return;
+      window.setTimeout(() => this.start(), retryDelay(this.retry++));
+    };
+  }
+
+  /** False when the socket is not open (nothing sent). */
+  send(text: string): boolean {
+    if (this.socket?.readyState !== WebSocket.OPEN) return false;
+    this.socket.send(text);
+    return true;
+  }
+
+  stop(): void {
+    this.stopped = true;
+    this.socket?.close();
+    this.socket = null;
+  }
 }

@@ -2,7 +2,7 @@
 // and the output of its current run, gaps filled from GET status?after=N. Reconnects itself.
 
 import { api } from "../api";
-import { retryDelay, socketUrl } from "../socket";
+import { ReconnectingSocket } from "../socket";
 import type { OutputEntry, RunStatus } from "./types";
 
 const MAX_KEPT_OUTPUT = 2000;
@@ -14,46 +14,30 @@ export interface RunView {
 
 export class RunFeed extends EventTarget {
   private readonly views = new Map<string, RunView>();
-  private socket: WebSocket | null = null;
-  private retry = 0;
-  private stopped = true;
+  private readonly socket = new ReconnectingSocket("/api/programs/_ws", (data) => {
+    try {
+      this.receive(JSON.parse(data) as RunStatus);
+    } catch {
+      // Not a status: nothing to show.
+    }
+  });
 
   view(program: string): RunView | undefined {
     return this.views.get(program);
   }
 
   start(): void {
-    this.stopped = false;
-    if (this.socket) return;
-    const socket = new WebSocket(socketUrl("/api/programs/_ws"));
-    this.socket = socket;
-    socket.onopen = () => (this.retry = 0);
-    socket.onmessage = (event) => {
-      try {
-        this.receive(JSON.parse(event.data as string) as RunStatus);
-      } catch {
-        // Not a status: nothing to show.
-      }
-    };
-    socket.onclose = () => {
-      this.socket = null;
-      if (this.stopped) return;
-      window.setTimeout(() => this.start(), retryDelay(this.retry++));
-    };
+    this.socket.start();
   }
 
   /** A program's stop over the open socket (no HTTP request on the way); false when the
    * socket is not open, and the caller asks over HTTP. */
   sendStop(program: string): boolean {
-    if (this.socket?.readyState !== WebSocket.OPEN) return false;
-    this.socket.send(JSON.stringify({ type: "stop", program }));
-    return true;
+    return this.socket.send(JSON.stringify({ type: "stop", program }));
   }
 
   stop(): void {
-    this.stopped = true;
-    this.socket?.close();
-    this.socket = null;
+    this.socket.stop();
   }
 
   /** The answer to a run request: the new run shows at once. Answers about a run already

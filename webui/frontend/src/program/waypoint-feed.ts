@@ -2,7 +2,7 @@
 // reach the program dropdowns at once, from the variable storage's change events. On every
 // (re)connection the caller reads the whole list again: events missed meanwhile are lost.
 
-import { retryDelay, socketUrl } from "../socket";
+import { ReconnectingSocket } from "../socket";
 
 const WAYPOINT_TYPES = new Set(["joint_waypoint", "pose_waypoint"]);
 
@@ -17,46 +17,34 @@ interface VariableEvent {
 }
 
 export class WaypointFeed {
-  private socket: WebSocket | null = null;
-  private retry = 0;
-  private stopped = true;
+  private readonly socket: ReconnectingSocket;
 
-  constructor(
-    private readonly onChange: (change: WaypointChange) => void,
-    private readonly onConnect: () => void,
-  ) {}
+  constructor(onChange: (change: WaypointChange) => void, onConnect: () => void) {
+    this.socket = new ReconnectingSocket(
+      "/api/variables/_events",
+      (data) => {
+        let message: VariableEvent;
+        try {
+          message = JSON.parse(data) as VariableEvent;
+        } catch {
+          return;
+        }
+        const variable = message.variable;
+        if (typeof variable?.name !== "string" || !WAYPOINT_TYPES.has(String(variable.type))) {
+          return;
+        }
+        if (message.type === "changed") onChange({ name: variable.name, present: true });
+        if (message.type === "deleted") onChange({ name: variable.name, present: false });
+      },
+      onConnect,
+    );
+  }
 
   start(): void {
-    this.stopped = false;
-    if (this.socket) return;
-    const socket = new WebSocket(socketUrl("/api/variables/_events"));
-    this.socket = socket;
-    socket.onopen = () => {
-      this.retry = 0;
-      this.onConnect();
-    };
-    socket.onmessage = (event) => {
-      let message: VariableEvent;
-      try {
-        message = JSON.parse(event.data as string) as VariableEvent;
-      } catch {
-        return;
-      }
-      const variable = message.variable;
-      if (typeof variable?.name !== "string" || !WAYPOINT_TYPES.has(String(variable.type))) return;
-      if (message.type === "changed") this.onChange({ name: variable.name, present: true });
-      if (message.type === "deleted") this.onChange({ name: variable.name, present: false });
-    };
-    socket.onclose = () => {
-      this.socket = null;
-      if (this.stopped) return;
-      window.setTimeout(() => this.start(), retryDelay(this.retry++));
-    };
+    this.socket.start();
   }
 
   stop(): void {
-    this.stopped = true;
-    this.socket?.close();
-    this.socket = null;
+    this.socket.stop();
   }
 }
