@@ -1,5 +1,5 @@
-"""What other services ask the device manager: is this lease token in control, and a live
-link to an added robot."""
+"""What other services ask the device manager over HTTP: is this lease token in control, and
+an added robot's description. Links to devices go over the link socket (runtime/links)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,7 @@ from typing import Any
 
 from runtime.interfaces.robot import RobotInfo
 from runtime.kit.client import ServiceClient
-from runtime.kit.errors import OpenPendantError, Unavailable
-from runtime.robot_link import RobotLink
+from runtime.kit.errors import OpenPendantError
 
 
 def require_token(name: str, token: str | None) -> str:
@@ -30,14 +29,3 @@ async def robot_info(devices: ServiceClient, name: str) -> RobotInfo:
     """An added robot's info, as the device manager has it from the driver."""
     details = await devices.get(f"/devices/{name}")
     return RobotInfo.model_validate(details["info"]["info"])
-
-
-async def open_robot_link(devices: ServiceClient, name: str, url: str) -> RobotLink:
-    """A started link to an added robot, its info from the device manager; fails unless the
-    robot's state is streaming."""
-    link = RobotLink(name, url, await robot_info(devices, name))
-    await link.start()
-    if not link.alive:
-        await link.close()
-        raise Unavailable(f"no state from {name}", code="device_disconnected")
-    return link

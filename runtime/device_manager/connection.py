@@ -1,5 +1,9 @@
-"""One added device's link: fetch its description, follow its state stream, reconnect with
-back-off, and move to a new address when discovery reports one."""
+"""One added device's link: the only connection the runtime has to it. A session fetches the
+device's description, follows its state stream and, for a robot, holds the command stream
+every service's commands go through (bound as the runtime's session: the driver halts the
+robot when it closes or goes silent). A session whose states stop or arrive late is stale:
+it is ended at once, and the next one is a new generation, on which nothing of the old one
+continues. Sessions restart with a short back-off, and move when the address does."""
 
 from __future__ import annotations
 
@@ -8,25 +12,47 @@ import contextlib
 import json
 import logging
 import time
+from collections import OrderedDict
 from collections.abc import Callable
 from typing import Any
 
 import httpx
 import websockets
+from websockets.asyncio.client import ClientConnection
 
 from runtime.device_manager.models import ConnectionStatus
+from runtime.kit.discovery import clean_text
+from runtime.kit.errors import OpenPendantError, Unavailable
+from runtime.kit.settings import LinkSettings
+from runtime.links.freshness import Freshness, state_stamp
 from runtime.variable_storage.types import DeviceRecord
 
 log = logging.getLogger(__name__)
 
-# A stream silent for this long counts as a dropped connection.
-STALE_AFTER = 1.0
-BACKOFF = (0.2, 0.5, 1.0, 2.0, 5.0)
-CLOSE_TIMEOUT = 1.0
+RETRY = (0.1, 0.25, 0.5)  # s between attempts; a returning device is met within 0.5 s
+CONNECT_TIMEOUT = 1.0
+CALL_TIMEOUT = 5.0
+MAX_INFO = 256 * 1024  # bytes of GET /info
+MAX_STATE = 1 << 20  # bytes of one state message
+MAX_ERROR = 300  # characters of a shown error
+MAX_QUEUED = 1000  # commands waiting for a slow link: more means it is not a link any more
+MAX_ROUTED = 4096  # recent command ids whose refusals go back to their sender
+
+Refusal = Callable[[dict[str, Any]], None]
 
 
 class WrongDevice(Exception):
     pass
+
+
+class SessionEnded(Exception):
+    def __init__(self, reason: str, *, stale: bool = False) -> None:
+        super().__init__(reason)
+        self.stale = stale
+
+
+def short(text: str) -> str:
+    return clean_text(text, MAX_ERROR)
 
 
 class DeviceConnection:
@@ -35,39 +61,119 @@ class DeviceConnection:
         record: DeviceRecord,
         on_state: Callable[[DeviceConnection, str], None],
         on_status: Callable[[DeviceConnection], None],
+        timing: LinkSettings | None = None,
     ) -> None:
         self.record = record
+        self.timing = timing or LinkSettings()
         self.status: ConnectionStatus = "connecting"
         self.last_error = ""
         self.connected_since: float | None = None
         self.info: dict[str, Any] | None = None
         self.last_state: str | None = None
+        self.generation = 0  # one per session: a new session continues nothing of the old
+        self.freshness = Freshness()
         self._on_state = on_state
         self._on_status = on_status
         self._wake = asyncio.Event()
+        self._stopping = False
         self._task: asyncio.Task[None] | None = None
+        self._outbox: asyncio.Queue[str] | None = None  # the live session's commands
+        self._http: httpx.AsyncClient | None = None
+        self._routes: OrderedDict[int, Refusal] = OrderedDict()
+        self._next_id = 0
 
     @property
     def name(self) -> str:
         return self.record.local_name
 
+    @property
+    def live(self) -> bool:
+        return self.status == "connected" and self._outbox is not None
+
     def start(self) -> None:
         self._task = asyncio.create_task(self._run(), name=f"device:{self.name}")
 
     async def stop(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            await asyncio.wait({self._task}, timeout=CLOSE_TIMEOUT * 2)
+        """Ends the session (the driver halts the robot as its session closes)."""
+        task = self._task
+        if task is None:
+            return
+        # The flag and the wake end the loop even if a library swallows the cancellation
+        # (seen here: a session left streaming by a stop that did not arrive).
+        self._stopping = True
+        self._wake.set()
+        task.cancel()
+        # asyncio.wait never swallows a cancellation of our own caller, and the session
+        # aborts its sockets rather than waiting for close handshakes.
+        await asyncio.wait({task}, timeout=2.0)
+        if not task.done():
+            log.error("the session of %s did not end when stopped", self.name)
 
     def move_to(self, url: str) -> None:
-        """Discovery saw this device at a new address: reconnect there now."""
+        """Reconnect at a new address now (the registry decides when that is right)."""
         self.record = self.record.model_copy(update={"url": url})
         self._wake.set()
+
+    # Commands --------------------------------------------------------------------------------
+
+    def send(self, command: dict[str, Any], generation: int, on_refused: Refusal) -> None:
+        """Queue a command on this generation's session, in order; the driver's refusal, if
+        any, goes to `on_refused`."""
+        self._require(generation)
+        assert self._outbox is not None
+        self._next_id += 1
+        ident = self._next_id
+        self._routes[ident] = on_refused
+        while len(self._routes) > MAX_ROUTED:
+            self._routes.popitem(last=False)
+        try:
+            self._outbox.put_nowait(json.dumps({**command, "id": ident}))
+        except asyncio.QueueFull:
+            raise Unavailable(f"{self.name} is not taking commands", code="link_stale") from None
+
+    def halt(self, tag: str | None = None) -> bool:
+        """Stop always wins: on whatever session is live. False when there is none (then the
+        driver has halted by itself, its session closed)."""
+        if self._outbox is None:
+            return False
+        with contextlib.suppress(asyncio.QueueFull):
+            self._outbox.put_nowait(json.dumps({"type": "halt", "tag": tag}))
+        return True
+
+    async def call(self, method: str, path: str, body: Any, generation: int) -> tuple[int, Any]:
+        """A request to the driver on this generation's session: (status, JSON body)."""
+        self._require(generation)
+        assert self._http is not None
+        try:
+            response = await self._http.request(method, path, json=body, timeout=CALL_TIMEOUT)
+        except httpx.HTTPError as exc:
+            raise Unavailable(
+                f"{self.name} did not answer: {type(exc).__name__}", code="device_disconnected"
+            ) from exc
+        try:
+            content = response.json() if response.content else None
+        except ValueError:
+            content = None
+        return response.status_code, content
+
+    def _require(self, generation: int) -> None:
+        if self.generation != generation:
+            raise OpenPendantError(
+                f"the link to {self.name} was lost and made again since; nothing that was "
+                "running on it continues",
+                code="link_changed",
+                status=409,
+            )
+        if not self.live:
+            code = "link_stale" if self.status == "stale" else "device_disconnected"
+            raise Unavailable(f"{self.name} is {self.status}: {self.last_error}", code=code)
+
+    # Status ----------------------------------------------------------------------------------
 
     def _set_status(self, status: ConnectionStatus, error: str = "") -> None:
         changed = status != self.status or error != self.last_error
         self.status = status
-        self.last_error = error
+        self.last_error = short(error)
         self.connected_since = time.time() if status == "connected" else None
         if status != "connected":
             self.last_state = None
@@ -76,67 +182,190 @@ class DeviceConnection:
 
     async def _run(self) -> None:
         attempt = 0
-        while True:
+        while not self._stopping:
             self._wake.clear()
-            url = self.record.url
-            self._set_status("connecting", self.last_error)
-            error = await self._until_closed_or_moved(url)
-            if self.status == "connected":
+            try:
+                ended = await self._session(self.record.url)
+            except Exception as exc:  # a bug must not end the device's link for good
+                log.exception("%s: session failed", self.name)
+                ended = SessionEnded(f"internal error: {describe(exc)}")
+            if ended is not None:  # it had connected: start again at once
+                self._set_status("stale" if ended.stale else "disconnected", str(ended))
                 attempt = 0
-            self._set_status("disconnected", error)
-            delay = 0.0 if self._wake.is_set() else BACKOFF[min(attempt, len(BACKOFF) - 1)]
+            if self._wake.is_set():  # moved, or stopping
+                continue
+            delay = RETRY[min(attempt, len(RETRY) - 1)]
             attempt += 1
             with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._wake.wait(), delay)
+                async with asyncio.timeout(delay):
+                    await self._wake.wait()
 
-    async def _until_closed_or_moved(self, url: str) -> str:
-        session = asyncio.create_task(self._session(url))
-        wake = asyncio.create_task(self._wake.wait())
+    async def _session(self, url: str) -> SessionEnded | None:
+        """One session; returns why it ended if it had connected, else None (status set)."""
+        state_ws: ClientConnection | None = None
+        command_ws: ClientConnection | None = None
+        http = httpx.AsyncClient(base_url=url, timeout=CONNECT_TIMEOUT)
         try:
-            await asyncio.wait({session, wake}, return_when=asyncio.FIRST_COMPLETED)
+            try:
+                async with asyncio.timeout(CONNECT_TIMEOUT * 2):
+                    info = await self._fetch_info(http, url)
+                    state_ws = await self._open(url, "/state/ws")
+                    if self.record.kind == "robot":
+                        command_ws = await self._open(url, "/command/ws")
+                        timeout = self.timing.driver_timeout
+                        await command_ws.send(json.dumps({"type": "session", "timeout": timeout}))
+                    first = await state_ws.recv()
+            except (OSError, httpx.HTTPError, websockets.WebSocketException, TimeoutError) as exc:
+                self._failed(f"cannot reach {url}: {describe(exc)}")
+                return None
+            except (WrongDevice, ValueError) as exc:
+                self._failed(str(exc))
+                return None
+            return await self._connected(url, info, http, state_ws, command_ws, first)
         finally:
-            wake.cancel()
-            if not session.done():
-                session.cancel()
-                # asyncio.wait, unlike awaiting the task, never swallows our own cancellation.
-                await asyncio.wait({session})
-            if not session.cancelled():
-                session.exception()  # looked at, even if we are being cancelled ourselves
-        if session.cancelled():
-            return f"moved to {self.record.url}"
-        exc = session.exception()
-        if exc is None:
-            return "connection closed"
-        if isinstance(exc, WrongDevice):
-            return str(exc)
-        if isinstance(
-            exc,
-            OSError | httpx.HTTPError | websockets.WebSocketException | TimeoutError | ValueError,
-        ):
-            return f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
-        raise exc
+            for ws in (state_ws, command_ws):
+                if ws is not None:
+                    ws.transport.abort()  # no handshake to wait for, no queued data sent
+            await http.aclose()
 
-    async def _session(self, url: str) -> None:
-        async with httpx.AsyncClient(base_url=url, timeout=2.0) as http:
-            response = await http.get("/info")
-            response.raise_for_status()
-            info = response.json()
-        uuid = info.get("identity", {}).get("uuid") if isinstance(info, dict) else None
-        if uuid != self.record.uuid:
-            raise WrongDevice(f"another device (uuid {uuid!r}) answers at {url}")
+    def _failed(self, error: str) -> None:
+        self._set_status("disconnected", error)
+
+    async def _connected(
+        self,
+        url: str,
+        info: dict[str, Any],
+        http: httpx.AsyncClient,
+        state_ws: ClientConnection,
+        command_ws: ClientConnection | None,
+        first: str | bytes,
+    ) -> SessionEnded:
+        self.freshness.reset()
+        text = first if isinstance(first, str) else first.decode()
+        self._observe(text)
         self.info = info
-        ws_url = url.replace("http://", "ws://", 1).replace("https://", "wss://", 1)
-        async with websockets.connect(
-            f"{ws_url}/state/ws", open_timeout=2.0, close_timeout=CLOSE_TIMEOUT, max_size=2**22
-        ) as ws:
+        self.generation += 1
+        self._http = http
+        self._routes.clear()
+        if command_ws is not None:
+            self._outbox = asyncio.Queue(MAX_QUEUED)
+        log.info("%s connected at %s (link %d)", self.name, url, self.generation)
+        self._set_status("connected")
+        self._state(text)
+        jobs = [self._read_states(state_ws), self._watch_wake()]
+        if command_ws is not None:
+            jobs += [self._write_commands(command_ws), self._read_refusals(command_ws)]
+        tasks = [asyncio.create_task(job) for job in jobs]
+        try:
+            # Plain tasks, not a TaskGroup: on Python 3.11 a TaskGroup whose child fails
+            # while it exits leaves a cancel request counted on this task, and a later
+            # asyncio.timeout then takes a real cancellation for its own and swallows it.
+            done, _ = await asyncio.wait(tasks, return_when=asyncio.FIRST_COMPLETED)
+        finally:
+            for task in tasks:
+                task.cancel()
+            await asyncio.wait(tasks)
+            self._outbox = None
+            self._http = None
+        ended = next(iter(done)).exception()
+        if not isinstance(ended, SessionEnded):  # a bug: _run logs it and starts again
+            raise ended or AssertionError("a session task returned")
+        log.warning("%s: link %d ended: %s", self.name, self.generation, ended)
+        return ended
+
+    # Session tasks ---------------------------------------------------------------------------
+
+    async def _read_states(self, ws: ClientConnection) -> None:
+        stale_after = self.timing.stale_after
+        while True:
+            try:
+                async with asyncio.timeout(stale_after):
+                    message = await ws.recv()
+            except TimeoutError:
+                raise SessionEnded(
+                    f"stale: no state for {stale_after * 1000:.0f} ms", stale=True
+                ) from None
+            except websockets.WebSocketException as exc:
+                raise SessionEnded(f"state stream closed: {describe(exc)}") from None
+            text = message if isinstance(message, str) else message.decode()
+            try:
+                age = self._observe(text)
+            except ValueError as exc:
+                raise SessionEnded(f"malformed state: {exc}") from None
+            if age > stale_after:
+                raise SessionEnded(f"stale: states arrive {age * 1000:.0f} ms late", stale=True)
+            self._state(text)
+
+    def _observe(self, text: str) -> float:
+        stamp = state_stamp(text)
+        age = self.freshness.observe(stamp.seqno, stamp.ts)
+        # Only a robot's state changes every cycle; other devices repeat theirs at rest.
+        return age if self.record.kind == "robot" else 0.0
+
+    def _state(self, text: str) -> None:
+        self.last_state = text
+        self._on_state(self, text)
+
+    async def _watch_wake(self) -> None:
+        await self._wake.wait()
+        raise SessionEnded(f"moved to {self.record.url}")
+
+    async def _write_commands(self, ws: ClientConnection) -> None:
+        assert self._outbox is not None
+        outbox = self._outbox
+        keepalive = self.timing.driver_timeout / 4
+        quiet = json.dumps({"type": "keepalive"})
+        try:
             while True:
                 try:
-                    message = await asyncio.wait_for(ws.recv(), STALE_AFTER)
+                    async with asyncio.timeout(keepalive):
+                        text = await outbox.get()
                 except TimeoutError:
-                    raise TimeoutError(f"no state from the device for {STALE_AFTER} s") from None
-                text = message if isinstance(message, str) else message.decode()
-                json.loads(text)  # a malformed message ends the session
-                if self.status != "connected":
-                    self._set_status("connected")
-                self.last_state = text
-                self._on_state(self, text)
+                    text = quiet
+                await ws.send(text)
+        except websockets.WebSocketException as exc:
+            raise SessionEnded(f"command stream closed: {describe(exc)}") from None
+
+    async def _read_refusals(self, ws: ClientConnection) -> None:
+        try:
+            async for message in ws:
+                body = json.loads(message)
+                if not isinstance(body, dict):
+                    continue
+                route = self._routes.get(body.get("id"))  # type: ignore[arg-type]
+                if route is not None:
+                    route(body.get("error") or {})
+                else:
+                    log.warning("%s refused: %s", self.name, short(str(body.get("error"))))
+        except (websockets.WebSocketException, ValueError) as exc:
+            raise SessionEnded(f"command stream closed: {describe(exc)}") from None
+        raise SessionEnded("the driver closed the command stream")
+
+    # Set-up ----------------------------------------------------------------------------------
+
+    async def _fetch_info(self, http: httpx.AsyncClient, url: str) -> dict[str, Any]:
+        async with http.stream("GET", "/info") as response:
+            response.raise_for_status()
+            raw = b""
+            async for chunk in response.aiter_bytes():
+                raw += chunk
+                if len(raw) > MAX_INFO:
+                    raise ValueError(f"{url}/info is over {MAX_INFO // 1024} KiB")
+        info = json.loads(raw)
+        identity = info.get("identity") if isinstance(info, dict) else None
+        uuid = identity.get("uuid") if isinstance(identity, dict) else None
+        if uuid != self.record.uuid:
+            shown = short(repr(uuid)[:80])
+            raise WrongDevice(f"another device (uuid {shown}) answers at {url}")
+        return info  # type: ignore[no-any-return]
+
+    async def _open(self, url: str, path: str) -> ClientConnection:
+        ws_url = url.replace("http://", "ws://", 1).replace("https://", "wss://", 1)
+        return await websockets.connect(
+            ws_url + path, open_timeout=CONNECT_TIMEOUT, close_timeout=0.2, max_size=MAX_STATE
+        )
+
+
+def describe(exc: BaseException) -> str:
+    text = str(exc)
+    return f"{type(exc).__name__}: {text}" if text else type(exc).__name__

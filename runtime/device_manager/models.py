@@ -11,7 +11,7 @@ from runtime.interfaces.common import Strict
 
 LOCAL_NAME_PATTERN = r"^[a-z][a-z0-9_]{0,31}$"
 
-ConnectionStatus = Literal["connecting", "connected", "disconnected"]
+ConnectionStatus = Literal["connecting", "connected", "stale", "disconnected"]
 
 
 class DetectedDevice(BaseModel):
@@ -28,6 +28,16 @@ class DetectedDevice(BaseModel):
     last_seen: float
 
 
+class AddressClaim(BaseModel):
+    """Another address an added device was seen at: announced there while its link was
+    live (not followed: shown to the user), or where it was before it moved (followed)."""
+
+    url: str
+    name: str
+    seen: float
+    followed: bool = False
+
+
 class AddedDevice(BaseModel):
     local_name: str
     uuid: str
@@ -41,10 +51,17 @@ class AddedDevice(BaseModel):
     detected: bool = False
     controlled_by: str | None = None
     control_expires: float | None = None
+    link: int = 0  # the link's generation: a new one for every session
+    state_age: float | None = None  # s, of the newest state, while connected
+    address_claim: AddressClaim | None = None
 
 
 class DeviceDetails(AddedDevice):
     info: dict[str, Any] | None = None
+
+
+class RepointRequest(Strict):
+    url: str = Field(pattern=r"^https?://[^\s/]+(:\d+)?/?$", max_length=256)
 
 
 class AddDeviceRequest(Strict):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import math
 import time
 from collections.abc import Coroutine
 from typing import Any
@@ -13,14 +14,17 @@ import httpx
 
 from runtime.device_manager.connection import DeviceConnection
 from runtime.device_manager.leases import LeaseBook, LeaseGranted, LeaseInfo
+from runtime.device_manager.links import LinkServer
 from runtime.device_manager.models import (
     AddDeviceRequest,
     AddedDevice,
+    AddressClaim,
     DetectedDevice,
     DeviceDetails,
 )
-from runtime.kit.discovery import Detected, clean_text
+from runtime.kit.discovery import Detected, checked_uuid, clean_text
 from runtime.kit.errors import Conflict, DeviceError, NotFound, OpenPendantError, Unavailable
+from runtime.kit.settings import LinkSettings
 from runtime.kit.websocket import Fanout
 from runtime.variable_storage.client import StorageClient
 from runtime.variable_storage.types import DeviceRecord
@@ -31,12 +35,21 @@ RECORD_PREFIX = "devices."
 
 
 class DeviceRegistry:
-    def __init__(self, storage: StorageClient, fanout: Fanout, lease_seconds: float = 15.0) -> None:
+    def __init__(
+        self,
+        storage: StorageClient,
+        fanout: Fanout,
+        lease_seconds: float = 15.0,
+        timing: LinkSettings | None = None,
+    ) -> None:
         self.storage = storage
         self.fanout = fanout  # everything, device states included
         self.events = Fanout()  # lists and leases only, for services
+        self.links = LinkServer(self)
+        self.timing = timing or LinkSettings()
         self.detected: dict[str, Detected] = {}
         self.connections: dict[str, DeviceConnection] = {}
+        self.claims: dict[str, AddressClaim] = {}  # local name -> another address it was seen at
         self.loaded = False
         self.leases = LeaseBook(lease_seconds)
         self._lock = asyncio.Lock()
@@ -49,10 +62,50 @@ class DeviceRegistry:
         self._publish_detected()
         for conn in self.connections.values():
             if conn.record.uuid == device.uuid and conn.record.url != device.url:
-                log.info("%s moved to %s", conn.name, device.url)
-                conn.move_to(device.url)
-                self._background(self._persist_url(conn.name, conn.record))
-                self._publish_devices()
+                self._seen_elsewhere(conn, device)
+
+    def _seen_elsewhere(self, conn: DeviceConnection, device: Detected) -> None:
+        """An added device announced at another address. While its link is live the device
+        answers where it is: the announcement is a second device with its identity (or a
+        stale one), shown to the user and not followed. A device whose link is down has
+        moved (a restart on a new port): the link follows."""
+        claim = AddressClaim(url=device.url, name=device.name, seen=time.time())
+        if conn.status == "connected":
+            log.warning(
+                "%s is live at %s; another device announces its uuid at %s: not followed",
+                conn.name,
+                conn.record.url,
+                device.url,
+            )
+            self.claims[conn.name] = claim
+            self._publish_devices()
+            return
+        self._move(conn, device.url)
+
+    def _move(self, conn: DeviceConnection, url: str) -> None:
+        log.warning("%s moves from %s to %s", conn.name, conn.record.url, url)
+        self.claims[conn.name] = AddressClaim(
+            url=conn.record.url, name=conn.record.name, seen=time.time(), followed=True
+        )
+        conn.move_to(url)
+        self._background(self._persist_url(conn.name, conn.record))
+        self._publish_devices()
+
+    async def repoint(self, local_name: str, url: str) -> AddedDevice:
+        """The user moves a device to another address: its robot halted first, the one link
+        moved at once (every service uses it), the address stored."""
+        url = url.rstrip("/")
+        async with self._lock:
+            conn = self._get(local_name)
+            record = await self._record_from_url(url, local_name)
+            if record.uuid != conn.record.uuid:
+                raise Conflict(
+                    f"the device at {url} is not {local_name} (uuid {record.uuid!r})",
+                    code="wrong_device",
+                )
+            conn.halt("address changed by the user")
+            self._move(conn, url)
+        return self._added(conn)
 
     def on_gone(self, service_name: str) -> None:
         gone = [uuid for uuid, d in self.detected.items() if d.service_name == service_name]
@@ -129,8 +182,12 @@ class DeviceRegistry:
             conn = self._get(local_name)
             await self.storage.delete(RECORD_PREFIX + local_name)
             del self.connections[local_name]
+            self.claims.pop(local_name, None)
             self.leases.drop(local_name)
-        await conn.stop()
+            # Gone from the link socket's view before its session ends: no service may
+            # command it under this name any more.
+            self.links.on_removed(local_name)
+            await conn.stop()
         self._publish_devices()
         self._publish_detected()
         return self._added(conn)
@@ -159,17 +216,23 @@ class DeviceRegistry:
             raise DeviceError(
                 f"no OpenPendant device answers at {url}", code="device_unreachable"
             ) from exc
-        return DeviceRecord(
-            uuid=clean_text(str(identity.get("uuid", "")), 64),
-            local_name=local_name,
-            kind=clean_text(str(identity.get("kind", "")), 16),
-            model=clean_text(str(identity.get("model", "")), 64),
-            name=clean_text(str(identity.get("name", "")), 64),
-            url=url,
-        )
+        try:
+            return DeviceRecord(
+                uuid=checked_uuid(identity.get("uuid")),
+                local_name=local_name,
+                kind=clean_text(str(identity.get("kind", "")), 16),
+                model=clean_text(str(identity.get("model", "")), 64),
+                name=clean_text(str(identity.get("name", "")), 64),
+                url=url,
+            )
+        except ValueError as exc:
+            raise DeviceError(
+                f"the device at {url} does not identify itself properly: {exc}",
+                code="device_invalid",
+            ) from exc
 
     def _connect(self, record: DeviceRecord) -> DeviceConnection:
-        conn = DeviceConnection(record, self._on_state, lambda _: self._publish_devices())
+        conn = DeviceConnection(record, self._on_state, self._on_status, self.timing)
         self.connections[record.local_name] = conn
         found = self.detected.get(record.uuid)
         if found is not None and found.url != record.url:
@@ -177,6 +240,12 @@ class DeviceRegistry:
             self._background(self._persist_url(record.local_name, conn.record))
         conn.start()
         return conn
+
+    def _on_status(self, conn: DeviceConnection) -> None:
+        if self.connections.get(conn.name) is not conn:
+            return  # removed: its last words are not news
+        self.links.on_status(conn)
+        self._publish_devices()
 
     async def close(self) -> None:
         for conn in list(self.connections.values()):
@@ -206,6 +275,9 @@ class DeviceRegistry:
             detected=r.uuid in self.detected,
             controlled_by=lease.holder,
             control_expires=lease.expires,
+            link=conn.generation,
+            state_age=_state_age(conn),
+            address_claim=self.claims.get(r.local_name),
         )
 
     # Control leases -------------------------------------------------------------------------
@@ -265,14 +337,14 @@ class DeviceRegistry:
             raise Unavailable(
                 f"{local_name} is {conn.status}"
                 + (f": {conn.last_error}" if conn.last_error else ""),
-                code="device_disconnected",
+                code="link_stale" if conn.status == "stale" else "device_disconnected",
             )
         return conn.last_state
 
     # Live updates ---------------------------------------------------------------------------
 
     def snapshot_messages(self, states: bool = True) -> list[str]:
-        messages = [self._detected_message(), self._devices_message()]
+        messages = [self._detected_message(), self.devices_message()]
         if not states:
             return messages
         for name, conn in sorted(self.connections.items()):
@@ -281,15 +353,18 @@ class DeviceRegistry:
         return messages
 
     def _on_state(self, conn: DeviceConnection, text: str) -> None:
+        if self.connections.get(conn.name) is not conn:
+            return  # removed: its session is ending
         if self.fanout.subscribers:
             self.fanout.publish(_state_message(conn.name, text), key=f"state:{conn.name}")
+        self.links.on_state(conn, text)
 
     def _detected_message(self) -> str:
         return json.dumps(
             {"type": "detected", "detected": [d.model_dump() for d in self.detected_list()]}
         )
 
-    def _devices_message(self) -> str:
+    def devices_message(self) -> str:
         return json.dumps(
             {"type": "devices", "devices": [d.model_dump() for d in self.added_list()]}
         )
@@ -301,10 +376,19 @@ class DeviceRegistry:
             self.events.publish(message)
 
     def _publish_devices(self) -> None:
-        if self.fanout.subscribers or self.events.subscribers:
-            message = self._devices_message()
+        if self.fanout.subscribers or self.events.subscribers or self.links.clients:
+            message = self.devices_message()
             self.fanout.publish(message)
             self.events.publish(message)
+            self.links.on_devices(message)
+
+
+def _state_age(conn: DeviceConnection) -> float | None:
+    if conn.status != "connected":
+        return None
+    fresh = conn.freshness
+    age = fresh.age() if conn.record.kind == "robot" else fresh.silence()
+    return round(age, 4) if math.isfinite(age) else None
 
 
 def _state_message(local_name: str, state_text: str) -> str:

@@ -15,6 +15,7 @@ from runtime.device_manager.models import (
     AddedDevice,
     DetectedDevice,
     DeviceDetails,
+    RepointRequest,
 )
 from runtime.device_manager.registry import DeviceRegistry
 from runtime.kit.app import create_app
@@ -41,6 +42,11 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
         fanout = registry.fanout if states else registry.events
         await fanout.serve(ws, registry.snapshot_messages(states), max_rate_hz=max_rate)
 
+    @router.websocket("/_links")
+    async def links(ws: WebSocket) -> None:
+        """For services: the one link per device (runtime/device_manager/links.py)."""
+        await registry.links.serve(ws)
+
     @router.get("")
     async def added() -> list[AddedDevice]:
         return registry.added_list()
@@ -52,6 +58,11 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
     @router.get("/{local_name}")
     async def details(local_name: str) -> DeviceDetails:
         return registry.details(local_name)
+
+    @router.put("/{local_name}/address")
+    async def repoint(local_name: str, body: RepointRequest) -> AddedDevice:
+        """Point an added device at another address (its robot is halted first)."""
+        return await registry.repoint(local_name, body.url)
 
     @router.delete("/{local_name}")
     async def remove(local_name: str) -> AddedDevice:
@@ -87,7 +98,7 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
 
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
-    registry = DeviceRegistry(storage, Fanout(), settings.lease_seconds)
+    registry = DeviceRegistry(storage, Fanout(), settings.lease_seconds, settings.link)
     browser = Browser(settings.zeroconf_interfaces(), registry.on_found, registry.on_gone)
 
     @contextlib.asynccontextmanager

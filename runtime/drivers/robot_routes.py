@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from fastapi import APIRouter, Response, WebSocket
-from pydantic import ValidationError
 
 from runtime.drivers.command_log import CommandLog, LoggedCommand
+from runtime.drivers.command_stream import CommandStream
 from runtime.interfaces.robot import (
     CommandModeRequest,
     DigitalOutputCommand,
@@ -22,9 +20,6 @@ from runtime.interfaces.robot import (
     VelocityCommand,
 )
 from runtime.interfaces.robot_driver import RobotDriver
-from runtime.kit.app import describe_validation_errors
-from runtime.kit.errors import OpenPendantError
-from runtime.kit.websocket import Fanout
 
 
 def robot_router(driver: RobotDriver, log: CommandLog) -> APIRouter:
@@ -115,55 +110,8 @@ def robot_router(driver: RobotDriver, log: CommandLog) -> APIRouter:
     @router.websocket("/command/ws")
     async def command_ws(ws: WebSocket) -> None:
         """Streamed commands, one JSON object per message with a `type` (jog_joint,
-        velocity_command, position_command, command_mode, halt); they apply in order, and
-        refusals come back on the socket."""
-
-        commanded = False
-
-        async def handle(message: Any) -> None:
-            nonlocal commanded
-            await dispatch_stream_command(driver, message, log)
-            commanded = True
-
-        try:
-            await Fanout().serve(ws, on_message=handle)
-        finally:
-            # A stream that drops must not leave the robot coasting until its timeout.
-            if commanded:
-                await driver.halt()
-                log.record("halt", "command stream closed")
+        velocity_command, position_command, command_mode, halt; session, keepalive); they
+        apply in order, and refusals come back on the socket (with the command's `id`)."""
+        await CommandStream(driver, log).serve(ws)
 
     return router
-
-
-async def dispatch_stream_command(driver: RobotDriver, message: Any, log: CommandLog) -> None:
-    if not isinstance(message, dict):
-        raise OpenPendantError("a command must be a JSON object", code="bad_message")
-    kind = message.get("type")
-    fields = {k: v for k, v in message.items() if k != "type"}
-    try:
-        if kind == "jog_joint":
-            jog = JogJointCommand.model_validate(fields)
-            await driver.jog_joint(jog)
-            log.record(kind, jog.tag)
-        elif kind == "velocity_command":
-            velocity = VelocityCommand.model_validate(fields)
-            await driver.velocity_command(velocity)
-            log.record(kind, velocity.tag)
-        elif kind == "position_command":
-            position = PositionCommand.model_validate(fields)
-            await driver.position_command(position)
-            log.record(kind, position.tag)
-        elif kind == "halt":
-            await driver.halt()
-            tag = fields.get("tag")
-            log.record(kind, tag[:64] if isinstance(tag, str) else None)
-        elif kind == "command_mode":
-            request = CommandModeRequest.model_validate(fields)
-            await driver.set_command_mode(request.mode)
-            log.record(f"command_mode:{request.mode.value}")
-        else:
-            raise OpenPendantError(f"unknown command type {kind!r}", code="bad_message")
-    except ValidationError as exc:
-        text, _ = describe_validation_errors(exc.errors())
-        raise OpenPendantError(text, code="invalid_request", status=422) from exc

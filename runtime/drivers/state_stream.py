@@ -10,8 +10,9 @@ from pydantic import BaseModel
 
 from runtime.kit.websocket import Fanout
 
-# An unchanged state is repeated this often, so a quiet device is not taken for a dead one.
-KEEPALIVE = 0.25
+# An unchanged state is repeated this often, so a quiet device is not taken for a dead or
+# stale one (the runtime calls a link stale after 0.2 s without a state).
+KEEPALIVE = 0.05
 
 
 class StateStream:

@@ -10,13 +10,12 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from runtime.interfaces.input import InputState
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import CommandMode, RobotState
 from runtime.jog.velocity import VelocityController
 from runtime.kinematics import Kinematics
+from runtime.links.robot import InputLink
 from runtime.motion.joint_move import PlannedMove
-from runtime.state_feed import StateFeed
 
 # The driver halts on its own if the stream stops for this long (the deadman's backstop).
 COMMAND_TIMEOUT = 0.2
@@ -34,6 +33,7 @@ class Action(ABC):
         self.done = False
         self.outcome = ("done", "arrived")  # what to report when done
         self.ticks = 0
+        self.generation = -1  # the robot link it runs on (set when it starts)
 
     def release(self, now: float) -> bool:
         """The button was let go. True when the action winds down by itself (it then ends
@@ -217,7 +217,7 @@ class MouseJog(Action):
         press: str,
         controller: VelocityController,
         kinematics: Kinematics,
-        feed: StateFeed[InputState],
+        feed: InputLink,
         *,
         cartesian: bool,
         frame: str,

@@ -18,7 +18,8 @@ from runtime.jog.actions import Action
 from runtime.jog.velocity import MANUAL_TCP_SPEED, Constraint, VelocityController
 from runtime.kinematics import Kinematics
 from runtime.kit.errors import OpenPendantError, RobotError
-from runtime.robot_link import RobotLink
+from runtime.links.hub import LINK_FAULTS
+from runtime.links.robot import RobotLink
 
 log = logging.getLogger(__name__)
 
@@ -60,7 +61,8 @@ class Jogger:
         self._task.cancel()
         with contextlib.suppress(asyncio.CancelledError):
             await self._task
-        await self.link.close()
+        if self.link.on_error == self._refused:
+            self.link.on_error = None
 
     def tcp_cap(self) -> float | None:
         state = self.link.current()
@@ -73,7 +75,10 @@ class Jogger:
         return MANUAL_TCP_SPEED
 
     async def start(self, action: Action, listener: Listener) -> None:
-        state = self.link.current()
+        # The press belongs to the link it began on: if that link is lost, the next one
+        # refuses its commands, and it ends.
+        action.generation = self.link.generation
+        state = self.link.current(action.generation)
         flags = state.flags
         if not flags.ready:
             # The same codes the driver uses, whichever of the two notices first.
@@ -86,7 +91,7 @@ class Jogger:
         self.action = None
         if previous is not None and previous.press != action.press:
             self._end(previous, "stopped", "replaced by a new press")
-        await self.link.ensure_mode(action.mode)
+        await self.link.ensure_mode(action.mode, action.generation)
         self.listener = listener
         self.action = action
         await self._tick(action)  # the first command goes out now, not at the next cycle
@@ -123,7 +128,8 @@ class Jogger:
                     "velocity": zero,
                     "timeout": 0.2,
                     "tag": f"{action.press}:release",
-                }
+                },
+                action.generation,
             )
         else:
             await self.link.halt(tag=f"{action.press}:release")
@@ -137,12 +143,14 @@ class Jogger:
         if action is not None:
             self.action = None
             message = str(error.get("message", "the robot refused"))
-            self._end(action, "refused", str(error.get("code", "refused")), message)
+            code = str(error.get("code", "refused"))
+            self._end(action, "halted" if code in LINK_FAULTS else "refused", code, message)
 
     async def _tick(self, action: Action) -> None:
-        command = action.tick(self.link.current(), time.monotonic())
+        state = self.link.current(action.generation)
+        command = action.tick(state, time.monotonic())
         if command is not None:
-            await self.link.send(command)
+            await self.link.send(command, action.generation)
         if action.done and self.action is action:
             self.action = None
             self._end(action, *action.outcome)
@@ -164,7 +172,15 @@ class Jogger:
             except OpenPendantError as exc:
                 if self.action is action:
                     self.action = None
-                    self._end(action, "refused", exc.code, exc.message)
+                    if exc.code in LINK_FAULTS:
+                        # A lost or stale link: the robot is halted and the press is over;
+                        # it never resumes when the link returns.
+                        log.warning("jog on %s ended: %s", self.link.name, exc.message)
+                        with contextlib.suppress(OpenPendantError):
+                            await self.link.halt(tag=f"{action.press}:link")
+                        self._end(action, "halted", exc.code, exc.message)
+                    else:
+                        self._end(action, "refused", exc.code, exc.message)
             except Exception:
                 log.exception("jog cycle failed; halting %s", self.link.name)
                 self.action = None

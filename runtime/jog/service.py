@@ -9,7 +9,6 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, FastAPI, Header, WebSocket
 
-from runtime.interfaces.robot import RobotState
 from runtime.jog.directory import Directory
 from runtime.jog.models import TeachRequest
 from runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
@@ -18,6 +17,7 @@ from runtime.jog.waypoints import robot_waypoints, teach
 from runtime.kit.app import create_app
 from runtime.kit.client import ServiceClient
 from runtime.kit.settings import RuntimeSettings
+from runtime.links.hub import LinkHub
 from runtime.motion.mirror import WorldMirror
 from runtime.paths import package_roots
 from runtime.variable_storage.client import StorageClient
@@ -71,11 +71,12 @@ def jog_router(directory: Directory, storage: StorageClient, deadman: float) -> 
         return await robot_waypoints(storage, robot, jogger.kinematics)
 
     @router.post("/robots/{robot}/halt")
-    async def halt(robot: str) -> RobotState:
+    async def halt(robot: str) -> dict[str, Any]:
         """Stop always wins: any client may halt any robot, lease or not."""
-        jogger = await directory.jogger(robot)
-        await jogger.halt_all("stop requested")
-        return jogger.link.current()
+        await directory.halt(robot, "stop requested")
+        jogger = directory.joggers.get(robot)
+        state = jogger.link.latest() if jogger is not None else None
+        return {"robot": robot, "halted": True, "state": state.model_dump() if state else None}
 
     for command in ("enable", "disable", "reset_errors"):
         router.add_api_route(
@@ -122,18 +123,20 @@ def _public_uri(urdf: str) -> str | None:
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
     devices = ServiceClient(urls["device_manager"], timeout=3.0, name="device manager")
-    mirror = WorldMirror(devices, storage)
-    directory = Directory(urls["device_manager"], avoidance=mirror.constraint)
+    hub = LinkHub(urls["device_manager"], "jog", settings.link.stale_after)
+    mirror = WorldMirror(devices, storage, hub)
+    directory = Directory(urls["device_manager"], hub, avoidance=mirror.constraint)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
-        await directory.start()
+        await hub.start()
         await mirror.start()
         try:
             yield
         finally:
             await directory.close()
             await mirror.close()
+            await hub.close()
             await devices.aclose()
             await storage.aclose()
 

@@ -327,11 +327,7 @@ class JogSession:
     async def _halt(self, robot: str | None) -> None:
         robots = set(self.touched) | ({robot} if robot else set())
         for name in robots:
-            try:
-                jogger = await self.directory.jogger(name)
-            except OpenPendantError:
-                continue
-            await jogger.halt_all("stop requested")
+            await self.directory.halt(name, "stop requested")
         for press in list(self.held):
             self._forget(press)
 

@@ -11,6 +11,7 @@ import logging
 import re
 import socket
 import time
+import unicodedata
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Literal
@@ -23,7 +24,10 @@ log = logging.getLogger(__name__)
 SERVICE_TYPE = "_openpendant._tcp.local."
 API_VERSION = "1"
 KINDS = ("robot", "camera", "detector", "io", "gripper", "input")
-_CONTROL = re.compile(r"[\x00-\x1f\x7f]")
+UUID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:-]{0,63}$")
+# Control, format (bidi overrides, zero-width), surrogate, private-use and separator
+# characters: none belongs in a name shown on a pendant.
+_HIDDEN = {"Cc", "Cf", "Cs", "Co", "Zl", "Zp"}
 
 Interfaces = list[str] | Literal["all"]
 
@@ -37,11 +41,23 @@ def make_zeroconf(interfaces: Interfaces) -> AsyncZeroconf:
 
 
 def clean_text(raw: bytes | str | None, limit: int = 128) -> str:
-    """Untrusted TXT text: decoded leniently, control characters dropped, length capped."""
+    """Untrusted text: decoded leniently, control, format and bidi characters dropped,
+    length capped."""
     if raw is None:
         return ""
+    text = raw[: limit * 4].decode("utf-8", "replace") if isinstance(raw, bytes) else raw
+    text = text[: limit * 4]
+    return "".join(c for c in text if unicodedata.category(c) not in _HIDDEN)[:limit]
+
+
+def checked_uuid(raw: object) -> str:
+    """A device uuid as sent: refused, never cut, when it is not 1-64 plain characters (two
+    long ids sharing a prefix must not become one device)."""
     text = raw.decode("utf-8", "replace") if isinstance(raw, bytes) else raw
-    return _CONTROL.sub("", text)[:limit]
+    if not isinstance(text, str) or not UUID_PATTERN.match(text):
+        shown = clean_text(repr(raw), 40)
+        raise ValueError(f"a device uuid is 1-64 letters, digits and ._:- (got {shown})")
+    return text
 
 
 @dataclass(frozen=True)
@@ -126,10 +142,14 @@ class Detected:
 def parse_info(info: AsyncServiceInfo) -> Detected | None:
     """A resolved service record as a Detected device, or None when it is not usable."""
     props = info.properties or {}
-    uuid = clean_text(props.get(b"uuid"), 64)
+    try:
+        uuid = checked_uuid(props.get(b"uuid"))
+    except ValueError as exc:
+        log.warning("ignoring announcement %s: %s", clean_text(info.name, 80), exc)
+        return None
     kind = clean_text(props.get(b"kind"), 16)
     addresses = info.parsed_addresses(IPVersion.V4Only)
-    if not uuid or kind not in KINDS or not addresses or not info.port:
+    if kind not in KINDS or not addresses or not info.port:
         return None
     return Detected(
         uuid=uuid,

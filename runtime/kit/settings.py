@@ -31,6 +31,20 @@ class DiscoverySettings(BaseModel):
     interfaces: Literal["auto", "all"] | list[str] = "auto"
 
 
+class LinkSettings(BaseModel):
+    """The device manager's one link per device (DESIGN.md §6: a stale link is a fault)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    # A link whose newest state is older than this is stale: its motion is halted and ends
+    # failed. 20 periods of the 100 Hz state stream: a loaded 2-core host stalls a process
+    # for tens of milliseconds now and then, and a stall is not a lost link.
+    stale_after: float = Field(default=0.2, ge=0.02, le=5.0)
+    # A driver halts the robot and ends the runtime's session after this long without a
+    # message from it (the device manager sends a keepalive every quarter of it).
+    driver_timeout: float = Field(default=0.3, ge=0.05, le=5.0)
+
+
 class SimRobotSpec(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
@@ -51,6 +65,7 @@ class RuntimeSettings(BaseSettings):
     sim: bool = True
     sim_robots: list[SimRobotSpec] = Field(default_factory=lambda: [SimRobotSpec()])
     discovery: DiscoverySettings = Field(default_factory=DiscoverySettings)
+    link: LinkSettings = Field(default_factory=LinkSettings)
     state_rate_hz: float = Field(default=100.0, gt=0, le=500)
     variable_history: int = Field(default=20, ge=1, le=1000)
     lease_seconds: float = Field(default=15.0, gt=0, le=3600)

@@ -11,8 +11,8 @@ import numpy as np
 
 from runtime.interfaces.robot import CommandMode, RobotState, TrajectoryState
 from runtime.kit.errors import OpenPendantError, RobotError
+from runtime.links.robot import RobotLink
 from runtime.motion.timing import TimedPath
-from runtime.robot_link import RobotLink
 
 WATCH_PERIOD = 0.02  # s
 # The robot's position and its setpoint this far apart means it is not following.
@@ -48,6 +48,7 @@ class Execution:
         self.timed = timed
         self.mode_ready = mode_ready  # the driver was put in trajectory mode for this move
         self.progress = 0.0
+        self.generation = -1
         self._cancel = asyncio.Event()
 
     def cancel(self) -> None:
@@ -55,17 +56,24 @@ class Execution:
 
     async def run(self) -> None:
         """Returns when the robot has arrived; raises MoveFailed otherwise (robot halted)."""
-        state = self.link.current()
+        # The move belongs to the link it starts on: if that is lost, the move has failed,
+        # whatever the next link shows.
+        self.generation = self.link.generation
+        state = self.link.current(self.generation)
         here = np.array(state.joint_position)
         if np.max(np.abs(here - self.timed.positions[0])) > START_TOLERANCE:
             raise MoveFailed("the robot moved since the move was planned; plan again")
         if len(self.timed.times) < 2:  # already there
             self.progress = 1.0
             return
-        if not self.mode_ready:
-            await self.link.call("PUT", "/command_mode", {"mode": CommandMode.trajectory.value})
+        gen = self.generation
+        if not self.mode_ready or state.command_mode is not CommandMode.trajectory:
+            mode = {"mode": CommandMode.trajectory.value}
+            await self.link.call("PUT", "/command_mode", mode, generation=gen)
         try:
-            accepted = await self.link.call("POST", "/trajectory", waypoints(self.timed))
+            accepted = await self.link.call(
+                "POST", "/trajectory", waypoints(self.timed), generation=gen
+            )
         except RobotError as exc:
             if exc.code == "wrong_mode":  # something else took the robot since it was set
                 raise MoveFailed(f"{exc.message}; plan again", code="wrong_mode") from exc
@@ -84,14 +92,18 @@ class Execution:
             if self._cancel.is_set():
                 raise MoveFailed("cancelled", code="cancelled")
             with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._cancel.wait(), WATCH_PERIOD)
-            state = self.link.current()
+                # asyncio.timeout, not wait_for: on 3.11 wait_for can lose a cancellation.
+                async with asyncio.timeout(WATCH_PERIOD):
+                    await self._cancel.wait()
+            state = self.link.current(self.generation)
             self._check(state)
             self.progress = min(1.0, (time.monotonic() - started) / duration)
             running = state.trajectory
             if running is not None and running.id == trajectory_id:
                 continue
-            status = await self.link.call("GET", f"/trajectory/{trajectory_id}")
+            status = await self.link.call(
+                "GET", f"/trajectory/{trajectory_id}", generation=self.generation
+            )
             if status["state"] == TrajectoryState.finished.value:
                 self.progress = 1.0
                 return

@@ -16,18 +16,17 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from runtime.device_manager.client import robot_info
 from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import RobotState
 from runtime.interfaces.scene import SceneObject
 from runtime.jog.waypoints import base_in_world
 from runtime.kinematics import Kinematics
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import OpenPendantError
+from runtime.links.hub import LinkHub
+from runtime.links.robot import RobotLink, robot_link
 from runtime.motion.avoidance import AvoidanceConstraint
 from runtime.motion.robot_body import RobotBody
 from runtime.motion.world import Contact, World, build_obstacles
-from runtime.state_feed import StateFeed
 from runtime.variable_storage.client import StorageClient
 
 log = logging.getLogger(__name__)
@@ -86,11 +85,12 @@ class CellReading:
 
 
 class WorldMirror:
-    def __init__(self, devices: ServiceClient, storage: StorageClient) -> None:
+    def __init__(self, devices: ServiceClient, storage: StorageClient, hub: LinkHub) -> None:
         self.devices = devices
         self.storage = storage
+        self.hub = hub
         self.world = World()
-        self.feeds: dict[str, StateFeed[RobotState]] = {}
+        self.links: dict[str, RobotLink] = {}
         self.refreshed = asyncio.Event()
         self._task: asyncio.Task[None] | None = None
 
@@ -102,8 +102,6 @@ class WorldMirror:
             self._task.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
-        for feed in self.feeds.values():
-            await feed.close()
 
     async def _follow(self) -> None:
         while True:
@@ -116,31 +114,29 @@ class WorldMirror:
 
     async def refresh(self) -> None:
         cell = await CellReading.read(self.devices, self.storage, self.world.robots)
-        for name in [n for n in self.feeds if n not in cell.robots]:
-            await self.feeds.pop(name).close()
+        for name in [n for n in self.links if n not in cell.robots]:
+            del self.links[name]
             self.world.remove_robot(name)
-        for name, device in cell.robots.items():
-            await self._ensure(name, device)
+        for name in cell.robots:
+            try:
+                await self._ensure(name)
+            except OpenPendantError as exc:
+                log.info("world mirror: %s left out for now: %s", name, exc.message)
         await cell.place_bases(self.world, self.storage)
         if cell.scene != self.world.objects:
             # Built off the loop, swapped in on it: a control cycle never sees half a scene.
             obstacles = await asyncio.to_thread(build_obstacles, cell.scene)
             self.world.set_objects(cell.scene, obstacles)
 
-    async def _ensure(self, name: str, device: dict[str, Any]) -> None:
-        feed = self.feeds.get(name)
-        if feed is not None and feed.url.startswith(device["url"].replace("http", "ws", 1)):
-            return
-        if feed is not None:
-            await self.feeds.pop(name).close()
-        info = await robot_info(self.devices, name)
+    async def _ensure(self, name: str) -> None:
+        link = self.links.get(name)
+        if link is None:
+            link = self.links[name] = await robot_link(self.hub, name)
+        info = link.info
         known = self.world.robots.get(name)
         if known is None or known.kinematics.info != info:
             body = await asyncio.to_thread(RobotBody, name, Kinematics(info))
             self.world.insert_robot(body)
-        feed = StateFeed(device["url"], RobotState, name)
-        await feed.start(wait=1.0)
-        self.feeds[name] = feed
 
     def place_others(self, robot: str, lookahead: float = LOOKAHEAD) -> None:
         """Every other robot where it will be a cycle from now: its latest reported joints
@@ -150,8 +146,8 @@ class WorldMirror:
         for name, body in self.world.robots.items():
             if name == robot:
                 continue
-            feed = self.feeds.get(name)
-            state = feed.state if feed is not None else None
+            link = self.links.get(name)
+            state = link.latest() if link is not None else None
             if state is not None:
                 ahead = min(max(now - state.ts, 0.0), MAX_AGE) + lookahead
                 q = np.array(state.joint_position) + ahead * np.array(state.joint_velocity)

@@ -13,9 +13,9 @@ import pinocchio as pin
 
 from runtime.interfaces.robot import CommandMode
 from runtime.jog.velocity import VelocityController
+from runtime.links.robot import RobotLink
 from runtime.motion.executor import MoveFailed, check_faults
 from runtime.motion.mirror import MAX_AGE, MirrorConstraint
-from runtime.robot_link import RobotLink
 
 PERIOD = 0.01  # s
 GAIN = 3.0  # 1/s: how fast the remaining error is closed near the goal
@@ -47,13 +47,15 @@ class ReactiveExecution:
         self.speed = speed
         self.tcp_cap = tcp_cap
         self.progress = 0.0
+        self.generation = -1
         self._cancel = asyncio.Event()
 
     def cancel(self) -> None:
         self._cancel.set()
 
     async def run(self) -> None:
-        await self.link.ensure_mode(CommandMode.velocity_command)
+        self.generation = self.link.generation  # the move ends with the link it began on
+        await self.link.ensure_mode(CommandMode.velocity_command, self.generation)
         try:
             await self._steer()
         except BaseException:
@@ -63,7 +65,9 @@ class ReactiveExecution:
 
     async def _steer(self) -> None:
         kinematics = self.controller.kinematics
-        start = self._error(kinematics.tcp(np.array(self.link.current().joint_position)))
+        start = self._error(
+            kinematics.tcp(np.array(self.link.current(self.generation).joint_position))
+        )
         first = max(float(np.linalg.norm(start[:3])), 1e-9)
         best, best_at = np.inf, time.monotonic()
         previous: np.ndarray | None = None
@@ -71,7 +75,7 @@ class ReactiveExecution:
         while True:
             if self._cancel.is_set():
                 raise MoveFailed("cancelled", code="cancelled")
-            state = self.link.current()
+            state = self.link.current(self.generation)
             check_faults(state)
             q = np.array(state.joint_position_command)
             error = self._error(kinematics.tcp(q))
@@ -95,7 +99,8 @@ class ReactiveExecution:
             await self._send(step.velocity)
             next_tick = max(next_tick + PERIOD, time.monotonic())
             with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._cancel.wait(), next_tick - time.monotonic())
+                async with asyncio.timeout(max(0.0, next_tick - time.monotonic())):
+                    await self._cancel.wait()
 
     def _error(self, tcp: pin.SE3) -> np.ndarray:
         """From the TCP to the goal: [translation, rotation vector], in the base frame."""
@@ -126,5 +131,6 @@ class ReactiveExecution:
                 "velocity": velocity.tolist(),
                 "timeout": COMMAND_TIMEOUT,
                 "tag": "motion:reactive",
-            }
+            },
+            self.generation,
         )

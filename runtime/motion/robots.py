@@ -6,32 +6,31 @@ from __future__ import annotations
 import asyncio
 import contextlib
 from collections.abc import AsyncIterator
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
-from runtime.device_manager.client import check_lease, open_robot_link, require_token
+from runtime.device_manager.client import check_lease, require_token
 from runtime.interfaces.common import Pose
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import NotFound
+from runtime.links.hub import LinkHub
+from runtime.links.robot import RobotLink, robot_link
 from runtime.motion.mirror import CellReading
 from runtime.motion.world import World
-from runtime.robot_link import RobotLink
 from runtime.variable_storage.client import StorageClient
 
 
 class Robots:
-    def __init__(self, device_manager_url: str, storage: StorageClient) -> None:
+    def __init__(self, device_manager_url: str, storage: StorageClient, hub: LinkHub) -> None:
         self.devices = ServiceClient(device_manager_url, timeout=3.0, name="device manager")
         self.storage = storage
+        self.hub = hub
         self.links: dict[str, RobotLink] = {}
         self._world = World()
         self._lock = asyncio.Lock()
 
     async def close(self) -> None:
-        for link in self.links.values():
-            await link.close()
         await self.devices.aclose()
 
     @contextlib.asynccontextmanager
@@ -60,28 +59,23 @@ class Robots:
         """Bring the world up to date: robots, their bases and joints, the scene objects."""
         cell = await CellReading.read(self.devices, self.storage, self._world.robots)
         for name in [n for n in self.links if n not in cell.robots]:
-            await self.links.pop(name).close()
+            del self.links[name]
             self._world.remove_robot(name)
-        for name, device in cell.robots.items():
-            await self._ensure(name, device)
+        for name in cell.robots:
+            await self._ensure(name)
         await cell.place_bases(self._world, self.storage)
         if cell.scene != self._world.objects:
             self._world.set_objects(cell.scene)
         for name, link in self.links.items():
-            state = link.feed.state
+            state = link.latest()
             if state is not None:
                 self._world.robot(name).place(np.array(state.joint_position))
         return self._world
 
-    async def _ensure(self, name: str, device: dict[str, Any]) -> None:
+    async def _ensure(self, name: str) -> None:
         link = self.links.get(name)
-        if link is not None and link.url == device["url"].rstrip("/") and link.alive:
-            return
-        if link is not None:
-            await link.close()
-            del self.links[name]
-        link = await open_robot_link(self.devices, name, device["url"])
-        self.links[name] = link
+        if link is None:
+            link = self.links[name] = await robot_link(self.hub, name)
         known = self._world.robots.get(name)
         if known is None or known.kinematics.info != link.info:
             self._world.add_robot(name, link.info)

@@ -19,6 +19,7 @@ from runtime.jog.velocity import MANUAL_TCP_SPEED, VelocityController
 from runtime.kit.app import create_app
 from runtime.kit.errors import Conflict, NotFound, OpenPendantError
 from runtime.kit.settings import RuntimeSettings
+from runtime.links.hub import LinkHub
 from runtime.motion.executor import Execution
 from runtime.motion.mirror import WorldMirror
 from runtime.motion.models import (
@@ -145,9 +146,9 @@ class Moves:
             await lease
         except Exception:
             return False  # refused: that is raised where the move awaits the lease
-        if link.current().command_mode is CommandMode.trajectory:
-            return True
         try:
+            if link.current().command_mode is CommandMode.trajectory:
+                return True
             await link.call("PUT", "/command_mode", {"mode": CommandMode.trajectory.value})
         except OpenPendantError:
             return False
@@ -250,8 +251,7 @@ class Moves:
         entry = self.running.get(robot)
         if entry is not None:
             entry[1].cancel()
-        link = await self.robots.link(robot)
-        await link.halt("motion: stop")
+        await self.robots.hub.halt(robot, "motion: stop")
 
     @staticmethod
     def _drop_planned(status: MoveStatus, code: str, message: str) -> None:
@@ -346,12 +346,14 @@ def motion_router(moves: Moves, robots: Robots) -> APIRouter:
 
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
-    robots = Robots(urls["device_manager"], storage)
-    mirror = WorldMirror(robots.devices, storage)
+    hub = LinkHub(urls["device_manager"], "motion", settings.link.stale_after)
+    robots = Robots(urls["device_manager"], storage, hub)
+    mirror = WorldMirror(robots.devices, storage, hub)
     moves = Moves(robots, storage, mirror)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        await hub.start()
         await mirror.start()
         try:
             yield
@@ -360,6 +362,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             for robot in list(moves.running):
                 with contextlib.suppress(Exception):
                     await moves.stop(robot)
+            await hub.close()
             await robots.close()
             await storage.aclose()
 

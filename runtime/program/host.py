@@ -13,10 +13,10 @@ import uuid
 from collections.abc import Awaitable, Callable
 from typing import Any
 
-from runtime.interfaces.robot import RobotInfo
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import NotFound, OpenPendantError
-from runtime.robot_link import RobotLink
+from runtime.links.hub import LinkHub
+from runtime.links.robot import RobotLink, robot_link
 from runtime.variable_storage.client import StorageClient
 from sandbox.supervisor import CallRefused
 
@@ -30,39 +30,6 @@ MAX_STORED = 256 * 1024
 Handler = Callable[[dict[str, Any]], Awaitable[Any]]
 
 
-class DriverLinks:
-    """The program service's links to robot drivers, shared by its runs and kept open: the
-    command stream (a stop is one message on it) and HTTP (tool, I/O)."""
-
-    def __init__(self, devices: ServiceClient) -> None:
-        self.devices = devices
-        self.links: dict[str, RobotLink] = {}
-        self._lock = asyncio.Lock()  # two runs starting at once make one link, not two
-
-    async def get(self, robot: str) -> RobotLink:
-        async with self._lock:
-            return await self._get(robot)
-
-    async def _get(self, robot: str) -> RobotLink:
-        details = await self.devices.get(f"/devices/{robot}")
-        link = self.links.get(robot)
-        if link is not None and link.url == details["url"].rstrip("/"):
-            await link.open_commands()  # again, if the stream dropped since
-            return link
-        if link is not None:  # the robot was added again, elsewhere
-            await link.close()
-        link = RobotLink(robot, details["url"], RobotInfo.model_validate(details["info"]["info"]))
-        self.links[robot] = link
-        await link.open_commands()
-        await link.http.get("/health")
-        return link
-
-    async def close(self) -> None:
-        for link in self.links.values():
-            await link.close()
-        self.links.clear()
-
-
 class RunHost:
     def __init__(
         self,
@@ -70,13 +37,13 @@ class RunHost:
         devices: ServiceClient,
         motion: ServiceClient,
         storage: StorageClient,
-        links: DriverLinks,
+        hub: LinkHub,
         *,
         robot: str | None,
         leases: dict[str, str],
     ) -> None:
         self.holder = holder
-        self.links = links
+        self.hub = hub
         self.devices = devices
         self.motion = motion
         self.storage = storage
@@ -121,28 +88,22 @@ class RunHost:
             raise CallRefused(f"malformed request to {fn}: {exc}", "bad_call") from None
 
     async def halt(self) -> None:
-        """Stop wins: each driver halts at once; the motion service drops the move, and any
-        later one of this run."""
+        """Stop wins: each robot halts at once over its link; the motion service drops the
+        move, and any later one of this run."""
         self.halted = True
         robots = list(self.commanded)
         tag = f"{self.holder} stopped"
-        unstreamed = []
-        # First one message on each stream opened ahead, no answer awaited: within a control
-        # cycle of the stop. Then the round trips.
+        # First one message per robot on the link socket, no answer awaited: within a
+        # control cycle of the stop. Then the round trips.
         for robot in robots:
-            driver = self._drivers.get(robot)
-            if driver is None:
-                continue
             try:
-                await driver.send({"type": "halt", "tag": tag})
+                await self.hub.halt(robot, tag)
             except OpenPendantError as exc:
-                log.warning("no command stream to halt %s: %s", robot, exc)
-                unstreamed.append(driver)
+                log.warning("could not halt %s over its link: %s", robot, exc.message)
         calls = [
             self.motion.post(f"/motion/robots/{robot}/stop", headers=self._caller)
             for robot in robots
         ]
-        calls += [driver.http.post("/halt") for driver in unstreamed]
         for result in await asyncio.gather(*calls, return_exceptions=True):
             if isinstance(result, Exception):
                 log.warning("halting: %s", result)
@@ -154,6 +115,9 @@ class RunHost:
     async def close(self) -> None:
         if self._renewer is not None:
             self._renewer.cancel()
+        for link in self._drivers.values():
+            with contextlib.suppress(OpenPendantError):
+                await link.unclaim()
         for robot, token in self.acquired.items():
             with contextlib.suppress(OpenPendantError):
                 await self.devices.delete(
@@ -213,18 +177,23 @@ class RunHost:
 
     async def _driver(self, robot: str, token: str) -> RobotLink:
         await self.devices.post(f"/devices/{robot}/lease/check", headers={"X-Lease-Token": token})
-        driver = self._drivers.get(robot)
-        if driver is None:
-            driver = self._drivers[robot] = await self.links.get(robot)
-        return driver
+        return await self._claimed(robot)
 
-    async def _ready_to_halt(self, robot: str, token: str) -> None:
-        """The driver's command stream open for a stop at once; until it is, a stop halts
-        through the motion service."""
+    async def _claimed(self, robot: str) -> RobotLink:
+        """The robot's link, claimed for this run: if the program service dies, the device
+        manager halts the robot."""
+        link = self._drivers.get(robot)
+        if link is None:
+            link = await robot_link(self.hub, robot)
+            await link.claim()
+            self._drivers[robot] = link
+        return link
+
+    async def _ready_to_halt(self, robot: str) -> None:
         try:
-            await self._driver(robot, token)
+            await self._claimed(robot)
         except OpenPendantError as exc:
-            log.warning("no command stream to %s: %s", robot, exc)
+            log.warning("no link to %s: %s", robot, exc)
 
     async def _run_move(self, request: dict[str, Any]) -> None:
         robot = await self._active()
@@ -241,7 +210,7 @@ class RunHost:
         if robot in self._drivers:
             status = await start
         else:  # the link is made while the move is planned, not before
-            status, _ = await asyncio.gather(start, self._ready_to_halt(robot, token))
+            status, _ = await asyncio.gather(start, self._ready_to_halt(robot))
         while status["state"] in ("planning", "running"):
             status = await self.motion.get(
                 f"/motion/moves/{status['id']}",
@@ -291,7 +260,7 @@ class RunHost:
     async def _tool(self, args: dict[str, Any]) -> None:
         robot = await self._active()
         driver = await self._driver(robot, await self._token(robot))
-        await driver.http.post("/tool", json={"open": bool(args["open"])})
+        await driver.call("POST", "/tool", {"open": bool(args["open"])})
 
     # Waypoints, I/O, stored values ----------------------------------------------------------
 
@@ -318,7 +287,7 @@ class RunHost:
         if kind != "do":
             raise CallRefused(f"{args['name']} is an input; only outputs can be set", "read_only")
         driver = await self._driver(robot, await self._token(robot))
-        await driver.http.put(f"/digital_outputs/{index}", json={"value": bool(args["value"])})
+        await driver.call("PUT", f"/digital_outputs/{index}", {"value": bool(args["value"])})
 
     async def _io_get(self, args: dict[str, Any]) -> bool:
         robot, kind, index = self._io(str(args["name"]))

@@ -11,7 +11,8 @@ import time
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import Conflict, NotFound
 from runtime.kit.websocket import Fanout
-from runtime.program.host import DriverLinks, RunHost
+from runtime.links.hub import LinkHub
+from runtime.program.host import RunHost
 from runtime.program.library import ProgramLibrary
 from runtime.program.models import ErrorInfo, OutputEntry, RunRequest, RunStatus
 from runtime.variable_storage.client import StorageClient
@@ -37,6 +38,7 @@ class Runs:
         motion: ServiceClient,
         storage: StorageClient,
         fanout: Fanout,
+        hub: LinkHub,
     ) -> None:
         self.library = library
         self.devices = devices
@@ -47,7 +49,7 @@ class Runs:
         self._numbers = itertools.count(1)
         self._watchers: set[asyncio.Task[None]] = set()
         self.pool = WorkerPool()
-        self.links = DriverLinks(devices)
+        self.hub = hub
 
     async def start(self, name: str, request: RunRequest) -> RunStatus:
         current = self.runs.get(name)
@@ -59,7 +61,7 @@ class Runs:
             self.devices,
             self.motion,
             self.storage,
-            self.links,
+            self.hub,
             robot=request.robot,
             leases=request.leases,
         )
@@ -128,7 +130,6 @@ class Runs:
             with contextlib.suppress(Exception):
                 await active.run.stop("the program service is shutting down")
         await self.pool.close()
-        await self.links.close()
 
     async def breakpoints(self, name: str, ids: list[str]) -> RunStatus:
         await self._active(name).run.set_breakpoints(set(ids))

@@ -18,6 +18,7 @@ from runtime.kit.errors import InvalidValue
 from runtime.kit.request_start import RequestStart, received_at
 from runtime.kit.settings import RuntimeSettings
 from runtime.kit.websocket import Fanout
+from runtime.links.hub import LinkHub
 from runtime.program.library import (
     ProgramLibrary,
     generate_checked,
@@ -144,14 +145,17 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     motion = ServiceClient(urls["motion"], timeout=10.0, name="motion")
     library = ProgramLibrary(storage)
     fanout = Fanout()
-    runs = Runs(library, devices, motion, storage, fanout)
+    hub = LinkHub(urls["device_manager"], "program", settings.link.stale_after)
+    runs = Runs(library, devices, motion, storage, fanout, hub)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        await hub.start()
         try:
             yield
         finally:
             await runs.stop_all()
+            await hub.close()
             await devices.aclose()
             await motion.aclose()
             await storage.aclose()

@@ -27,7 +27,7 @@ from tests.support.blocks import (
 )
 from tests.support.jog import Cell
 from tests.support.posts import LEFT, RIGHT, clear_posts, put_posts
-from tests.support.processes import Runtime, wait_for
+from tests.support.processes import STILL, Runtime, wait_for
 from tests.support.programs import HOME, PICK_AND_PLACE_WAYPOINTS, PLACE, pick_and_place, teach
 
 FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]
@@ -221,7 +221,7 @@ def test_stop_during_a_long_move_halts_the_robot(ready: Cell) -> None:
     ready.robot.wait_stopped(2.0)
     q = ready.robot.q()
     time.sleep(0.5)
-    assert np.abs(ready.robot.q() - q).max() < 1e-9  # nothing resumes after the stop
+    assert np.abs(ready.robot.q() - q).max() < STILL  # nothing resumes after the stop
     assert np.abs(q - np.array(FAR)).max() > 0.1
     assert all(o["text"] != "never" for o in status(ready, "long_move")["output"])
 
@@ -243,7 +243,7 @@ def test_stop_over_the_program_socket_halts_the_robot(ready: Cell) -> None:
     ready.robot.wait_stopped(2.0)
     q = ready.robot.q()
     time.sleep(0.3)
-    assert np.abs(ready.robot.q() - q).max() < 1e-9
+    assert np.abs(ready.robot.q() - q).max() < STILL
 
 
 def test_stop_while_a_move_is_planned_means_it_never_starts(ready: Cell) -> None:
@@ -296,7 +296,7 @@ def test_bad_targets_are_refused_at_their_block_and_nothing_moves(
     assert printed == ["start"]
     moves = [c for c in ready.robot.commands(before) if c["type"] in ("trajectory",)]
     assert moves == []
-    assert np.abs(ready.robot.q() - q).max() < 1e-9
+    assert np.abs(ready.robot.q() - q).max() < STILL
     assert ready.runtime.api("GET", "/programs/bad_target/status").status_code == 200
 
 

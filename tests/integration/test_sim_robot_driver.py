@@ -10,6 +10,7 @@ from typing import Any
 import httpx
 import numpy as np
 import pytest
+from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
 from runtime.robot_info import load_robot_info
@@ -261,3 +262,49 @@ def test_a_dropped_command_stream_halts_the_robot(robot: Robot) -> None:
     wait_for(robot.stopped, 3, what="halt on dropped stream")
     assert robot.state()["command_mode"] == "halt"
     assert robot.call("GET", "/sim/loop_stats")["command_timeouts"] == timeouts_before
+
+
+def test_a_silent_session_halts_the_robot_and_is_closed(robot: Robot) -> None:
+    """The runtime's session: a trajectory (sent over HTTP) halts when the session's
+    keepalives stop, and the session is closed, so commands held back by a lost network
+    never move the robot when it returns."""
+    robot.call("PUT", "/command_mode", {"mode": "trajectory"})
+    q = robot.state()["joint_position"]
+    goal = [q[0] + 0.8, *q[1:]]
+    with connect(f"{robot.ws_url}/command/ws") as ws:
+        ws.send(json.dumps({"type": "session", "timeout": 0.3}))
+        ws.send(json.dumps({"type": "keepalive"}))
+        path = {"waypoints": [{"time_from_start": 4.0, "position": goal}]}
+        robot.call("POST", "/trajectory", path)
+        wait_for(lambda: robot.state()["joint_velocity"][0] > 0.05, 3, what="trajectory moving")
+        silent_from = time.monotonic()  # nothing more is sent on the session
+        wait_for(robot.stopped, 3, what="halt on a silent session")
+        assert robot.state()["command_mode"] == "halt"
+        assert time.monotonic() - silent_from < 1.5
+        with pytest.raises(ConnectionClosed) as closed:
+            ws.recv(timeout=2)
+        assert closed.value.rcvd is not None and closed.value.rcvd.code == 4000
+    log = robot.call("GET", "/command_log")
+    assert log[-1]["type"] == "halt" and log[-1]["tag"] == "session silent"
+
+
+def test_a_session_that_closes_halts_a_trajectory(robot: Robot) -> None:
+    robot.call("PUT", "/command_mode", {"mode": "trajectory"})
+    q = robot.state()["joint_position"]
+    goal = [q[0] + 0.8, *q[1:]]
+    with connect(f"{robot.ws_url}/command/ws") as ws:
+        ws.send(json.dumps({"type": "session", "timeout": 5.0}))
+        robot.call(
+            "POST", "/trajectory", {"waypoints": [{"time_from_start": 4.0, "position": goal}]}
+        )
+        wait_for(lambda: robot.state()["joint_velocity"][0] > 0.05, 3, what="trajectory moving")
+    wait_for(robot.stopped, 3, what="halt on a closed session")
+    assert robot.call("GET", "/command_log")[-1]["tag"] == "command stream closed"
+
+
+def test_refusals_on_the_command_stream_name_their_command(robot: Robot) -> None:
+    with connect(f"{robot.ws_url}/command/ws") as ws:
+        ws.send(json.dumps({"type": "jog_joint", "id": 17, "velocity": [0.1] * 6}))
+        error = json.loads(ws.recv(timeout=2))
+    assert error["id"] == 17
+    assert error["error"]["code"] == "wrong_mode"

@@ -20,6 +20,10 @@ import httpx
 
 T = TypeVar("T")
 
+# Joints that changed by less than this (rad) did not move: live floating-point state is never
+# compared exactly (a halted simulator still settles in the last digits).
+STILL = 1e-6
+
 # Every process a test starts does discovery on loopback only (DESIGN.md §5, §8).
 LOOPBACK_ENV = {"OPENPENDANT_DISCOVERY__INTERFACES": '["127.0.0.1"]'}
 

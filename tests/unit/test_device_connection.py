@@ -1,64 +1,214 @@
-"""The device manager's per-device connection task: stopping and moving it."""
+"""The device manager's one link per device (DeviceConnection) against small devices served
+in this process over real HTTP and WebSockets: sessions, staleness, moves and cancellation."""
 
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import json
+import random
 import time
+from collections.abc import AsyncIterator, Callable, Coroutine
+from typing import Any
+
+import pytest
+import uvicorn
+from fastapi import FastAPI, WebSocket
+from starlette.websockets import WebSocketDisconnect
 
 from runtime.device_manager.connection import DeviceConnection
+from runtime.kit.errors import OpenPendantError
+from runtime.kit.serve import listening_socket
+from runtime.kit.settings import LinkSettings
 from runtime.variable_storage.types import DeviceRecord
 
-RECORD = DeviceRecord(
-    uuid="u1", local_name="robot", kind="robot", model="ur5", name="sim", url="http://127.0.0.1:9"
-)
+UUID = "robot-1"
+TIMING = LinkSettings(stale_after=0.1, driver_timeout=0.2)
 
 
-def test_stop_wins_even_while_a_session_is_still_closing() -> None:
-    """A session that takes a while to unwind (a WebSocket close handshake) must not swallow
-    the cancellation of the connection itself."""
-    sessions: list[str] = []
+class FakeDevice:
+    """A device that says who it is and streams a state every 10 ms (unless paused), and
+    counts the sockets open to it."""
 
-    async def slow_session(url: str) -> None:
-        sessions.append(url)
+    def __init__(self, uuid: str = UUID) -> None:
+        self.uuid = uuid
+        self.open = {"state": 0, "command": 0}
+        self.closed = {"state": 0, "command": 0}
+        self.commands: list[dict[str, Any]] = []
+        self.paused = False
+        self.delay = 0.0  # s added to every state's age
+        self.seqno = 0
+        self.app = FastAPI()
+        self.app.get("/info")(self.info)
+        self.app.websocket("/state/ws")(self.states)
+        self.app.websocket("/command/ws")(self.command_stream)
+        self.sock = listening_socket("127.0.0.1", 0)
+        self.url = f"http://127.0.0.1:{self.sock.getsockname()[1]}"
+        self.server = uvicorn.Server(uvicorn.Config(self.app, log_config=None, lifespan="off"))
+        self._task: asyncio.Task[None] | None = None
+
+    async def info(self) -> dict[str, Any]:
+        return {"identity": {"uuid": self.uuid, "kind": "robot", "model": "m", "name": "n"}}
+
+    async def states(self, ws: WebSocket) -> None:
+        await ws.accept()
+        self.open["state"] += 1
+        gone = asyncio.create_task(ws.receive())  # the client's close, even while paused
         try:
-            await asyncio.sleep(100)
-        except asyncio.CancelledError:
-            await asyncio.sleep(0.3)
-            raise
+            while not gone.done():
+                if not self.paused:
+                    self.seqno += 1
+                    ts = time.time() - self.delay
+                    await ws.send_text(f'{{"seqno":{self.seqno},"ts":{ts}}}')
+                await asyncio.sleep(0.01)
+        except (WebSocketDisconnect, RuntimeError, OSError):
+            pass
+        finally:
+            gone.cancel()
+            self.open["state"] -= 1
+            self.closed["state"] += 1
 
-    async def scenario() -> tuple[bool, float]:
-        conn = DeviceConnection(RECORD, lambda *_: None, lambda _: None)
-        conn._session = slow_session  # type: ignore[method-assign]
-        conn.start()
-        await asyncio.sleep(0.05)
-        conn.move_to("http://127.0.0.1:10")  # the old session starts closing
-        await asyncio.sleep(0.05)
-        started = time.monotonic()
+    async def command_stream(self, ws: WebSocket) -> None:
+        await ws.accept()
+        self.open["command"] += 1
+        try:
+            while True:
+                self.commands.append(json.loads(await ws.receive_text()))
+        except (WebSocketDisconnect, RuntimeError, OSError):
+            pass
+        finally:
+            self.open["command"] -= 1
+            self.closed["command"] += 1
+
+    async def __aenter__(self) -> FakeDevice:
+        self._task = asyncio.create_task(self.server.serve(sockets=[self.sock]))
+        await until(lambda: self.server.started)
+        return self
+
+    async def __aexit__(self, *_: object) -> None:
+        self.server.should_exit = True
+        assert self._task is not None
+        await asyncio.wait({self._task}, timeout=5.0)
+
+
+def record(url: str) -> DeviceRecord:
+    return DeviceRecord(uuid=UUID, local_name="robot", kind="robot", model="m", name="n", url=url)
+
+
+async def until(check: Callable[[], bool], timeout: float = 3.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not check():
+        assert time.monotonic() < deadline, "timed out"
+        await asyncio.sleep(0.01)
+
+
+@contextlib.asynccontextmanager
+async def connection(url: str) -> AsyncIterator[tuple[DeviceConnection, list[str]]]:
+    statuses: list[str] = []
+    conn = DeviceConnection(
+        record(url), lambda *_: None, lambda c: statuses.append(c.status), TIMING
+    )
+    conn.start()
+    try:
+        yield conn, statuses
+    finally:
         await conn.stop()
-        assert conn._task is not None
-        return conn._task.done(), time.monotonic() - started
-
-    done, took = asyncio.run(scenario())
-    assert done
-    assert took < 1.5
-    assert sessions == ["http://127.0.0.1:9"]
 
 
-def test_moving_reconnects_at_the_new_address_at_once() -> None:
-    sessions: list[str] = []
+def run(scenario: Callable[[], Coroutine[Any, Any, None]]) -> None:
+    asyncio.run(scenario())
 
-    async def session(url: str) -> None:
-        sessions.append(url)
-        await asyncio.sleep(100)
+
+def test_a_session_holds_the_state_stream_and_a_bound_command_stream() -> None:
+    async def scenario() -> None:
+        async with FakeDevice() as device, connection(device.url) as (conn, _):
+            await until(lambda: conn.status == "connected")
+            assert device.open == {"state": 1, "command": 1}
+            assert device.commands[0]["type"] == "session"
+            assert device.commands[0]["timeout"] == TIMING.driver_timeout
+            conn.send({"type": "halt"}, conn.generation, lambda _: None)
+            await until(lambda: any(c["type"] == "halt" for c in device.commands))
+            # A quiet session is kept alive for the driver's watchdog.
+            await until(lambda: any(c["type"] == "keepalive" for c in device.commands))
+
+    run(scenario)
+
+
+def test_a_silent_state_stream_makes_the_link_stale_and_the_next_one_a_new_generation() -> None:
+    async def scenario() -> None:
+        async with FakeDevice() as device, connection(device.url) as (conn, statuses):
+            await until(lambda: conn.status == "connected")
+            first = conn.generation
+            device.paused = True
+            await until(lambda: "stale" in statuses, timeout=1.0)
+            assert "no state" in conn.last_error
+            # The stale session is ended: nothing is sent on it any more.
+            await until(lambda: device.closed == {"state": 1, "command": 1})
+            device.paused = False
+            await until(lambda: conn.status == "connected", timeout=1.5)
+            assert conn.generation == first + 1
+            with pytest.raises(OpenPendantError) as refused:
+                conn.send({"type": "jog_joint"}, first, lambda _: None)
+            assert refused.value.code == "link_changed"
+
+    run(scenario)
+
+
+def test_late_states_make_the_link_stale() -> None:
+    async def scenario() -> None:
+        async with FakeDevice() as device, connection(device.url) as (conn, statuses):
+            await until(lambda: conn.status == "connected")
+            await asyncio.sleep(0.3)  # the offset estimate settles on the fast deliveries
+            device.delay = 0.5  # states keep coming, each half a second old
+            await until(lambda: "stale" in statuses, timeout=1.0)
+            assert "late" in conn.last_error
+
+    run(scenario)
+
+
+def test_another_device_at_the_address_is_not_connected() -> None:
+    async def scenario() -> None:
+        async with FakeDevice(uuid="someone-else") as device, connection(device.url) as (conn, _):
+            await until(lambda: conn.last_error != "")
+            assert conn.status == "disconnected"
+            assert "another device" in conn.last_error
+            assert device.open == {"state": 0, "command": 0}
+
+    run(scenario)
+
+
+def test_many_moves_and_stops_leave_no_session_behind() -> None:
+    """Moving between two addresses at random moments, and stopping in the middle of
+    connecting, closing or streaming: every stop returns at once and leaves no socket open
+    (Python 3.11's wait_for could swallow a cancellation and hang a session)."""
 
     async def scenario() -> None:
-        conn = DeviceConnection(RECORD, lambda *_: None, lambda _: None)
-        conn._session = session  # type: ignore[method-assign]
-        conn.start()
-        await asyncio.sleep(0.05)
-        conn.move_to("http://127.0.0.1:10")
-        await asyncio.sleep(0.05)
-        await conn.stop()
+        rng = random.Random(7)
+        async with FakeDevice() as a, FakeDevice() as b:
+            for _ in range(40):
+                conn = DeviceConnection(record(a.url), lambda *_: None, lambda _: None, TIMING)
+                conn.start()
+                for _ in range(rng.randint(0, 4)):
+                    await asyncio.sleep(rng.uniform(0.0, 0.03))
+                    conn.move_to(rng.choice((a.url, b.url)))
+                await asyncio.sleep(rng.uniform(0.0, 0.03))
+                started = time.monotonic()
+                await conn.stop()
+                assert conn._task is not None and conn._task.done()
+                assert time.monotonic() - started < 1.0
+            await until(lambda: a.open == b.open == {"state": 0, "command": 0}, timeout=1.0)
 
-    asyncio.run(scenario())
-    assert sessions == ["http://127.0.0.1:9", "http://127.0.0.1:10"]
+    run(scenario)
+
+
+def test_a_stopped_connection_sends_nothing_more() -> None:
+    async def scenario() -> None:
+        async with FakeDevice() as device:
+            async with connection(device.url) as (conn, _):
+                await until(lambda: conn.status == "connected")
+            await until(lambda: device.open == {"state": 0, "command": 0}, timeout=1.0)
+            count = len(device.commands)
+            await asyncio.sleep(0.2)
+            assert len(device.commands) == count
+
+    run(scenario)

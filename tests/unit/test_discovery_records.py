@@ -4,9 +4,16 @@ from __future__ import annotations
 
 import socket
 
+import pytest
 from zeroconf.asyncio import AsyncServiceInfo
 
-from runtime.kit.discovery import SERVICE_TYPE, Advertisement, clean_text, parse_info
+from runtime.kit.discovery import (
+    SERVICE_TYPE,
+    Advertisement,
+    checked_uuid,
+    clean_text,
+    parse_info,
+)
 
 
 def info(properties: dict[bytes, bytes], port: int = 8000) -> AsyncServiceInfo:
@@ -44,17 +51,29 @@ def test_untrusted_text_is_cleaned_not_interpreted() -> None:
     found = parse_info(
         info(
             {
-                b"uuid": b"u\x00\x1b[31m",
+                b"uuid": b"u-1",
                 b"kind": b"robot",
-                b"name": b"<script>alert(1)</script>\n" + b"\xff" * 150,
+                b"name": b"<script>alert(1)</script>\n\xe2\x80\xae" + b"\xff" * 150,
             }
         )
     )
     assert found is not None
-    assert found.uuid == "u[31m"
+    assert found.uuid == "u-1"
     assert found.name.startswith("<script>alert(1)</script>")  # kept as text; the UI escapes
     assert len(found.name) <= 64 and "\n" not in found.name
+    assert "\u202e" not in found.name  # a right-to-left override would reorder what is shown
     assert clean_text(None) == ""
+    assert clean_text("a\u200bb\u2066c\x7f") == "abc"
+
+
+def test_uuids_are_refused_not_cut() -> None:
+    """Two long ids sharing a prefix must stay two devices; control characters, an empty id
+    or more than 64 characters are not an id."""
+    for bad in (b"u\x00\x1b[31m", b"", b"x" * 65, b"a b", "\u202eabc".encode()):
+        assert parse_info(info({b"uuid": bad, b"kind": b"robot"})) is None
+    assert checked_uuid("x" * 64) == "x" * 64
+    with pytest.raises(ValueError, match="1-64"):
+        checked_uuid("x" * 5_000_000)
 
 
 def test_instance_names_are_safe_and_unique_per_device() -> None:

@@ -12,7 +12,16 @@ export interface DetectedDevice {
   last_seen: number;
 }
 
-export type ConnectionStatus = "connecting" | "connected" | "disconnected";
+export type ConnectionStatus = "connecting" | "connected" | "stale" | "disconnected";
+
+// Another address an added device was seen at: announced there while its link was live (not
+// followed), or where it was before it moved (followed).
+export interface AddressClaim {
+  url: string;
+  name: string;
+  seen: number;
+  followed: boolean;
+}
 
 export interface AddedDevice {
   local_name: string;
@@ -27,6 +36,9 @@ export interface AddedDevice {
   detected: boolean;
   controlled_by: string | null;
   control_expires: number | null;
+  link: number;
+  state_age: number | null;
+  address_claim: AddressClaim | null;
 }
 
 export interface Pose {

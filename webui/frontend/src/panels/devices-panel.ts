@@ -12,6 +12,7 @@ import "../components/robot-live";
 type Dialog =
   | { kind: "add"; device: DetectedDevice | null; url: string }
   | { kind: "remove"; device: AddedDevice }
+  | { kind: "repoint"; device: AddedDevice; url: string }
   | { kind: "details"; name: string }
   | null;
 
@@ -71,6 +72,10 @@ export class OpDevicesPanel extends LitElement {
       .empty {
         padding: 20px;
       }
+      .warn-text {
+        color: var(--warn);
+        font-weight: 600;
+      }
     `,
   ];
 
@@ -97,11 +102,24 @@ export class OpDevicesPanel extends LitElement {
     }
   }
 
+  private async repoint(device: AddedDevice, url: string) {
+    try {
+      await api("PUT", `/api/devices/${encodeURIComponent(device.local_name)}/address`, { url });
+      this.dialog = null;
+    } catch (err) {
+      this.error = errorText(err);
+      this.dialog = null;
+    }
+  }
+
   private statusChip(device: AddedDevice) {
     const cls = device.status === "connected" ? "ok" : device.status === "connecting" ? "warn" : "bad";
-    const label = { connected: "Connected", connecting: "Connecting…", disconnected: "Disconnected" }[
-      device.status
-    ];
+    const label = {
+      connected: "Connected",
+      connecting: "Connecting…",
+      stale: "Stale",
+      disconnected: "Disconnected",
+    }[device.status];
     return html`<span class="chip ${cls}" data-testid="device-status" title=${device.last_error}
       >${label}</span
     >`;
@@ -139,6 +157,7 @@ export class OpDevicesPanel extends LitElement {
       ${d.status !== "connected" && d.last_error
         ? html`<div class="sub error">${d.last_error}</div>`
         : ""}
+      ${this.claimNotice(d)}
       ${d.kind === "robot" && d.status === "connected"
         ? html`<div class="row"><op-robot-live .state=${state}></op-robot-live></div>`
         : ""}
@@ -158,6 +177,30 @@ export class OpDevicesPanel extends LitElement {
     </div>`;
   }
 
+  // Who else claimed this device's identity, and from where: shown, never followed silently.
+  private claimNotice(d: AddedDevice) {
+    const claim = d.address_claim;
+    if (!claim) return "";
+    const when = new Date(claim.seen * 1000).toLocaleTimeString();
+    if (claim.followed) {
+      return html`<div class="sub muted" data-testid="device-moved">
+        Moved from ${claim.url} at ${when}.
+      </div>`;
+    }
+    return html`<div class="sub warn-text" data-testid="device-claim" role="alert">
+        At ${when} a device announced itself as ${d.local_name}${claim.name ? ` ("${claim.name}")` : ""}
+        from ${claim.url}. It was not followed: ${d.local_name} still answers at ${d.url}.
+      </div>
+      <div class="row">
+        <button
+          data-testid="repoint-device"
+          @click=${() => (this.dialog = { kind: "repoint", device: d, url: claim.url })}
+        >
+          Use ${claim.url}…
+        </button>
+      </div>`;
+  }
+
   private renderDialog() {
     const dialog = this.dialog;
     if (!dialog) return "";
@@ -173,6 +216,21 @@ export class OpDevicesPanel extends LitElement {
         ></op-add-device-dialog>`;
       case "details":
         return html`<op-device-details name=${dialog.name} @close=${close}></op-device-details>`;
+      case "repoint":
+        return html`<op-modal heading="Move ${dialog.device.local_name} to ${dialog.url}?" @close=${close}>
+          <p>
+            <strong>${dialog.device.local_name}</strong> is halted first. Every program, jog and move
+            then talks to the device at ${dialog.url} only. Do this only if you know that device is
+            the real ${dialog.device.local_name}.
+          </p>
+          <div class="row">
+            <span class="spacer"></span>
+            <button @click=${close}>Cancel</button>
+            <button class="danger" data-testid="confirm-repoint" @click=${() => this.repoint(dialog.device, dialog.url)}>
+              Halt and move
+            </button>
+          </div>
+        </op-modal>`;
       case "remove":
         return html`<op-modal heading="Remove ${dialog.device.local_name}?" @close=${close}>
           <p>

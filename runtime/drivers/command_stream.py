@@ -1,0 +1,168 @@
+"""One `/command/ws` socket of a robot driver: streamed commands applied in order.
+
+A plain stream halts the robot when it closes, if it commanded anything. A *session* stream
+(first message `{"type": "session", "timeout": s}`) is the runtime's link to this robot:
+the robot halts when it closes, or when no message (commands or keepalives) arrives for
+`timeout` s. A silent session is then closed, never resumed: commands a lost network held
+back must not move the robot when the network returns; the runtime opens a new session.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+from typing import Any
+
+from fastapi import WebSocket
+from pydantic import ValidationError
+from starlette.websockets import WebSocketDisconnect
+
+from runtime.drivers.command_log import CommandLog
+from runtime.interfaces.robot import (
+    CommandMode,
+    CommandModeRequest,
+    JogJointCommand,
+    PositionCommand,
+    VelocityCommand,
+)
+from runtime.interfaces.robot_driver import RobotDriver
+from runtime.kit.app import describe_validation_errors
+from runtime.kit.errors import OpenPendantError
+
+log = logging.getLogger(__name__)
+
+MIN_SESSION_TIMEOUT = 0.05
+MAX_SESSION_TIMEOUT = 5.0
+MAX_PENDING_REPLIES = 100
+SILENT_SESSION = 4000  # close code: the session went silent and the robot was halted
+
+
+class CommandStream:
+    def __init__(self, driver: RobotDriver, log: CommandLog) -> None:
+        self.driver = driver
+        self.log = log
+        self.session_timeout: float | None = None
+        self.commanded = False
+        self._replies: asyncio.Queue[str] = asyncio.Queue(MAX_PENDING_REPLIES)
+
+    async def serve(self, ws: WebSocket) -> None:
+        await ws.accept()
+        sender = asyncio.create_task(self._send_replies(ws))
+        silent = False
+        try:
+            silent = await self._receive(ws)
+        except (WebSocketDisconnect, RuntimeError, OSError):
+            pass
+        finally:
+            sender.cancel()
+            with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
+                await sender
+            if self.session_timeout is not None or self.commanded:
+                # A stream that drops must not leave the robot coasting until its timeout.
+                reason = "session silent" if silent else "command stream closed"
+                await self._halt(reason)
+            with contextlib.suppress(RuntimeError, OSError, WebSocketDisconnect):
+                await ws.close(code=SILENT_SESSION if silent else 1000)
+
+    async def _receive(self, ws: WebSocket) -> bool:
+        """Applies messages until the peer leaves (False) or a session goes silent (True)."""
+        while True:
+            try:
+                async with asyncio.timeout(self.session_timeout):
+                    text = await ws.receive_text()
+            except TimeoutError:
+                log.warning(
+                    "runtime session silent for %.0f ms: halting and closing it",
+                    (self.session_timeout or 0.0) * 1000,
+                )
+                return True
+            await self._apply(text)
+
+    async def _apply(self, text: str) -> None:
+        try:
+            message = json.loads(text)
+        except ValueError:
+            self._reply(None, OpenPendantError("message is not JSON", code="bad_message"))
+            return
+        ident = message.get("id") if isinstance(message, dict) else None
+        try:
+            await self._dispatch(message)
+        except OpenPendantError as exc:
+            self._reply(ident, exc)
+
+    async def _dispatch(self, message: Any) -> None:
+        if not isinstance(message, dict):
+            raise OpenPendantError("a command must be a JSON object", code="bad_message")
+        kind = message.get("type")
+        if kind == "keepalive":
+            return
+        if kind == "session":
+            timeout = message.get("timeout")
+            if not isinstance(timeout, int | float) or not (
+                MIN_SESSION_TIMEOUT <= timeout <= MAX_SESSION_TIMEOUT
+            ):
+                raise OpenPendantError(
+                    f"a session timeout is {MIN_SESSION_TIMEOUT} to {MAX_SESSION_TIMEOUT} s",
+                    code="invalid_request",
+                    status=422,
+                )
+            self.session_timeout = float(timeout)
+            return
+        await dispatch_stream_command(self.driver, message, self.log)
+        self.commanded = True
+
+    def _reply(self, ident: Any, exc: OpenPendantError) -> None:
+        body: dict[str, Any] = {"type": "error", **exc.body()}
+        if isinstance(ident, int | str):
+            body["id"] = ident
+        with contextlib.suppress(asyncio.QueueFull):  # a peer that stops reading loses errors
+            self._replies.put_nowait(json.dumps(body))
+
+    async def _send_replies(self, ws: WebSocket) -> None:
+        while True:
+            await ws.send_text(await self._replies.get())
+
+    async def _halt(self, reason: str) -> None:
+        if self.driver.status().command_mode is CommandMode.halt:
+            return  # halted already
+        try:
+            await self.driver.halt()
+        except OpenPendantError as exc:
+            log.warning("halt on %s failed: %s", reason, exc.message)
+            return
+        self.log.record("halt", reason)
+
+
+async def dispatch_stream_command(driver: RobotDriver, message: Any, log: CommandLog) -> None:
+    if not isinstance(message, dict):
+        raise OpenPendantError("a command must be a JSON object", code="bad_message")
+    kind = message.get("type")
+    fields = {k: v for k, v in message.items() if k not in ("type", "id")}
+    try:
+        if kind == "jog_joint":
+            jog = JogJointCommand.model_validate(fields)
+            await driver.jog_joint(jog)
+            log.record(kind, jog.tag)
+        elif kind == "velocity_command":
+            velocity = VelocityCommand.model_validate(fields)
+            await driver.velocity_command(velocity)
+            log.record(kind, velocity.tag)
+        elif kind == "position_command":
+            position = PositionCommand.model_validate(fields)
+            await driver.position_command(position)
+            log.record(kind, position.tag)
+        elif kind == "halt":
+            await driver.halt()
+            tag = fields.get("tag")
+            log.record(kind, tag[:64] if isinstance(tag, str) else None)
+        elif kind == "command_mode":
+            request = CommandModeRequest.model_validate(fields)
+            await driver.set_command_mode(request.mode)
+            log.record(f"command_mode:{request.mode.value}")
+        else:
+            raise OpenPendantError(f"unknown command type {kind!r}", code="bad_message")
+    except ValidationError as exc:
+        text, _ = describe_validation_errors(exc.errors())
+        raise OpenPendantError(text, code="invalid_request", status=422) from exc
