@@ -188,6 +188,7 @@ class SimRobotProc(Proc):
         model: str = "ur5",
         port: int = 0,
         extra: list[str] | None = None,
+        env: dict[str, str] | None = None,
     ) -> None:
         argv = [
             sys.executable,
@@ -202,7 +203,9 @@ class SimRobotProc(Proc):
             str(port),
             *(extra or []),
         ]
-        super().__init__(argv, child_env(home), home / "logs" / f"sim-{name}-{port}.log")
+        super().__init__(
+            argv, child_env(home, **(env or {})), home / "logs" / f"sim-{name}-{port}.log"
+        )
         self.url = ""
         self.uuid = ""
 

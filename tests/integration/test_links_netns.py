@@ -1,0 +1,280 @@
+"""The runtime and its robot on two hosts: network namespaces this test makes, joined by veth
+pairs (a runtime computer, a driver board, and a third host for an impostor). The link
+between them is cut and restored while the robot moves.
+
+A link drop during a held jog halts it and tells the client within 0.5 s, and the robot
+does not move when the link returns, though the operator still holds the button; a drop
+during a planned move ends it failed; the runtime reconnects within 1 s of the link's
+return. An impostor announcing the robot's uuid from another host is shown, not followed,
+and STOP still stops the real robot."""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import httpx
+import numpy as np
+import pytest
+
+from tests.support import netns
+from tests.support.jog import JogClient
+from tests.support.netns import Link, Network, inside
+from tests.support.processes import STILL, Runtime, SimRobotProc, child_env, wait_for
+
+WHY_NOT = netns.available()
+pytestmark = [
+    pytest.mark.integration,
+    pytest.mark.skipif(WHY_NOT is not None, reason=f"no network namespaces: {WHY_NOT}"),
+]
+LINK_FAULTS = ("link_stale", "link_changed", "device_disconnected")
+FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]
+
+
+def discovery_on(*addresses: str) -> dict[str, str]:
+    return {"OPENPENDANT_DISCOVERY__INTERFACES": json.dumps(list(addresses))}
+
+
+class HostRuntime(Runtime):
+    """The runtime in its own namespace: the test reaches it from inside."""
+
+    namespace = ""
+
+    def api(self, method: str, path: str, **kwargs: Any) -> httpx.Response:
+        with inside(self.namespace):
+            return super().api(method, path, **kwargs)
+
+
+class BoardRobot:
+    """The simulated robot as its own board sees it, however the network between is."""
+
+    def __init__(self, namespace: str, url: str) -> None:
+        self.namespace = namespace
+        self.url = url
+
+    def get(self, path: str, **params: Any) -> Any:
+        with inside(self.namespace):
+            return httpx.get(self.url + path, params=params, timeout=5).json()
+
+    def post(self, path: str, body: Any) -> Any:
+        with inside(self.namespace):
+            return httpx.post(self.url + path, json=body, timeout=5)
+
+    def q(self) -> np.ndarray[Any, Any]:
+        return np.array(self.get("/state")["joint_position"])
+
+    def moving(self) -> bool:
+        return bool(np.abs(self.get("/state")["joint_velocity"]).max() > 0.02)
+
+    def stopped(self) -> bool:
+        return bool(np.allclose(self.get("/state")["joint_velocity"], 0.0))
+
+    def commands(self, after: int = 0) -> list[dict[str, Any]]:
+        found: list[dict[str, Any]] = self.get("/command_log", after=after)
+        return found
+
+    def last_seq(self) -> int:
+        log = self.commands()
+        return int(log[-1]["seq"]) if log else 0
+
+
+class Hosts:
+    def __init__(self, home: Path) -> None:
+        self.net = Network()
+        self.runtime_host = self.net.namespace("rt")
+        self.board_host = self.net.namespace("bd")
+        self.other_host = self.net.namespace("im")
+        self.wire: Link = self.net.link(self.runtime_host, self.board_host)
+        self.other_wire: Link = self.net.link(self.runtime_host, self.other_host)
+        self.home = home
+        env = child_env(home, **discovery_on(self.wire.left_ip, self.other_wire.left_ip))
+        with inside(self.runtime_host):
+            self.runtime = HostRuntime(home / "rt", extra=["--no-sim"], env=env)
+        self.runtime.namespace = self.runtime_host
+        self.runtime.wait_ready()
+        self.sim = self.start_robot(self.board_host, self.wire)
+        self.robot = BoardRobot(self.board_host, self.sim.url)
+        self.token = ""
+
+    def start_robot(self, host: str, wire: Link, uuid: str | None = None) -> SimRobotProc:
+        extra = ["--host", wire.right_ip, *(["--uuid", uuid] if uuid else [])]
+        with inside(host):
+            sim = SimRobotProc(
+                self.home / host, "board-ur5", extra=extra, env=discovery_on(wire.right_ip)
+            )
+        sim.wait_ready()
+        return sim
+
+    def add_robot(self) -> None:
+        api = self.runtime.api
+        wait_for(lambda: self.runtime.is_detected(self.sim.uuid), 10, what="robot detected")
+        added = api("POST", "/devices", json={"uuid": self.sim.uuid, "local_name": "robot"})
+        assert added.status_code == 201, added.text
+        self.wait_connected(10)
+        self.token = api("POST", "/devices/robot/lease", json={"holder": "tests"}).json()["token"]
+
+    def link_status(self) -> str:
+        return str(self.runtime.api("GET", "/devices/robot").json()["status"])
+
+    def wait_connected(self, timeout: float) -> None:
+        wait_for(lambda: self.link_status() == "connected", timeout, what="the robot's link")
+
+    def ready(self) -> None:
+        self.wait_connected(10)
+        headers = {"X-Lease-Token": self.token}
+        self.token = self.runtime.api(
+            "POST", "/devices/robot/lease", json={"holder": "tests"}, headers=headers
+        ).json()["token"]
+        headers = {"X-Lease-Token": self.token}
+        for command in ("reset_errors", "enable"):
+            done = self.runtime.api("POST", f"/jog/robots/robot/{command}", headers=headers)
+            assert done.status_code == 200, done.text
+        wait_for(self.robot.stopped, 5, what="robot at rest")
+
+    def jog_client(self) -> JogClient:
+        with inside(self.runtime_host):
+            return JogClient(self.runtime, token=self.token)
+
+    def close(self) -> None:
+        self.sim.stop()
+        self.runtime.stop()
+        self.net.close()
+
+
+@pytest.fixture(scope="module")
+def hosts(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Hosts]:
+    made = Hosts(tmp_path_factory.mktemp("netns"))
+    try:
+        made.add_robot()
+        yield made
+    finally:
+        made.close()
+
+
+def heartbeat_for(jog: JogClient, press: str, seconds: float) -> None:
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        jog.send({"type": "heartbeat", "press": press})
+        jog.drain(0.03)
+
+
+def ended(jog: JogClient, press: str) -> dict[str, Any] | None:
+    return next(
+        (m for m in jog.messages if m.get("press") == press and m.get("state") != "moving"),
+        None,
+    )
+
+
+def test_a_link_drop_during_a_held_jog_halts_it_and_nothing_resumes(hosts: Hosts) -> None:
+    hosts.ready()
+    jog = hosts.jog_client()
+    try:
+        press = jog.press(kind="joint", axis=0, direction=1, speed=0.3)
+        heartbeat_for(jog, press, 0.6)
+        assert hosts.robot.moving()
+        dropped = time.monotonic()
+        hosts.wire.down()
+        # The operator keeps holding the button through the outage.
+        while ended(jog, press) is None and time.monotonic() - dropped < 2.0:
+            jog.send({"type": "heartbeat", "press": press})
+            jog.drain(0.01)
+        told = time.monotonic() - dropped
+        status = ended(jog, press)
+        assert status is not None and status["state"] == "halted"
+        assert status["reason"] in LINK_FAULTS
+        assert told < 0.5, f"the client heard of the lost link after {told:.2f} s"
+        print(f"link dropped: the client was told after {told * 1000:.0f} ms")
+        assert hosts.link_status() in ("stale", "disconnected")
+        heartbeat_for(jog, press, 0.5)
+        # The board halted the robot by itself: the runtime's session went silent.
+        wait_for(hosts.robot.stopped, 2, what="the robot halted on its board")
+        halts = [c for c in hosts.robot.commands() if c["type"] == "halt"]
+        assert halts[-1]["tag"] in ("session silent", "command stream closed")
+        heartbeat_for(jog, press, 4.5)  # a 5 s outage
+        at_rest = hosts.robot.q()
+        seq = hosts.robot.last_seq()
+        hosts.wire.up()
+        returned = time.monotonic()
+        hosts.wait_connected(1.5)
+        reconnected = time.monotonic() - returned
+        assert reconnected < 1.0, f"the runtime reconnected {reconnected:.2f} s after"
+        print(f"link back: reconnected after {reconnected * 1000:.0f} ms")
+        heartbeat_for(jog, press, 1.5)
+        assert np.abs(hosts.robot.q() - at_rest).max() < STILL
+        moved = [c for c in hosts.robot.commands(seq) if c["type"] not in ("halt", "command_mode")]
+        assert moved == [], f"commands reached the robot after the link returned: {moved}"
+    finally:
+        jog.close()
+
+
+def test_a_link_drop_during_a_planned_move_ends_it_failed(hosts: Hosts) -> None:
+    hosts.ready()
+    request = {"kind": "joint", "target": {"joints": FAR}, "speed": 0.1, "acceleration": 0.5}
+    headers = {"X-Lease-Token": hosts.token}
+    started = hosts.runtime.api("POST", "/motion/robots/robot/moves", json=request, headers=headers)
+    assert started.status_code == 202, started.text
+    move = started.json()["id"]
+    wait_for(hosts.robot.moving, 10, what="the move running")
+    hosts.wire.down()
+    try:
+        status = wait_for(
+            lambda: (
+                (s := hosts.runtime.api("GET", f"/motion/moves/{move}").json())["state"]
+                not in ("planning", "running")
+                and s
+            ),
+            3,
+            what="the move to end",
+        )
+        assert status["state"] == "failed"
+        assert status["code"] in LINK_FAULTS
+        wait_for(hosts.robot.stopped, 2, what="the robot halted on its board")
+        at_rest = hosts.robot.q()
+        assert np.abs(at_rest - np.array(FAR)).max() > 0.1  # it did not run on to the end
+    finally:
+        hosts.wire.up()
+    hosts.wait_connected(1.5)
+    time.sleep(1.0)
+    assert np.abs(hosts.robot.q() - at_rest).max() < STILL
+    assert hosts.runtime.api("GET", f"/motion/moves/{move}").json()["state"] == "failed"
+
+
+def test_an_impostor_is_shown_not_followed_and_stop_still_stops_the_real_robot(
+    hosts: Hosts,
+) -> None:
+    hosts.ready()
+    request = {"kind": "joint", "target": {"joints": FAR}, "speed": 0.1, "acceleration": 0.5}
+    headers = {"X-Lease-Token": hosts.token}
+    started = hosts.runtime.api("POST", "/motion/robots/robot/moves", json=request, headers=headers)
+    assert started.status_code == 202, started.text
+    wait_for(hosts.robot.moving, 10, what="the move running")
+    real_url = hosts.runtime.api("GET", "/devices/robot").json()["url"]
+    impostor = hosts.start_robot(hosts.other_host, hosts.other_wire, uuid=hosts.sim.uuid)
+    try:
+        claim = wait_for(
+            lambda: hosts.runtime.api("GET", "/devices/robot").json()["address_claim"],
+            5,
+            what="the announcement from the other host shown",
+        )
+        assert claim["url"] == impostor.url and not claim["followed"]
+        device = hosts.runtime.api("GET", "/devices/robot").json()
+        assert device["url"] == real_url and device["status"] == "connected"
+        assert hosts.robot.moving()  # nothing was halted or moved by the announcement
+        jog = hosts.jog_client()
+        try:
+            seq = hosts.robot.last_seq()
+            jog.send({"type": "halt", "robot": "robot"})
+            stopped = hosts.runtime.api("POST", "/jog/robots/robot/halt")
+            assert stopped.status_code == 200, stopped.text
+        finally:
+            jog.close()
+        wait_for(hosts.robot.stopped, 2, what="the real robot halted")
+        assert any(c["type"] == "halt" for c in hosts.robot.commands(seq))
+        assert np.abs(hosts.robot.q() - np.array(FAR)).max() > 0.1
+        impostor_robot = BoardRobot(hosts.other_host, impostor.url)
+        assert impostor_robot.commands() == []  # the impostor heard nothing
+    finally:
+        impostor.stop()
