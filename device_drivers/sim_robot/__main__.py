@@ -74,6 +74,7 @@ def main(argv: list[str] | None = None) -> int:
         port=args.port,
         interfaces=settings.zeroconf_interfaces(),
         state_rate_hz=settings.state_rate_hz,
+        ttl=settings.discovery.ttl,
         routers=[robot_router(robot, CommandLog()), sim_router(robot)],
     )
     return 0

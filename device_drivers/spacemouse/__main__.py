@@ -109,6 +109,7 @@ def main(argv: list[str] | None = None) -> int:
         routers=routers,
         interfaces=settings.zeroconf_interfaces(),
         state_rate_hz=settings.state_rate_hz,
+        ttl=settings.discovery.ttl,
     )
     return 0
 

@@ -344,26 +344,34 @@ class DeviceConnection:
     # Set-up ----------------------------------------------------------------------------------
 
     async def _fetch_info(self, http: httpx.AsyncClient, url: str) -> dict[str, Any]:
-        async with http.stream("GET", "/info") as response:
-            response.raise_for_status()
-            raw = b""
-            async for chunk in response.aiter_bytes():
-                raw += chunk
-                if len(raw) > MAX_INFO:
-                    raise ValueError(f"{url}/info is over {MAX_INFO // 1024} KiB")
-        info = json.loads(raw)
-        identity = info.get("identity") if isinstance(info, dict) else None
+        info = await fetch_info(http, url)
+        identity = info.get("identity")
         uuid = identity.get("uuid") if isinstance(identity, dict) else None
         if uuid != self.record.uuid:
             shown = short(repr(uuid)[:80])
             raise WrongDevice(f"another device (uuid {shown}) answers at {url}")
-        return info  # type: ignore[no-any-return]
+        return info
 
     async def _open(self, url: str, path: str) -> ClientConnection:
         ws_url = url.replace("http://", "ws://", 1).replace("https://", "wss://", 1)
         return await websockets.connect(
             ws_url + path, open_timeout=CONNECT_TIMEOUT, close_timeout=0.2, max_size=MAX_STATE
         )
+
+
+async def fetch_info(http: httpx.AsyncClient, url: str) -> dict[str, Any]:
+    """A device's GET /info, read no further than MAX_INFO bytes."""
+    async with http.stream("GET", "/info") as response:
+        response.raise_for_status()
+        raw = bytearray()
+        async for chunk in response.aiter_bytes():
+            raw += chunk
+            if len(raw) > MAX_INFO:
+                raise ValueError(f"{url}/info is over {MAX_INFO // 1024} KiB")
+    info = json.loads(raw)
+    if not isinstance(info, dict):
+        raise ValueError(f"{url}/info is not a JSON object")
+    return info
 
 
 def describe(exc: BaseException) -> str:

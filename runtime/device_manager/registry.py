@@ -12,7 +12,7 @@ from typing import Any
 
 import httpx
 
-from runtime.device_manager.connection import DeviceConnection
+from runtime.device_manager.connection import DeviceConnection, describe, fetch_info, short
 from runtime.device_manager.leases import LeaseBook, LeaseGranted, LeaseInfo
 from runtime.device_manager.links import LinkServer
 from runtime.device_manager.models import (
@@ -209,12 +209,14 @@ class DeviceRegistry:
         url = url.rstrip("/")
         try:
             async with httpx.AsyncClient(base_url=url, timeout=2.0) as http:
-                response = await http.get("/info")
-                response.raise_for_status()
-                identity = response.json()["identity"]
+                info = await fetch_info(http, url)
+            identity = info["identity"]
+            if not isinstance(identity, dict):
+                raise TypeError("identity is not an object")
         except (httpx.HTTPError, ValueError, KeyError, TypeError) as exc:
             raise DeviceError(
-                f"no OpenPendant device answers at {url}", code="device_unreachable"
+                f"no OpenPendant device answers at {url}: {short(describe(exc))}",
+                code="device_unreachable",
             ) from exc
         try:
             return DeviceRecord(

@@ -37,6 +37,8 @@ MIN_SESSION_TIMEOUT = 0.05
 MAX_SESSION_TIMEOUT = 5.0
 MAX_PENDING_REPLIES = 100
 SILENT_SESSION = 4000  # close code: the session went silent and the robot was halted
+# The command streams open in this process (a driver process serves one device).
+OPEN: set[CommandStream] = set()
 
 
 class CommandStream:
@@ -51,11 +53,13 @@ class CommandStream:
         await ws.accept()
         sender = asyncio.create_task(self._send_replies(ws))
         silent = False
+        OPEN.add(self)
         try:
             silent = await self._receive(ws)
         except (WebSocketDisconnect, RuntimeError, OSError):
             pass
         finally:
+            OPEN.discard(self)
             sender.cancel()
             with contextlib.suppress(asyncio.CancelledError, WebSocketDisconnect, RuntimeError):
                 await sender

@@ -13,10 +13,11 @@ from typing import Any
 
 from fastapi import APIRouter, FastAPI, WebSocket
 
+from runtime.drivers import command_stream
 from runtime.drivers.state_stream import StateStream
 from runtime.interfaces.device import DeviceDriver
 from runtime.kit.app import create_app
-from runtime.kit.discovery import Advertisement, Advertiser, Interfaces
+from runtime.kit.discovery import DEFAULT_TTL, Advertisement, Advertiser, Interfaces
 from runtime.kit.serve import listening_socket, run_app
 
 log = logging.getLogger(__name__)
@@ -45,6 +46,15 @@ def device_router(driver: DeviceDriver, stream: StateStream) -> APIRouter:
     @router.get("/state")
     async def state() -> Any:
         return driver.state()
+
+    @router.get("/clients")
+    async def clients() -> dict[str, int]:
+        """Who is connected: state streams, command streams and runtime sessions."""
+        return {
+            "state_streams": len(stream.fanout.subscribers),
+            "command_streams": len(command_stream.OPEN),
+            "sessions": sum(1 for c in command_stream.OPEN if c.session_timeout is not None),
+        }
 
     @router.websocket("/state/ws")
     async def state_ws(ws: WebSocket, max_rate: float | None = None) -> None:
@@ -106,6 +116,7 @@ def serve_driver(
     interfaces: Interfaces,
     state_rate_hz: float,
     routers: Sequence[APIRouter] = (),
+    ttl: int = DEFAULT_TTL,
 ) -> None:
     sock = listening_socket(host, port)
     actual_port = int(sock.getsockname()[1])
@@ -117,6 +128,7 @@ def serve_driver(
         name=ident.name,
         host=advertised_host(host),
         port=actual_port,
+        ttl=ttl,
     )
     app = build_driver_app(
         driver,

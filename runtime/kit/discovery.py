@@ -7,23 +7,41 @@ bound to loopback must never multicast on a real interface.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import re
 import socket
 import time
 import unicodedata
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Literal
 
-from zeroconf import InterfaceChoice, IPVersion, ServiceStateChange, Zeroconf
+from zeroconf import (
+    InterfaceChoice,
+    IPVersion,
+    ServiceStateChange,
+    Zeroconf,
+    current_time_millis,
+)
+
+# Exported by zeroconf, outside its __all__:
+from zeroconf._dns import DNSQuestion
+from zeroconf._protocol.outgoing import DNSOutgoing
 from zeroconf.asyncio import AsyncServiceBrowser, AsyncServiceInfo, AsyncZeroconf
 
 log = logging.getLogger(__name__)
 
 SERVICE_TYPE = "_openpendant._tcp.local."
 API_VERSION = "1"
+SO_RCVBUFFORCE = getattr(socket, "SO_RCVBUFFORCE", 33)
 KINDS = ("robot", "camera", "detector", "io", "gripper", "input")
+DEFAULT_TTL = 15
+FOLLOW_INTERFACES = 5.0  # s between re-scans of the network interfaces
+RECEIVE_BUFFER = 4 << 20  # bytes: a burst of announcements must not overflow the socket
+RESOLVE_ATTEMPTS = 3
+SWEEP = 1.0  # s between checks that detected devices still answer
+DNS_SRV, DNS_IN, DNS_QUERY = 33, 1, 0x0000  # RFC 1035 / 2782 numbers
 UUID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:-]{0,63}$")
 # Control, format (bidi overrides, zero-width), surrogate, private-use and separator
 # characters: none belongs in a name shown on a pendant.
@@ -38,6 +56,30 @@ def make_zeroconf(interfaces: Interfaces) -> AsyncZeroconf:
     if not interfaces:
         raise ValueError("discovery needs at least one interface address")
     return AsyncZeroconf(interfaces=list(interfaces), ip_version=IPVersion.V4Only)
+
+
+async def follow_interfaces(zc: AsyncZeroconf, receiving: bool = False) -> None:
+    """Interfaces that come and go after start (a cable plugged in, a VPN, a namespace's
+    veth) are listened and announced on: a re-scan is a no-op when nothing changed."""
+    while True:
+        await asyncio.sleep(FOLLOW_INTERFACES)
+        try:
+            await zc.zeroconf.async_update_interfaces()
+        except (OSError, RuntimeError) as exc:
+            log.warning("could not follow the network interfaces: %s", exc)
+            continue
+        if receiving:
+            enlarge_receive_buffers(zc)
+
+
+def enlarge_receive_buffers(zc: AsyncZeroconf) -> None:
+    for reader in zc.zeroconf.engine.readers:
+        sock = reader.sock
+        try:  # beyond net.core.rmem_max where allowed (root), else up to it
+            sock.setsockopt(socket.SOL_SOCKET, SO_RCVBUFFORCE, RECEIVE_BUFFER)
+        except OSError:
+            with contextlib.suppress(OSError):
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RECEIVE_BUFFER)
 
 
 def clean_text(raw: bytes | str | None, limit: int = 128) -> str:
@@ -69,6 +111,9 @@ class Advertisement:
     host: str
     port: int
     api: str = API_VERSION
+    # s: how long browsers keep the records when no goodbye comes (a device that lost
+    # power). RFC 6762's 75 minutes is far too long for a pendant's list of devices.
+    ttl: int = DEFAULT_TTL
 
     def instance_name(self) -> str:
         label = re.sub(r"[^A-Za-z0-9 _-]", "", self.name)[:40] or self.kind
@@ -88,6 +133,8 @@ class Advertisement:
                 "api": self.api,
             },
             server=f"openpendant-{self.uuid[:12]}.local.",
+            host_ttl=self.ttl,
+            other_ttl=self.ttl,
         )
 
 
@@ -98,6 +145,8 @@ class Advertiser:
         self._interfaces = interfaces
         self._zc: AsyncZeroconf | None = None
         self._info: AsyncServiceInfo | None = None
+        self._announcing: Awaitable[object] | None = None
+        self._follower: asyncio.Task[None] | None = None
 
     async def start(self, ad: Advertisement) -> None:
         if ad.kind not in KINDS:
@@ -105,16 +154,25 @@ class Advertiser:
         self._zc = make_zeroconf(self._interfaces)
         self._info = ad.service_info()
         # Instance names carry the device uuid, so probing for conflicts only costs time
-        # (about 1.5 s) against the ≤ 1 s discovery target.
-        await self._zc.async_register_service(self._info, cooperating_responders=True)
+        # (about 1.5 s) against the ≤ 1 s discovery target. The returned task repeats the
+        # announcement (the first is out already).
+        self._announcing = await self._zc.async_register_service(
+            self._info, cooperating_responders=True
+        )
+        self._follower = asyncio.create_task(follow_interfaces(self._zc))
         log.info("advertising %s", self._info.name, extra={"port": ad.port, "uuid": ad.uuid})
 
     async def stop(self) -> None:
         if self._zc is None:
             return
+        if self._follower is not None:
+            self._follower.cancel()
         try:
             if self._info is not None:
-                await self._zc.async_unregister_service(self._info)
+                # The goodbye is sent by the task this returns: closing before it finishes
+                # left stopped devices listed until their records' TTL ran out.
+                goodbye = await self._zc.async_unregister_service(self._info)
+                await goodbye
         finally:
             await self._zc.async_close()
             self._zc = None
@@ -178,17 +236,26 @@ class Browser:
         self._zc: AsyncZeroconf | None = None
         self._browser: AsyncServiceBrowser | None = None
         self._tasks: set[asyncio.Task[None]] = set()
+        self._follower: asyncio.Task[None] | None = None
+        self._sweeper: asyncio.Task[None] | None = None
+        # Instance names found, and when each was last asked to confirm itself (ms).
+        self._names: dict[str, float] = {}
 
     async def start(self) -> None:
         self._zc = make_zeroconf(self._interfaces)
+        await self._zc.zeroconf.async_wait_for_start()
+        enlarge_receive_buffers(self._zc)
         self._browser = AsyncServiceBrowser(
             self._zc.zeroconf, SERVICE_TYPE, handlers=[self._on_change]
         )
+        self._follower = asyncio.create_task(follow_interfaces(self._zc, receiving=True))
+        self._sweeper = asyncio.create_task(self._sweep())
 
     def _on_change(
         self, zeroconf: Zeroconf, service_type: str, name: str, state_change: ServiceStateChange
     ) -> None:
         if state_change is ServiceStateChange.Removed:
+            self._names.pop(name, None)
             self._on_gone(name)
             return
         task = asyncio.ensure_future(self._resolve(zeroconf, service_type, name))
@@ -197,16 +264,50 @@ class Browser:
 
     async def _resolve(self, zeroconf: Zeroconf, service_type: str, name: str) -> None:
         info = AsyncServiceInfo(service_type, name)
-        if not await info.async_request(zeroconf, 1500):
-            log.warning("could not resolve %s", name)
+        for attempt in range(RESOLVE_ATTEMPTS):
+            if await info.async_request(zeroconf, 1500):
+                break
+            await asyncio.sleep(0.2 * (attempt + 1))
+        else:
+            log.warning("could not resolve %s", clean_text(name, 120))
             return
         detected = parse_info(info)
         if detected is None:
-            log.warning("ignoring malformed advertisement %s", name)
+            log.warning("ignoring malformed advertisement %s", clean_text(name, 120))
             return
+        self._names.setdefault(name, current_time_millis())
         self._on_found(detected)
 
+    async def _sweep(self) -> None:
+        """A device that vanished without a goodbye (power lost) leaves the list when its
+        service record's TTL (the device's `discovery.ttl`) runs out. zeroconf keeps the
+        pointer records for at least 19 minutes, so the service records decide: each is
+        asked to confirm itself past half its TTL; one that lapses is gone."""
+        while True:
+            await asyncio.sleep(SWEEP)
+            if self._zc is None:
+                continue
+            zc = self._zc.zeroconf
+            now = current_time_millis()
+            for name, asked in list(self._names.items()):
+                records = zc.cache.get_all_by_details(name, DNS_SRV, DNS_IN)
+                live = [r for r in records if not r.is_expired(now)]
+                if not live:
+                    del self._names[name]
+                    log.info("%s stopped answering: gone", clean_text(name, 120))
+                    self._on_gone(name)
+                    continue
+                newest = max(live, key=lambda r: r.created)
+                if now >= newest.get_expiration_time(50) and now - asked >= newest.ttl * 250:
+                    query = DNSOutgoing(DNS_QUERY)
+                    query.add_question(DNSQuestion(name, DNS_SRV, DNS_IN))
+                    zc.async_send(query)
+                    self._names[name] = now
+
     async def stop(self) -> None:
+        for job in (self._follower, self._sweeper):
+            if job is not None:
+                job.cancel()
         for task in list(self._tasks):
             task.cancel()
         if self._browser is not None:

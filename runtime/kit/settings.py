@@ -29,6 +29,8 @@ class DiscoverySettings(BaseModel):
 
     # "auto": loopback only when the UI is bound to loopback, else every interface.
     interfaces: Literal["auto", "all"] | list[str] = "auto"
+    # s a device's announcement lasts where its goodbye was lost (it lost power).
+    ttl: int = Field(default=15, ge=2, le=4500)
 
 
 class LinkSettings(BaseModel):

@@ -278,3 +278,35 @@ def test_an_impostor_is_shown_not_followed_and_stop_still_stops_the_real_robot(
         assert impostor_robot.commands() == []  # the impostor heard nothing
     finally:
         impostor.stop()
+
+
+def test_a_network_that_appears_after_start_is_listened_on(tmp_path: Path) -> None:
+    """Discovery on every interface follows interfaces that come up later (a cable plugged
+    in): a robot on a network made after the runtime started is detected."""
+    net = Network()
+    try:
+        runtime_host = net.namespace("rt")
+        board_host = net.namespace("bd")
+        env = child_env(tmp_path, OPENPENDANT_DISCOVERY__INTERFACES='"all"')
+        with inside(runtime_host):
+            runtime = HostRuntime(tmp_path / "rt", extra=["--no-sim"], env=env)
+        runtime.namespace = runtime_host
+        runtime.wait_ready()
+        try:
+            wire = net.link(runtime_host, board_host)  # plugged in after start
+            with inside(board_host):
+                sim = SimRobotProc(
+                    tmp_path / "bd",
+                    "late-ur5",
+                    extra=["--host", wire.right_ip],
+                    env=discovery_on(wire.right_ip),
+                )
+            sim.wait_ready()
+            try:
+                wait_for(lambda: runtime.is_detected(sim.uuid), 12, what="detected")
+            finally:
+                sim.stop()
+        finally:
+            runtime.stop()
+    finally:
+        net.close()

@@ -1,0 +1,225 @@
+"""Discovery and device identity under stress, on loopback: goodbyes and lost goodbyes, a
+burst of 500 announcements, hostile announcements and /info answers, removing and
+re-pointing an added device."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+from zeroconf import ServiceInfo, Zeroconf
+
+from runtime.kit.discovery import SERVICE_TYPE
+from tests.support.fake_device import FakeDevice
+from tests.support.processes import Runtime, SimRobotProc, child_env, wait_for
+
+SHORT_TTL = {"OPENPENDANT_DISCOVERY__TTL": "3"}
+
+
+@pytest.fixture(scope="module")
+def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
+    proc = Runtime(tmp_path_factory.mktemp("discovery"), extra=["--no-sim"])
+    proc.wait_ready()
+    try:
+        yield proc
+    finally:
+        proc.stop()
+
+
+def detected(runtime: Runtime) -> dict[str, dict[str, Any]]:
+    return {d["uuid"]: d for d in runtime.api("GET", "/devices/detected").json()}
+
+
+def rss_kib(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1])
+    raise AssertionError("no VmRSS")
+
+
+def manager_log(runtime: Runtime) -> str:
+    return (runtime.data_dir / "logs" / "device_manager.log").read_text(errors="replace")
+
+
+def test_a_driver_stopped_with_sigterm_leaves_the_list_within_2_s(
+    runtime: Runtime, tmp_path: Path
+) -> None:
+    sim = SimRobotProc(tmp_path, "goodbye-ur5")
+    sim.wait_ready()
+    wait_for(lambda: sim.uuid in detected(runtime), 10, what="detected")
+    stopped = time.monotonic()
+    sim.stop()  # SIGTERM: the driver says goodbye
+    wait_for(lambda: sim.uuid not in detected(runtime), 2.0, what="gone after its goodbye")
+    print(f"gone {time.monotonic() - stopped:.2f} s after SIGTERM")
+
+
+def test_a_driver_that_vanishes_without_goodbye_leaves_when_its_records_lapse(
+    runtime: Runtime, tmp_path: Path
+) -> None:
+    sim = SimRobotProc(tmp_path, "vanish-ur5", env=SHORT_TTL)
+    sim.wait_ready()
+    wait_for(lambda: sim.uuid in detected(runtime), 10, what="detected")
+    # Alive, it is asked to confirm itself and stays listed well past its 3 s TTL.
+    for _ in range(40):
+        time.sleep(0.2)
+        assert sim.uuid in detected(runtime)
+    killed = time.monotonic()
+    sim.kill()  # no goodbye at all
+    wait_for(lambda: sim.uuid not in detected(runtime), 6.0, what="gone when its TTL ran out")
+    print(f"gone {time.monotonic() - killed:.2f} s after kill -9 (TTL 3 s)")
+
+
+def test_500_announcements_at_once_are_all_listed_and_all_goodbyes_heard(
+    runtime: Runtime, tmp_path: Path
+) -> None:
+    burst = subprocess.Popen(
+        [sys.executable, "-m", "tests.support.announce", "500"],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        env=child_env(tmp_path),
+    )
+    assert burst.stdout is not None and burst.stdin is not None
+    try:
+        uuids = set(json.loads(burst.stdout.readline())["uuids"])
+        assert len(uuids) == 500
+        wait_for(lambda: uuids <= set(detected(runtime)), 10, what="all 500 listed")
+    finally:
+        burst.stdin.close()
+        burst.wait(30)
+    wait_for(lambda: not uuids & set(detected(runtime)), 10, what="all 500 goodbyes heard")
+
+
+def announce(zc: Zeroconf, label: str, properties: dict[str, Any], port: int) -> ServiceInfo:
+    info = ServiceInfo(
+        SERVICE_TYPE,
+        f"{label}.{SERVICE_TYPE}",
+        addresses=[bytes([127, 0, 0, 1])],
+        port=port,
+        properties=properties,
+        server=f"{label}.local.",
+    )
+    zc.register_service(info, cooperating_responders=True)
+    return info
+
+
+def test_malformed_and_oversized_announcements_are_refused_with_a_log_line(
+    runtime: Runtime,
+) -> None:
+    zc = Zeroconf(interfaces=["127.0.0.1"])
+    try:
+        announce(zc, "long-uuid", {"uuid": "x" * 200, "kind": "robot"}, 30001)
+        announce(zc, "control-uuid", {"uuid": "a\x1b[31m", "kind": "robot"}, 30002)
+        announce(zc, "no-uuid", {"kind": "robot"}, 30003)
+        announce(zc, "bad-kind", {"uuid": "toaster-1", "kind": "toaster"}, 30004)
+        announce(
+            zc,
+            "hostile-name",
+            {"uuid": "named-1", "kind": "robot", "name": "ro\u202ebot\u200b\n" + "n" * 200},
+            30005,
+        )
+        found = wait_for(lambda: detected(runtime).get("named-1"), 10, what="the good one")
+        assert found["name"] == "robot" + "n" * 59  # cleaned and capped at 64
+        time.sleep(1.0)  # the others had as long
+        listed = detected(runtime)
+        assert "toaster-1" not in listed
+        assert not any(u.startswith("x" * 64) or u.startswith("a") for u in listed)
+        log = manager_log(runtime)
+        assert "ignoring announcement long-uuid" in log
+        assert "ignoring announcement control-uuid" in log
+    finally:
+        zc.close()
+
+
+def test_info_answers_too_big_or_malformed_are_refused_and_memory_stays_bounded(
+    runtime: Runtime,
+) -> None:
+    pid = int(runtime.api("GET", "/health").json()["services"]["device_manager"]["pid"])
+    before = rss_kib(pid)
+    fake = FakeDevice()
+    try:
+        cases = {
+            "huge uuid": json.dumps({"identity": {"uuid": "u" * 5_000_000, "kind": "robot"}}),
+            "empty uuid": json.dumps({"identity": {"uuid": "", "kind": "robot"}}),
+            "no identity": json.dumps({"identity": "robot"}),
+            "not json": "<html>hello</html>",
+            "a list": "[1, 2, 3]",
+        }
+        for case, body in cases.items():
+            fake.info = body.encode()
+            response = runtime.api("POST", "/devices", json={"url": fake.url, "local_name": "fake"})
+            assert 400 <= response.status_code < 500, (case, response.status_code)
+            error = response.json()["error"]
+            assert error["code"] in ("device_unreachable", "device_invalid"), case
+            assert len(response.content) < 2000, case
+        assert runtime.api("GET", "/devices/fake").status_code == 404
+    finally:
+        fake.close()
+    assert rss_kib(pid) - before < 50_000  # KiB: a 5 MB answer was never read whole
+
+
+def test_a_removed_device_leaves_no_session_behind(runtime: Runtime, tmp_path: Path) -> None:
+    sim = SimRobotProc(tmp_path, "removed-ur5")
+    sim.wait_ready()
+    try:
+        wait_for(lambda: sim.uuid in detected(runtime), 10, what="detected")
+        added = runtime.api("POST", "/devices", json={"uuid": sim.uuid, "local_name": "gone"})
+        assert added.status_code == 201, added.text
+        wait_for(
+            lambda: runtime.api("GET", "/devices/gone").json()["status"] == "connected",
+            10,
+            what="connected",
+        )
+        clients = httpx.get(f"{sim.url}/clients").json()
+        assert clients["sessions"] == 1 and clients["state_streams"] >= 1
+        assert runtime.api("DELETE", "/devices/gone").status_code == 200
+        wait_for(
+            lambda: (
+                httpx.get(f"{sim.url}/clients").json()
+                == {"state_streams": 0, "command_streams": 0, "sessions": 0}
+            ),
+            1.0,
+            what="no session left at the driver",
+        )
+    finally:
+        sim.stop()
+
+
+def test_a_device_can_be_re_pointed_by_the_user_and_an_impostor_is_refused(
+    runtime: Runtime, tmp_path: Path
+) -> None:
+    first = SimRobotProc(tmp_path, "moving-ur5")
+    first.wait_ready()
+    added = runtime.api("POST", "/devices", json={"url": first.url, "local_name": "mover"})
+    assert added.status_code == 201, added.text
+    wait_for(lambda: runtime.api("GET", "/devices/mover").json()["status"] == "connected", 10)
+    second = SimRobotProc(tmp_path, "moving-ur5", extra=["--uuid", first.uuid])
+    other = SimRobotProc(tmp_path, "someone-else")
+    try:
+        second.wait_ready()
+        other.wait_ready()
+        refused = runtime.api("PUT", "/devices/mover/address", json={"url": other.url})
+        assert refused.status_code == 409 and refused.json()["error"]["code"] == "wrong_device"
+        moved = runtime.api("PUT", "/devices/mover/address", json={"url": second.url})
+        assert moved.status_code == 200, moved.text
+        wait_for(
+            lambda: (
+                (d := runtime.api("GET", "/devices/mover").json())["status"] == "connected"
+                and d["url"] == second.url
+            ),
+            5,
+            what="connected at the new address",
+        )
+        assert httpx.get(f"{first.url}/clients").json()["sessions"] == 0
+        claim = runtime.api("GET", "/devices/mover").json()["address_claim"]
+        assert claim["url"] == first.url and claim["followed"]
+    finally:
+        for proc in (first, second, other):
+            proc.stop()
+        runtime.api("DELETE", "/devices/mover")
