@@ -3,14 +3,20 @@ Others may watch but not command it until the holder releases the lease or lets 
 
 from __future__ import annotations
 
+import json
+import logging
+import os
 import secrets
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 from pydantic import BaseModel, Field
 
 from runtime.interfaces.common import Strict
 from runtime.kit.errors import Conflict, OpenPendantError
+
+log = logging.getLogger(__name__)
 
 LEASE_SECONDS = 15.0
 
@@ -47,14 +53,52 @@ class _Lease:
 
 
 class LeaseBook:
-    def __init__(self, seconds: float = LEASE_SECONDS) -> None:
+    """Leases in memory, and on disk (`path`) as they are taken and released, so that a
+    restarted device manager hands no robot to someone else while its holder lives: each
+    lease comes back with a full term, which its holder's next use renews."""
+
+    def __init__(self, seconds: float = LEASE_SECONDS, path: Path | None = None) -> None:
         self.seconds = seconds
+        self.path = path
         self._leases: dict[str, _Lease] = {}
+        self._load()
+
+    def _load(self) -> None:
+        if self.path is None or not self.path.is_file():
+            return
+        try:
+            stored = json.loads(self.path.read_text())
+            restart = time.time() + self.seconds
+            for device, lease in stored.items():
+                self._leases[device] = _Lease(
+                    holder=str(lease["holder"]),
+                    token=str(lease["token"]),
+                    expires=max(float(lease["expires"]), restart),
+                )
+        except (OSError, ValueError, KeyError, TypeError, AttributeError) as exc:
+            log.warning("could not restore the control leases from %s: %s", self.path, exc)
+
+    def _save(self) -> None:
+        if self.path is None:
+            return
+        body = {
+            device: {"holder": lease.holder, "token": lease.token, "expires": lease.expires}
+            for device, lease in self._leases.items()
+        }
+        temporary = self.path.with_suffix(".tmp")
+        try:
+            descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+            with os.fdopen(descriptor, "w") as out:
+                json.dump(body, out)
+            os.replace(temporary, self.path)
+        except OSError as exc:
+            log.warning("could not store the control leases in %s: %s", self.path, exc)
 
     def _live(self, device: str, now: float) -> _Lease | None:
         lease = self._leases.get(device)
         if lease is not None and lease.expires <= now:
             del self._leases[device]
+            self._save()
             return None
         return lease
 
@@ -74,9 +118,12 @@ class LeaseBook:
                 f"{lease.expires - now:.0f} s unless they release it"
             )
         if lease is None:
-            lease = _Lease(holder=holder, token=secrets.token_urlsafe(16), expires=0.0)
+            token = secrets.token_urlsafe(16)
+            lease = _Lease(holder=holder, token=token, expires=now + self.seconds)
             self._leases[device] = lease
-        lease.expires = now + self.seconds
+            self._save()
+        else:
+            lease.expires = now + self.seconds
         return LeaseGranted(
             device=device, holder=lease.holder, token=lease.token, expires=lease.expires
         )
@@ -97,9 +144,11 @@ class LeaseBook:
         if token is None or not secrets.compare_digest(lease.token, token):
             raise Conflict(f"{device} is controlled by {lease.holder!r}", code="lease_held")
         del self._leases[device]
+        self._save()
 
     def drop(self, device: str) -> None:
-        self._leases.pop(device, None)
+        if self._leases.pop(device, None) is not None:
+            self._save()
 
     def sweep(self) -> bool:
         """Forget lapsed leases; True when any lapsed."""
@@ -107,4 +156,6 @@ class LeaseBook:
         lapsed = [d for d, lease in self._leases.items() if lease.expires <= now]
         for device in lapsed:
             del self._leases[device]
+        if lapsed:
+            self._save()
         return bool(lapsed)

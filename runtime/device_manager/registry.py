@@ -8,6 +8,7 @@ import logging
 import math
 import time
 from collections.abc import Coroutine
+from pathlib import Path
 from typing import Any
 
 import httpx
@@ -41,6 +42,7 @@ class DeviceRegistry:
         fanout: Fanout,
         lease_seconds: float = 15.0,
         timing: LinkSettings | None = None,
+        lease_file: Path | None = None,
     ) -> None:
         self.storage = storage
         self.fanout = fanout  # everything, device states included
@@ -51,7 +53,7 @@ class DeviceRegistry:
         self.connections: dict[str, DeviceConnection] = {}
         self.claims: dict[str, AddressClaim] = {}  # local name -> another address it was seen at
         self.loaded = False
-        self.leases = LeaseBook(lease_seconds)
+        self.leases = LeaseBook(lease_seconds, lease_file)
         self._lock = asyncio.Lock()
         self._tasks: set[asyncio.Task[None]] = set()
 

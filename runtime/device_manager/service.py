@@ -98,7 +98,13 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
 
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
-    registry = DeviceRegistry(storage, Fanout(), settings.lease_seconds, settings.link)
+    registry = DeviceRegistry(
+        storage,
+        Fanout(),
+        settings.lease_seconds,
+        settings.link,
+        lease_file=settings.data_dir / "leases.json",
+    )
     browser = Browser(settings.zeroconf_interfaces(), registry.on_found, registry.on_gone)
 
     @contextlib.asynccontextmanager

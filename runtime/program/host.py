@@ -41,6 +41,7 @@ class RunHost:
         *,
         robot: str | None,
         leases: dict[str, str],
+        on_lease: Callable[[], None] | None = None,
     ) -> None:
         self.holder = holder
         self.hub = hub
@@ -50,6 +51,8 @@ class RunHost:
         self.robot = robot
         self.given = dict(leases)
         self.acquired: dict[str, str] = {}
+        self.on_lease = on_lease  # a lease was taken: the run's record is written again
+        self.closed = False
         self.commanded: list[str] = []
         self.speed = 0.5
         # Named on each move: the motion service refuses the run's moves once it is stopped,
@@ -113,6 +116,7 @@ class RunHost:
         return {"X-Caller": self.caller}
 
     async def close(self) -> None:
+        self.closed = True
         if self._renewer is not None:
             self._renewer.cancel()
         for link in self._drivers.values():
@@ -159,6 +163,8 @@ class RunHost:
             )
             token = str(granted["token"])
             self.acquired[robot] = token
+            if self.on_lease is not None:
+                self.on_lease()
             if self._renewer is None:
                 self._renewer = asyncio.create_task(self._renew())
         if robot not in self.commanded:

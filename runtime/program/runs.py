@@ -6,17 +6,21 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import itertools
+import logging
 import time
 
 from runtime.kit.client import ServiceClient
-from runtime.kit.errors import Conflict, NotFound
+from runtime.kit.errors import Conflict, NotFound, OpenPendantError
 from runtime.kit.websocket import Fanout
 from runtime.links.hub import LinkHub
 from runtime.program.host import RunHost
 from runtime.program.library import ProgramLibrary
 from runtime.program.models import ErrorInfo, OutputEntry, RunRequest, RunStatus
+from runtime.program.records import RunRecords
 from runtime.variable_storage.client import StorageClient
 from sandbox.supervisor import ProgramRun, RunLimits, WorkerPool
+
+log = logging.getLogger(__name__)
 
 PUSHED_OUTPUT = 100
 
@@ -39,6 +43,7 @@ class Runs:
         storage: StorageClient,
         fanout: Fanout,
         hub: LinkHub,
+        records: RunRecords | None = None,
     ) -> None:
         self.library = library
         self.devices = devices
@@ -46,7 +51,8 @@ class Runs:
         self.storage = storage
         self.fanout = fanout
         self.runs: dict[str, Active] = {}
-        self._numbers = itertools.count(1)
+        self.records = records or RunRecords(None)
+        self._numbers = itertools.count(self.records.last_run() + 1)
         self._watchers: set[asyncio.Task[None]] = set()
         self.pool = WorkerPool()
         self.hub = hub
@@ -64,6 +70,7 @@ class Runs:
             self.hub,
             robot=request.robot,
             leases=request.leases,
+            on_lease=lambda: self._record(name),
         )
         limits = RunLimits(wall_seconds=request.time_limit or RunLimits.wall_seconds)
         number = next(self._numbers)
@@ -83,6 +90,7 @@ class Runs:
             await host.close()
             raise
         self.runs[name] = active
+        self._record(name)
         watcher = asyncio.create_task(self._finish(active))
         self._watchers.add(watcher)
         watcher.add_done_callback(self._watchers.discard)
@@ -92,6 +100,34 @@ class Runs:
         await active.run.wait()
         await active.host.close()
         await active.run.close()
+        name = next((n for n, a in self.runs.items() if a is active), None)
+        if name is not None:
+            self._record(name)
+
+    def _record(self, name: str) -> None:
+        """On disk while it matters: a crash of this service leaves the run's record."""
+        active = self.runs.get(name)
+        if active is not None:
+            ended = active.run.ended_state is not None and active.host.closed
+            leases = {} if ended else dict(active.host.acquired)
+            self.records.update(self.status(name), leases)
+
+    async def recover(self) -> None:
+        """Runs that were live when this service last stopped failed with it: recorded so,
+        and the leases they took released (retried until the device manager answers)."""
+        for name, leases in self.records.crashed():
+            log.warning("program %s was running when the program service stopped", name)
+            for robot, token in leases.items():
+                while True:
+                    try:
+                        await self.devices.delete(
+                            f"/devices/{robot}/lease", headers={"X-Lease-Token": token}
+                        )
+                        break
+                    except OpenPendantError as exc:
+                        if exc.status < 500:
+                            break  # lapsed, or the robot was removed: nothing to free
+                        await asyncio.sleep(0.5)
 
     def _active(self, name: str) -> Active:
         active = self.runs.get(name)
@@ -138,7 +174,7 @@ class Runs:
     def status(self, name: str, after: int = 0) -> RunStatus:
         active = self.runs.get(name)
         if active is None:
-            return RunStatus(program=name, state="idle")
+            return self.records.status(name) or RunStatus(program=name, state="idle")
         run = active.run
         error = None
         if run.error is not None:

@@ -34,6 +34,7 @@ from runtime.program.models import (
     RunStatus,
     Saved,
 )
+from runtime.program.records import RunRecords
 from runtime.program.runs import Runs
 from runtime.variable_storage.client import StorageClient
 
@@ -146,14 +147,17 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     library = ProgramLibrary(storage)
     fanout = Fanout()
     hub = LinkHub(urls["device_manager"], "program", settings.link.stale_after)
-    runs = Runs(library, devices, motion, storage, fanout, hub)
+    records = RunRecords(settings.data_dir / "program-runs.json")
+    runs = Runs(library, devices, motion, storage, fanout, hub, records)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
         await hub.start()
+        recovery = asyncio.create_task(runs.recover())
         try:
             yield
         finally:
+            recovery.cancel()
             await runs.stop_all()
             await hub.close()
             await devices.aclose()

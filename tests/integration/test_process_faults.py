@@ -139,19 +139,44 @@ def test_a_killed_device_manager_halts_a_move_and_the_move_fails(ready: Cell) ->
     assert ended["state"] == "failed"
     assert ended["code"] in ("device_disconnected", "link_changed", "link_stale")
     assert_stays_still(ready)
+    # The lease outlived the device manager: the holder keeps control, nobody else gets it.
+    wait_for(lambda: healthy(ready), 30, what="the device manager back")
+    kept = ready.runtime.api("POST", "/devices/robot/lease/check", headers=ready.headers())
+    assert kept.status_code == 200, kept.text
+    other = ready.runtime.api("POST", "/devices/robot/lease", json={"holder": "intruder"})
+    assert other.status_code == 409 and other.json()["error"]["code"] == "lease_held"
 
 
-def test_a_killed_program_service_halts_its_run(ready: Cell) -> None:
+def test_a_killed_program_service_halts_its_run_and_records_it_failed(ready: Cell) -> None:
     source = f"set_speed(10)\nmove_joint({FAR_DEGREES!r})"
     saved = ready.runtime.api("PUT", "/programs/slow", json={"python": source})
     assert saved.status_code == 200, saved.text
-    started = ready.runtime.api(
-        "POST", "/programs/slow/run", json={"leases": {"robot": ready.token}, "robot": "robot"}
-    )
+    # The run takes the robot's lease itself, as a run started from elsewhere does.
+    ready.runtime.api("DELETE", "/devices/robot/lease", headers=ready.headers())
+    started = ready.runtime.api("POST", "/programs/slow/run", json={"robot": "robot"})
     assert started.status_code == 202, started.text
     wait_for(lambda: moving(ready), 10, what="the robot moving")
+    holder = ready.runtime.api("GET", "/devices/robot/lease").json()["holder"]
+    assert holder == "program slow"
     time.sleep(0.3)
     before = ready.robot.last_command_seq()
     killed = kill(ready, "program")
     assert halted_after(ready, killed, before) < HALT_WITHIN
     assert_stays_still(ready)
+    wait_for(lambda: healthy(ready), 30, what="the program service back")
+    status = wait_for(
+        lambda: (
+            (s := ready.runtime.api("GET", "/programs/slow/status").json())["state"] == "error"
+            and s
+        ),
+        10,
+        what="the run recorded as failed",
+    )
+    assert status["error"]["code"] == "service_crashed"
+    assert "stopped during this run" in status["error"]["message"]
+    # Its lease was released at once, not left to lapse.
+    wait_for(
+        lambda: ready.runtime.api("GET", "/devices/robot/lease").json()["holder"] is None,
+        3,
+        what="the crashed run's lease released",
+    )

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import pytest
 
@@ -49,3 +50,34 @@ def test_leases_are_per_device() -> None:
     book = LeaseBook()
     book.acquire("robot", "tablet-1")
     assert book.acquire("robot2", "tablet-2").holder == "tablet-2"
+
+
+def test_leases_come_back_after_a_restart_with_a_full_term(tmp_path: Path) -> None:
+    """A restarted device manager hands no robot to someone else while its holder lives:
+    the holder's token still works, others are refused, and the file is private."""
+    path = tmp_path / "leases.json"
+    book = LeaseBook(seconds=10, path=path)
+    mine = book.acquire("robot", "tablet-1")
+    panda = book.acquire("panda", "program x")
+    book.release("panda", panda.token)
+    assert path.stat().st_mode & 0o777 == 0o600
+    restarted = LeaseBook(seconds=10, path=path)
+    assert restarted.check("robot", mine.token).holder == "tablet-1"
+    with pytest.raises(LeaseRefused):
+        restarted.acquire("robot", "tablet-2")
+    assert restarted.info("panda").holder is None  # released before the restart
+
+
+def test_a_lease_that_lapsed_before_a_restart_stays_lapsed(tmp_path: Path) -> None:
+    path = tmp_path / "leases.json"
+    book = LeaseBook(seconds=0.05, path=path)
+    book.acquire("robot", "tablet-1")
+    time.sleep(0.1)
+    assert book.sweep()
+    assert LeaseBook(seconds=10, path=path).info("robot").holder is None
+
+
+def test_an_unreadable_lease_file_starts_empty(tmp_path: Path) -> None:
+    path = tmp_path / "leases.json"
+    path.write_text("{not json")
+    assert LeaseBook(seconds=10, path=path).info("robot").holder is None
