@@ -41,6 +41,23 @@ def pid_alive(pid: int) -> bool:
     return Path(f"/proc/{pid}/status").read_text().find("State:\tZ") < 0
 
 
+def move_a_little(runtime: Runtime, robot: str) -> str:
+    """Take control, enable, and make a small planned joint move; its final state."""
+    token = runtime.api("POST", f"/devices/{robot}/lease", json={"holder": "tests"}).json()
+    headers = {"X-Lease-Token": token["token"]}
+    enabled = runtime.api("POST", f"/jog/robots/{robot}/enable", headers=headers)
+    assert enabled.status_code == 200, enabled.text
+    q = runtime.api("GET", f"/devices/{robot}/state").json()["joint_position"]
+    target = [q[0] + (0.1 if q[0] < 0 else -0.1), *q[1:]]
+    request = {"kind": "joint", "target": {"joints": target}, "speed": 1.0}
+    started = runtime.api(
+        "POST", f"/motion/robots/{robot}/moves", json=request, headers=headers, params={"wait": 20}
+    )
+    assert started.status_code == 202, started.text
+    runtime.api("DELETE", f"/devices/{robot}/lease", headers=headers)
+    return str(started.json()["state"])
+
+
 def test_discover_add_stream_and_survive_restarts(home: Path) -> None:
     runtime = Runtime(home)
     second = SimRobotProc(home, name="second-ur5", model="ur5")
@@ -95,6 +112,8 @@ def test_discover_add_stream_and_survive_restarts(home: Path) -> None:
         assert device["uuid"] == second.uuid
         wait_for(lambda: connected(runtime, "robot2"), 10, what="robot2 reconnected")
 
+        # Jog and motion have used robot2 before it moves (they hold its link)...
+        assert move_a_little(runtime, "robot2") == "finished"
         # Restart the driver on another port: the same device is updated, not duplicated.
         old_url = second.url
         second.stop()
@@ -108,6 +127,8 @@ def test_discover_add_stream_and_survive_restarts(home: Path) -> None:
             what="robot2 connected at its new address",
         )
         assert moved["uuid"] == second.uuid
+        # ... and the first move after the move succeeds: every service uses the one link.
+        assert move_a_little(runtime, "robot2") == "finished"
         devices = runtime.api("GET", "/devices").json()
         assert [d["local_name"] for d in devices if d["uuid"] == second.uuid] == ["robot2"]
         assert len(detected(runtime, second.uuid)) == 1
