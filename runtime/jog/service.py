@@ -9,6 +9,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, FastAPI, Header, WebSocket
 
+from runtime.jog.clearance import PathCheck
 from runtime.jog.directory import Directory
 from runtime.jog.models import TeachRequest
 from runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
@@ -26,7 +27,9 @@ from runtime.variable_storage.store import Variable
 LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 
 
-def jog_router(directory: Directory, storage: StorageClient, deadman: float) -> APIRouter:
+def jog_router(
+    directory: Directory, storage: StorageClient, deadman: float, paths: PathCheck
+) -> APIRouter:
     router = APIRouter(prefix="/jog")
 
     @router.get("/settings")
@@ -42,7 +45,7 @@ def jog_router(directory: Directory, storage: StorageClient, deadman: float) -> 
 
     @router.websocket("/ws")
     async def jog_socket(ws: WebSocket) -> None:
-        session = JogSession(directory, storage, deadman)
+        session = JogSession(directory, storage, deadman, paths)
         try:
             await session.out.serve(ws, on_message=session.handle)
         finally:
@@ -123,6 +126,7 @@ def _public_uri(urdf: str) -> str | None:
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
     devices = ServiceClient(urls["device_manager"], timeout=3.0, name="device manager")
+    motion = ServiceClient(urls["motion"], timeout=10.0, name="motion")
     hub = LinkHub(urls["device_manager"], "jog", settings.link.stale_after)
     mirror = WorldMirror(devices, storage, hub)
     directory = Directory(urls["device_manager"], hub, avoidance=mirror.constraint)
@@ -138,9 +142,11 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             await mirror.close()
             await hub.close()
             await devices.aclose()
+            await motion.aclose()
             await storage.aclose()
 
     app = create_app("jog", lifespan=lifespan)
-    app.include_router(jog_router(directory, storage, settings.deadman_seconds))
+    paths = PathCheck(motion)
+    app.include_router(jog_router(directory, storage, settings.deadman_seconds, paths))
     app.include_router(avoidance_router(mirror))
     return app

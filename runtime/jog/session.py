@@ -24,6 +24,7 @@ from runtime.jog.actions import (
     PlannedMoveAction,
     TwistJog,
 )
+from runtime.jog.clearance import PathCheck
 from runtime.jog.directory import Directory
 from runtime.jog.jogger import Ended, Jogger
 from runtime.jog.models import (
@@ -67,10 +68,13 @@ class Held:
 
 
 class JogSession:
-    def __init__(self, directory: Directory, storage: StorageClient, deadman: float) -> None:
+    def __init__(
+        self, directory: Directory, storage: StorageClient, deadman: float, paths: PathCheck
+    ) -> None:
         self.directory = directory
         self.storage = storage
         self.deadman = deadman
+        self.paths = paths
         self.out = Fanout()
         self.held: dict[str, Held] = {}
         self.ended: deque[str] = deque(maxlen=1000)
@@ -240,9 +244,11 @@ class JogSession:
                 JointLimitChecker(info),
                 q,
             )
+            await self.paths.joint_line(request.robot, goal)
             return self._plan(request.press, jogger, q, goal, request.speed, cap)
         if request.step is not None:
             goal = self._step_goal(request, jogger, q)
+            await self.paths.joint_line(request.robot, goal)
             return self._plan(request.press, jogger, q, goal, request.speed, cap)
         if request.kind == "joint":
             assert isinstance(request.axis, int)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import struct
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -19,7 +20,8 @@ import pytest
 from runtime.kinematics import Kinematics
 from runtime.robot_info import load_robot_info
 from tests.support.jog import Cell, JogClient
-from tests.support.processes import Runtime, SpaceMouseProc, child_env, wait_for
+from tests.support.posts import LEFT, RIGHT, clear_posts, put_posts
+from tests.support.processes import STILL, Runtime, SpaceMouseProc, child_env, wait_for
 
 INFO = load_robot_info("ur5")
 KINEMATICS = Kinematics(INFO)
@@ -225,6 +227,36 @@ def test_move_to_stops_when_the_button_is_let_go(cell: Cell, jog: JogClient) -> 
     assert np.abs(cell.robot.q() - far).max() > 0.3  # it did not get there on its own
     assert jog.move_to("far_away")["state"] == "done"
     assert np.abs(cell.robot.q() - far).max() < 1e-6
+
+
+def test_move_to_through_an_obstacle_is_refused_and_nothing_moves(
+    cell: Cell, jog: JogClient
+) -> None:
+    """Move-to passes the motion service's collision checks: the posts stand between LEFT
+    and RIGHT, so a held Move-to RIGHT is refused with the pair, and no setpoint moves."""
+    cell.place(LEFT)
+    cell.runtime.api(
+        "PUT",
+        "/variables/beyond_posts",
+        json={"type": "joint_waypoint", "value": {"joints": RIGHT, "robot": "robot"}},
+    )
+    put_posts(cell.runtime)
+    try:
+        before = cell.robot.q()
+        seq = cell.robot.last_command_seq()
+        status = jog.move_to("beyond_posts", timeout=10)
+        assert status["state"] == "refused"
+        assert status["reason"] == "collision"
+        assert "post_" in status["message"] and "would hit" in status["message"]
+        time.sleep(0.3)
+        assert np.abs(cell.robot.q() - before).max() < STILL
+        moved = [c for c in cell.robot.commands(seq) if c["type"] != "halt"]
+        assert moved == []
+        # A step that stays clear still goes.
+        step = jog.hold(0.1, kind="joint", axis=5, direction=1, step=0.01, speed=0.5)
+        assert jog.status(step, ("done",))["state"] == "done"
+    finally:
+        clear_posts(cell.runtime)
 
 
 # 3D mouse -------------------------------------------------------------------------------------
