@@ -10,6 +10,7 @@ import websockets
 from fastapi import Request, Response, WebSocket
 from starlette.websockets import WebSocketDisconnect
 
+from runtime.kit import deadline
 from runtime.kit.app import error_response
 from runtime.kit.request_start import HEADER as REQUEST_START
 from runtime.kit.request_start import stamp
@@ -18,6 +19,7 @@ from runtime.kit.websocket import until_either_ends
 # Hop-by-hop and length headers, and the arrival stamp, are the proxy's own business.
 _SKIP_REQUEST = {
     REQUEST_START.lower(),
+    deadline.HEADER.lower(),
     "host",
     "connection",
     "content-length",
@@ -34,7 +36,7 @@ class ServiceProxy:
         """routes: prefix -> (service name, base url)"""
         self.routes = routes
         # Long work is a resource with a status, never a long request: 10 s means hung.
-        self.http = httpx.AsyncClient(timeout=httpx.Timeout(10.0, connect=2.0))
+        self.http = httpx.AsyncClient(timeout=httpx.Timeout(deadline.GATEWAY_TIMEOUT, connect=2.0))
 
     async def aclose(self) -> None:
         await self.http.aclose()
@@ -53,6 +55,8 @@ class ServiceProxy:
         # When the request reached the runtime (a client's own value is replaced): services
         # that promise a reaction time count from here, e.g. a program stop.
         headers[REQUEST_START] = received
+        # Given up on at the timeout below (504): the service must not apply it later.
+        headers[deadline.HEADER] = deadline.for_request(float(received))
         try:
             upstream = await self.http.request(
                 request.method,

@@ -16,6 +16,7 @@ from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from runtime import __version__
+from runtime.kit.deadline import DeadlineMiddleware
 from runtime.kit.errors import OpenPendantError
 
 log = logging.getLogger(__name__)
@@ -93,6 +94,7 @@ def create_app(
 
     app = FastAPI(title=f"OpenPendant {service}", version=__version__, lifespan=_lifespan)
     install_error_handlers(app)
+    app.add_middleware(DeadlineMiddleware)
 
     @app.get("/health")
     async def _health() -> dict[str, Any]:

@@ -16,6 +16,7 @@ from typing import Any
 
 from pydantic import BaseModel, Field
 
+from runtime.kit import deadline
 from runtime.kit.errors import Conflict, InvalidValue, NotFound
 from runtime.variable_storage.types import validate_value
 
@@ -115,6 +116,8 @@ class VariableStore:
             self._db.execute("BEGIN IMMEDIATE")
             try:
                 yield
+                # The last moment to refuse: a request its gateway gave up on is not applied.
+                deadline.check()
             except BaseException:
                 self._db.execute("ROLLBACK")
                 raise

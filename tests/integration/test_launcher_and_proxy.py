@@ -8,6 +8,8 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -75,6 +77,38 @@ def test_a_frozen_service_shows_as_down(runtime: Runtime) -> None:
     wait_for(
         lambda: runtime.api("GET", "/health").json()["status"] == "ok", 10, what="healthy again"
     )
+
+
+def test_a_write_the_gateway_gave_up_on_is_never_applied_later(runtime: Runtime) -> None:
+    """The storage hangs (stopped, as while it restarts): the gateway answers each write 504
+    after its 10 s, and when the storage wakes up with the requests still waiting in its
+    socket, it refuses them instead of applying them over newer writes."""
+    assert runtime.api("PUT", "/variables/late", json={"type": "number", "value": 1}).is_success
+    pid = int(health(runtime)["variable_storage"]["pid"])
+    answers: list[int] = []
+
+    def write(value: int) -> None:
+        body = {"type": "number", "value": value}
+        answers.append(runtime.api("PUT", "/variables/late", json=body, timeout=30).status_code)
+
+    os.kill(pid, signal.SIGSTOP)
+    try:
+        writers = [threading.Thread(target=write, args=(v,)) for v in range(2, 7)]
+        for writer in writers:
+            writer.start()
+            time.sleep(0.2)
+        for writer in writers:
+            writer.join()
+        assert answers == [504] * 5
+    finally:
+        os.kill(pid, signal.SIGCONT)
+    wait_for(
+        lambda: runtime.api("GET", "/health").json()["status"] == "ok", 10, what="healthy again"
+    )
+    time.sleep(1.0)  # the waiting requests have been read and refused by now
+    assert runtime.api("GET", "/variables/late").json()["value"] == 1
+    assert runtime.api("PUT", "/variables/late", json={"type": "number", "value": 9}).is_success
+    assert runtime.api("GET", "/variables/late").json()["value"] == 9
 
 
 def test_unknown_api_prefix_is_a_json_404(runtime: Runtime) -> None:
