@@ -33,7 +33,14 @@ def _service(args: argparse.Namespace) -> int:
     settings = settings_from_env()
     if args.data_dir is not None:
         settings = settings.model_copy(update={"data_dir": args.data_dir})
-    run_service(args.name, fd=args.fd, host=args.host, port=args.port, settings=settings)
+    run_service(
+        args.name,
+        fd=args.fd,
+        host=args.host,
+        port=args.port,
+        settings=settings,
+        public_fd=args.public_fd,
+    )
     return 0
 
 
@@ -87,6 +94,9 @@ def parser() -> argparse.ArgumentParser:
 
     service.add_argument("name", choices=sorted(ALL_SERVICES))
     service.add_argument("--fd", type=int, default=None, help="inherited listening socket")
+    service.add_argument(
+        "--public-fd", type=int, default=None, help="inherited public socket (jog: its socket)"
+    )
     service.add_argument("--host", default="127.0.0.1")
     service.add_argument("--port", type=int, default=None)
     service.add_argument("--data-dir", type=Path, default=None)

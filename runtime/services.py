@@ -11,6 +11,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from fastapi import FastAPI
+from starlette.responses import PlainTextResponse
+from starlette.types import ASGIApp, Receive, Scope, Send
 
 from runtime.kit.logs import setup_logging
 from runtime.kit.serve import listening_socket, run_app
@@ -26,12 +28,15 @@ class ServiceSpec:
     name: str
     factory: str  # "module:function" that builds the app from (settings, service urls)
     prefixes: tuple[str, ...] = ()
+    # Paths also served to browsers on a public port of the service's own (none: only
+    # through the webui).
+    public_paths: tuple[str, ...] = ()
 
 
 SERVICES: tuple[ServiceSpec, ...] = (
     ServiceSpec("variable_storage", "runtime.variable_storage.service:build_app", ("variables",)),
     ServiceSpec("device_manager", "runtime.device_manager.service:build_app", ("devices",)),
-    ServiceSpec("jog", "runtime.jog.service:build_app", ("jog",)),
+    ServiceSpec("jog", "runtime.jog.service:build_app", ("jog",), public_paths=("/jog/ws",)),
     ServiceSpec("motion", "runtime.motion.service:build_app", ("motion",)),
     ServiceSpec("program", "runtime.program.service:build_app", ("programs",)),
 )
@@ -60,11 +65,39 @@ def run_service(
     host: str,
     port: int | None,
     settings: RuntimeSettings | None = None,
+    public_fd: int | None = None,
 ) -> None:
-    """Run one service in this process, on an inherited socket or a port of its own."""
+    """Run one service in this process, on an inherited socket or a port of its own, and on
+    its public socket (inherited) if it has one."""
     spec = ALL_SERVICES[name]
     settings = settings or settings_from_env()
     setup_logging(name, settings.log_level)
-    app = load_factory(spec)(settings, urls_from_env())
+    app: ASGIApp = load_factory(spec)(settings, urls_from_env())
     sock = socket.socket(fileno=fd) if fd is not None else listening_socket(host, port or 0)
-    run_app(app, sock)
+    sockets = [sock]
+    if public_fd is not None and spec.public_paths:
+        public = socket.socket(fileno=public_fd)
+        app = PublicPaths(app, int(public.getsockname()[1]), spec.public_paths)
+        sockets.append(public)
+    run_app(app, *sockets)
+
+
+class PublicPaths:
+    """On the public port only the service's public paths answer; the rest of its API is
+    reached through the webui, as every other service's."""
+
+    def __init__(self, app: ASGIApp, port: int, paths: tuple[str, ...]) -> None:
+        self.app = app
+        self.port = port
+        self.paths = set(paths)
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        server = scope.get("server")
+        on_public = server is not None and server[1] == self.port
+        if scope["type"] != "lifespan" and on_public and scope.get("path") not in self.paths:
+            if scope["type"] == "websocket":
+                await send({"type": "websocket.close", "code": 1008})
+            else:
+                await PlainTextResponse("not found", status_code=404)(scope, receive, send)
+            return
+        await self.app(scope, receive, send)

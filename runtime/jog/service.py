@@ -28,13 +28,20 @@ LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 
 
 def jog_router(
-    directory: Directory, storage: StorageClient, deadman: float, paths: PathCheck
+    directory: Directory,
+    storage: StorageClient,
+    deadman: float,
+    paths: PathCheck,
+    socket_port: int | None = None,
 ) -> APIRouter:
     router = APIRouter(prefix="/jog")
 
     @router.get("/settings")
     async def settings() -> dict[str, Any]:
         return {
+            # Where the UI opens its hold-to-run socket: the jog service's own port on the
+            # UI's host, at /jog/ws (none: through the webui, /api/jog/ws).
+            "socket_port": socket_port,
             "deadman_ms": round(deadman * 1000),
             "joint_speed": JOINT_SPEED,
             "linear_speed": LINEAR_SPEED,
@@ -147,6 +154,8 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
 
     app = create_app("jog", lifespan=lifespan)
     paths = PathCheck(motion)
-    app.include_router(jog_router(directory, storage, settings.deadman_seconds, paths))
+    app.include_router(
+        jog_router(directory, storage, settings.deadman_seconds, paths, settings.jog_port or None)
+    )
     app.include_router(avoidance_router(mirror))
     return app

@@ -6,7 +6,7 @@ from __future__ import annotations
 import socket
 
 import uvicorn
-from fastapi import FastAPI
+from starlette.types import ASGIApp
 
 
 def listening_socket(host: str, port: int) -> socket.socket:
@@ -19,7 +19,7 @@ def listening_socket(host: str, port: int) -> socket.socket:
     return sock
 
 
-def run_app(app: FastAPI, sock: socket.socket) -> None:
+def run_app(app: ASGIApp, *sockets: socket.socket) -> None:
     config = uvicorn.Config(
         app,
         log_config=None,
@@ -29,4 +29,4 @@ def run_app(app: FastAPI, sock: socket.socket) -> None:
         ws_ping_interval=5.0,
         ws_ping_timeout=5.0,
     )
-    uvicorn.Server(config).run(sockets=[sock])
+    uvicorn.Server(config).run(sockets=list(sockets))

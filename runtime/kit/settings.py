@@ -61,6 +61,9 @@ class RuntimeSettings(BaseSettings):
 
     host: str = "127.0.0.1"
     port: int = Field(default=8080, ge=0, le=65535)
+    # The hold-to-run socket's own port (0: any free one; the UI asks /api/jog/settings):
+    # heartbeats go straight to the jog service, never queued behind the gateway's HTTP.
+    jog_port: int = Field(default=0, ge=0, le=65535)
     data_dir: Path = Field(default_factory=default_data_dir)
     log_dir: Path | None = None
     log_level: Literal["debug", "info", "warning", "error"] = "info"

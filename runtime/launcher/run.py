@@ -29,15 +29,24 @@ class StartupFailed(RuntimeError):
 
 
 def _service_child(
-    name: str, sock: socket.socket, env: dict[str, str], settings: RuntimeSettings
+    name: str,
+    sock: socket.socket,
+    env: dict[str, str],
+    settings: RuntimeSettings,
+    public: socket.socket | None = None,
 ) -> Child:
     fd = sock.fileno()
+    argv = [sys.executable, "-m", "runtime.cli", "service", name, "--fd", str(fd)]
+    fds = [fd]
+    if public is not None:
+        argv += ["--public-fd", str(public.fileno())]
+        fds.append(public.fileno())
     return Child(
         name=name,
-        argv=[sys.executable, "-m", "runtime.cli", "service", name, "--fd", str(fd)],
+        argv=argv,
         env=env,
         log_path=settings.logs / f"{name}.log",
-        pass_fds=(fd,),
+        pass_fds=tuple(fds),
     )
 
 
@@ -104,6 +113,17 @@ def run(settings: RuntimeSettings) -> int:
     sockets = {spec.name: listening_socket("127.0.0.1", 0) for spec in SERVICES}
     urls = {name: f"http://127.0.0.1:{s.getsockname()[1]}" for name, s in sockets.items()}
     public_port = public.getsockname()[1]
+    try:
+        jog_public = listening_socket(settings.host, settings.jog_port)
+    except OSError as exc:
+        print(
+            f"openpendant: cannot listen on {settings.host}:{settings.jog_port} for the jog "
+            f"socket: {exc.strerror}. Choose another port with jog_port.",
+            file=sys.stderr,
+        )
+        return 1
+    # Kept by the launcher like the others: the port survives a restart of the jog service.
+    settings = settings.model_copy(update={"jog_port": int(jog_public.getsockname()[1])})
     env = process_env({**settings_for_child(settings), URLS_ENV: json.dumps(urls)})
 
     supervisor = Supervisor()
@@ -115,7 +135,8 @@ def run(settings: RuntimeSettings) -> int:
     signal.signal(signal.SIGTERM, on_signal)
 
     for spec in SERVICES:
-        supervisor.add(_service_child(spec.name, sockets[spec.name], env, settings))
+        public_socket = jog_public if spec.public_paths else None
+        supervisor.add(_service_child(spec.name, sockets[spec.name], env, settings, public_socket))
     supervisor.add(_service_child(WEBUI.name, public, env, settings))
     for child in _sim_children(settings, env):
         supervisor.add(child)

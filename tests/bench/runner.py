@@ -17,7 +17,16 @@ from typing import Any
 
 from tests.bench.stats import cpu_times, steal_percent
 
-MODULES = ("discovery", "state_push", "sim_loop", "cold_start", "jog", "motion", "program")
+MODULES = (
+    "discovery",
+    "state_push",
+    "sim_loop",
+    "cold_start",
+    "jog",
+    "jog_load",
+    "motion",
+    "program",
+)
 
 
 @dataclass

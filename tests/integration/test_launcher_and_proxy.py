@@ -111,6 +111,21 @@ def test_a_write_the_gateway_gave_up_on_is_never_applied_later(runtime: Runtime)
     assert runtime.api("GET", "/variables/late").json()["value"] == 9
 
 
+def test_the_jog_socket_has_a_port_of_its_own_that_serves_nothing_else(
+    runtime: Runtime,
+) -> None:
+    """Hold-to-run bypasses the gateway (no HTTP load can hold a heartbeat back); the port
+    answers only the jog socket. Through the gateway the socket still works for scripts."""
+    port = runtime.api("GET", "/jog/settings").json()["socket_port"]
+    assert port and port != runtime.port
+    for path in ("/jog/settings", "/health", "/jog/robots/robot/halt", "/docs"):
+        assert httpx.get(f"http://127.0.0.1:{port}{path}").status_code == 404, path
+    for url in (f"ws://127.0.0.1:{port}/jog/ws", runtime.url.replace("http", "ws") + "/api/jog/ws"):
+        with connect(url) as ws:
+            ws.send(json.dumps({"type": "nonsense"}))
+            assert json.loads(ws.recv(timeout=5))["error"]["code"] == "bad_message"
+
+
 def test_unknown_api_prefix_is_a_json_404(runtime: Runtime) -> None:
     response = runtime.api("GET", "/nonsense/thing")
     assert response.status_code == 404

@@ -17,11 +17,24 @@ _presses = itertools.count(1)
 
 
 class JogClient:
-    def __init__(self, runtime: Runtime, robot: str = "robot", token: str | None = None) -> None:
+    """The jog socket where the UI opens it: the jog service's own port (or, with
+    `via_gateway`, through the webui at /api/jog/ws)."""
+
+    def __init__(
+        self,
+        runtime: Runtime,
+        robot: str = "robot",
+        token: str | None = None,
+        via_gateway: bool = False,
+    ) -> None:
         self.runtime = runtime
         self.robot = robot
         self.token = token
-        self._socket = connect(runtime.url.replace("http", "ws") + "/api/jog/ws")
+        url = runtime.url.replace("http", "ws") + "/api/jog/ws"
+        port = runtime.api("GET", "/jog/settings").json()["socket_port"]
+        if port and not via_gateway:
+            url = f"ws://127.0.0.1:{port}/jog/ws"
+        self._socket = connect(url)
         self.ws: ClientConnection = self._socket.__enter__()
         self.messages: list[dict[str, Any]] = []
 

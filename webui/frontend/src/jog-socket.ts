@@ -1,4 +1,5 @@
 import { changeHeld } from "./activity";
+import { api } from "./api";
 import { socketUrl } from "./socket";
 
 // The jog socket: hold-to-run presses with heartbeats, releases, stops and 3D-mouse
@@ -20,6 +21,23 @@ export type JogMessage =
   | { type: "error"; error: { code: string; message: string } };
 
 let counter = 0;
+let direct: string | null = null;
+
+// Hold-to-run goes straight to the jog service's own port when it has one: heartbeats must
+// never wait behind the gateway's HTTP traffic. Through the gateway otherwise.
+async function jogSocketUrl(): Promise<string> {
+  if (direct) return direct;
+  try {
+    const settings = await api<{ socket_port: number | null }>("GET", "/api/jog/settings");
+    if (settings.socket_port) {
+      direct = socketUrl("/jog/ws", settings.socket_port);
+      return direct;
+    }
+  } catch {
+    // the runtime is not answering yet: the connection attempt will fail and retry
+  }
+  return socketUrl("/api/jog/ws");
+}
 
 export class JogSocket extends EventTarget {
   online = false;
@@ -29,10 +47,19 @@ export class JogSocket extends EventTarget {
   private frame = 0;
   private backup = 0;
   private closed = false;
+  private connecting = false;
 
   connect(): void {
-    if (this.socket || this.closed) return;
-    const socket = new WebSocket(socketUrl("/api/jog/ws"));
+    if (this.socket || this.closed || this.connecting) return;
+    this.connecting = true;
+    void jogSocketUrl().then((url) => {
+      this.connecting = false;
+      if (!this.socket && !this.closed) this.open(url);
+    });
+  }
+
+  private open(url: string): void {
+    const socket = new WebSocket(url);
     this.socket = socket;
     socket.onopen = () => {
       this.online = true;

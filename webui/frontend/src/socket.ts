@@ -1,9 +1,10 @@
 // WebSockets to the runtime: the URL for a path on this page's host, the wait before a
 // dropped socket tries again (doubling from 0.5 s, at most 5 s), and a socket that does so.
 
-export function socketUrl(path: string): string {
+export function socketUrl(path: string, port?: number): string {
   const scheme = location.protocol === "https:" ? "wss" : "ws";
-  return `${scheme}://${location.host}${path}`;
+  const host = port ? `${location.hostname}:${port}` : location.host;
+  return `${scheme}://${host}${path}`;
 }
 
 export function retryDelay(attempt: number): number {
