@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
 from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
@@ -81,7 +82,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
         results = await asyncio.gather(
             *(service_health(proxy.http, name, urls[name]) for name in names if name in urls)
         )
-        services: dict[str, Any] = {"webui": {"status": "ok"}}
+        services: dict[str, Any] = {"webui": {"status": "ok", "pid": os.getpid()}}
         services.update(dict(zip([n for n in names if n in urls], results, strict=True)))
         missing = [n for n in names if n not in urls]
         for name in missing:

@@ -373,17 +373,19 @@ class DeviceRegistry:
             {"type": "devices", "devices": [d.model_dump() for d in self.added_list()]}
         )
 
+    # Both lists are whole snapshots: a newer one replaces one not yet sent (keyed), so a
+    # slow client is never behind by more than one of each.
     def _publish_detected(self) -> None:
         if self.fanout.subscribers or self.events.subscribers:
             message = self._detected_message()
-            self.fanout.publish(message)
-            self.events.publish(message)
+            self.fanout.publish(message, key="detected")
+            self.events.publish(message, key="detected")
 
     def _publish_devices(self) -> None:
         if self.fanout.subscribers or self.events.subscribers or self.links.clients:
             message = self.devices_message()
-            self.fanout.publish(message)
-            self.events.publish(message)
+            self.fanout.publish(message, key="devices")
+            self.events.publish(message, key="devices")
             self.links.on_devices(message)
 
 

@@ -36,11 +36,16 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
         return registry.detected_list()
 
     @router.websocket("/ws")
-    async def live(ws: WebSocket, max_rate: float | None = None, states: bool = True) -> None:
+    async def live(
+        ws: WebSocket, max_rate: float | None = None, states: bool = True, batch: bool = False
+    ) -> None:
         """Detected list, added devices with status, and (unless states=false) every
-        device's state, pushed."""
+        device's state, pushed. `batch`: frames of all that changed, each acknowledged by
+        the client (`{"type": "ack"}`) before more come (the UI: once per drawn frame)."""
         fanout = registry.fanout if states else registry.events
-        await fanout.serve(ws, registry.snapshot_messages(states), max_rate_hz=max_rate)
+        await fanout.serve(
+            ws, registry.snapshot_messages(states), max_rate_hz=max_rate, acked=batch
+        )
 
     @router.websocket("/_links")
     async def links(ws: WebSocket) -> None:

@@ -14,6 +14,28 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from runtime.kit.errors import OpenPendantError
 
+ACK = '{"type":"ack"}'
+ACK_WINDOW = 2  # frames a client may have unacknowledged
+
+
+class Credit:
+    """Frames a client may still be sent before it acknowledges one."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self.left = limit
+        self._given = asyncio.Event()
+
+    async def take(self) -> None:
+        while self.left == 0:
+            self._given.clear()
+            await self._given.wait()
+        self.left -= 1
+
+    def give(self) -> None:
+        self.left = min(self.limit, self.left + 1)  # an ack too many gives nothing
+        self._given.set()
+
 
 class OutboxOverflow(Exception):
     """A subscriber fell too far behind on messages that must not be dropped."""
@@ -75,34 +97,52 @@ class Fanout:
         *,
         max_rate_hz: float | None = None,
         on_message: Callable[[Any], Awaitable[None]] | None = None,
+        acked: bool = False,
     ) -> None:
-        """Accept the socket and pump messages until either side closes."""
+        """Accept the socket and pump messages until either side closes. `acked`: each
+        frame is a JSON array of the messages gathered since the last, and the next frame
+        goes only when the client has acknowledged one (`{"type": "ack"}`) of the last
+        ACK_WINDOW: a client gets states as fast as it takes them (a browser, once per frame
+        it draws), and what it cannot take is conflated, never queued."""
         await ws.accept()
         sub = Subscriber(max_rate_hz=max_rate_hz)
         for text in initial:
             sub.push(text)
         self.subscribers.add(sub)
         try:
-            await _pump(ws, sub, on_message)
+            await _pump(ws, sub, on_message, acked)
         finally:
             self.subscribers.discard(sub)
 
 
 async def _pump(
-    ws: WebSocket, sub: Subscriber, on_message: Callable[[Any], Awaitable[None]] | None
+    ws: WebSocket,
+    sub: Subscriber,
+    on_message: Callable[[Any], Awaitable[None]] | None,
+    acked: bool = False,
 ) -> None:
+    credit = Credit(ACK_WINDOW)
+
     async def send_loop() -> None:
         while True:
+            if acked:
+                await credit.take()
             batch = await sub.next_batch()
             started = time.monotonic()
-            for text in batch:
-                await ws.send_text(text)
+            if acked:
+                await ws.send_text("[" + ",".join(batch) + "]")
+            else:
+                for text in batch:
+                    await ws.send_text(text)
             if sub.min_interval:
                 await asyncio.sleep(max(0.0, sub.min_interval - (time.monotonic() - started)))
 
     async def receive_loop() -> None:
         while True:
             text = await ws.receive_text()
+            if acked and text == ACK:
+                credit.give()
+                continue
             if on_message is None:
                 continue
             try:

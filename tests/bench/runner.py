@@ -26,6 +26,7 @@ MODULES = (
     "jog_load",
     "motion",
     "program",
+    "scale",
 )
 
 

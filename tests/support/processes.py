@@ -66,14 +66,19 @@ def wait_for(
 class Proc:
     """A child process whose stdout lines are collected by a reader thread."""
 
-    def __init__(self, argv: list[str], env: dict[str, str], log_path: Path) -> None:
+    def __init__(self, argv: list[str], env: dict[str, str], log_path: Path, nice: int = 0) -> None:
         self.argv = argv
         self.log_path = log_path
         log_path.parent.mkdir(parents=True, exist_ok=True)
         self._log = log_path.open("ab")
         self.lines: queue.Queue[str] = queue.Queue()
         self.popen = subprocess.Popen(
-            argv, env=env, stdout=subprocess.PIPE, stderr=self._log, stdin=subprocess.DEVNULL
+            argv,
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=self._log,
+            stdin=subprocess.DEVNULL,
+            preexec_fn=(lambda: os.nice(nice)) if nice else None,
         )
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
@@ -189,6 +194,7 @@ class SimRobotProc(Proc):
         port: int = 0,
         extra: list[str] | None = None,
         env: dict[str, str] | None = None,
+        nice: int = 0,
     ) -> None:
         argv = [
             sys.executable,
@@ -204,7 +210,10 @@ class SimRobotProc(Proc):
             *(extra or []),
         ]
         super().__init__(
-            argv, child_env(home, **(env or {})), home / "logs" / f"sim-{name}-{port}.log"
+            argv,
+            child_env(home, **(env or {})),
+            home / "logs" / f"sim-{name}-{port}.log",
+            nice=nice,
         )
         self.url = ""
         self.uuid = ""

@@ -4,17 +4,18 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import time
 
 import pytest
-from fastapi import FastAPI
+from fastapi import FastAPI, WebSocket
 from fastapi.testclient import TestClient
 
 from runtime.interfaces.common import Pose, Strict
 from runtime.kit.app import create_app
 from runtime.kit.errors import Conflict
 from runtime.kit.request_start import received_at, stamp
-from runtime.kit.websocket import OutboxOverflow, Subscriber
+from runtime.kit.websocket import Fanout, OutboxOverflow, Subscriber
 
 
 class Body(Strict):
@@ -143,3 +144,31 @@ def test_the_request_start_stamp_is_read_only_when_it_is_a_recent_time() -> None
     assert received_at(stamp()) == pytest.approx(now, abs=1.0)
     for bad in (None, "", "soon", "nan", "inf", "1", str(now + 3600), str(now - 3600)):
         assert received_at(bad) is None, bad
+
+
+def test_an_acknowledged_feed_sends_no_more_than_its_client_takes() -> None:
+    """A client that stops acknowledging gets two frames and then nothing more; meanwhile the
+    states conflate, so its next frame, after an ack, holds only the newest one."""
+    fanout = Fanout()
+    app = FastAPI()
+
+    @app.websocket("/feed")
+    async def feed(ws: WebSocket) -> None:
+        await fanout.serve(ws, acked=True)
+
+    with TestClient(app) as client, client.websocket_connect("/feed") as ws:
+        deadline = time.monotonic() + 2
+        while not fanout.subscribers:
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        frames = []
+        for i in range(3):
+            fanout.publish(json.dumps({"n": i}), key="state")
+            if i < 2:
+                frames.append(json.loads(ws.receive_text()))
+        for i in range(3, 50):
+            fanout.publish(json.dumps({"n": i}), key="state")
+        time.sleep(0.1)
+        ws.send_text('{"type":"ack"}')
+        frames.append(json.loads(ws.receive_text()))
+    assert frames == [[{"n": 0}], [{"n": 1}], [{"n": 49}]]

@@ -1,5 +1,8 @@
 // One WebSocket to the device manager: detected devices, added devices with their status,
 // and the live state of each. Reconnects by itself; views re-render once per frame at most.
+// The runtime sends frames of everything that changed and the next ones only when this
+// page acknowledges them, once per frame it draws: states come as fast as this device can
+// show them, and what it cannot show is dropped at the runtime, never queued here.
 
 import type { ReactiveController, ReactiveControllerHost } from "lit";
 import { retryDelay, socketUrl } from "./socket";
@@ -19,8 +22,9 @@ export class DeviceFeed extends EventTarget {
   private socket: WebSocket | null = null;
   private frame = 0;
   private retry = 0;
+  private unacked = 0;
 
-  constructor(private readonly path = "/api/devices/ws?max_rate=30") {
+  constructor(private readonly path = "/api/devices/ws?batch=1") {
     super();
   }
 
@@ -44,10 +48,15 @@ export class DeviceFeed extends EventTarget {
       this.retry = 0;
       this.changed();
     };
-    socket.onmessage = (event) => this.receive(event.data as string);
+    socket.onmessage = (event) => {
+      this.unacked++;
+      this.receive(event.data as string);
+      this.changed(); // the acknowledgement goes with the next drawn frame
+    };
     socket.onclose = () => {
       this.socket = null;
       this.online = false;
+      this.unacked = 0;
       this.states.clear();
       this.changed();
       window.setTimeout(() => this.start(), retryDelay(this.retry++));
@@ -55,12 +64,17 @@ export class DeviceFeed extends EventTarget {
   }
 
   private receive(text: string): void {
-    let message: Message;
+    let messages: Message[];
     try {
-      message = JSON.parse(text) as Message;
+      const parsed = JSON.parse(text) as Message | Message[];
+      messages = Array.isArray(parsed) ? parsed : [parsed];
     } catch {
       return;
     }
+    for (const message of messages) this.apply(message);
+  }
+
+  private apply(message: Message): void {
     switch (message.type) {
       case "detected":
         this.detected = message.detected;
@@ -78,7 +92,6 @@ export class DeviceFeed extends EventTarget {
       default:
         return;
     }
-    this.changed();
   }
 
   private changed(): void {
@@ -86,6 +99,9 @@ export class DeviceFeed extends EventTarget {
     this.frame = requestAnimationFrame(() => {
       this.frame = 0;
       this.dispatchEvent(new Event("change"));
+      for (; this.unacked > 0; this.unacked--) {
+        if (this.socket?.readyState === WebSocket.OPEN) this.socket.send('{"type":"ack"}');
+      }
     });
   }
 }

@@ -1,0 +1,63 @@
+"""UI clients of the device feed, as browsers hold it (/api/devices/ws?batch=1 through the
+webui, each frame acknowledged at the next 60 Hz display frame), from a process of their
+own: python -m tests.bench.ui_clients URL CLIENTS SECONDS
+
+Prints one JSON line: per client, the states received per device, and every state's age at
+arrival (ms: arrival time minus the driver's own timestamp; same machine, same clock)."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import re
+import sys
+import time
+from collections import defaultdict
+
+import websockets
+
+STATE = re.compile(r'"device":"([^"]+)","ts":[^,]+,"state":\{"seqno":\d+,"ts":([-+0-9.eE]+)')
+DISPLAY = 1 / 60  # s per frame a browser draws
+ACK = '{"type":"ack"}'
+
+
+async def client(url: str, seconds: float) -> tuple[dict[str, int], list[float]]:
+    counts: dict[str, int] = defaultdict(int)
+    ages: list[float] = []
+    async with websockets.connect(url, max_size=2**24) as ws:
+        unacked = 0
+
+        async def display() -> None:
+            nonlocal unacked
+            while True:
+                await asyncio.sleep(DISPLAY)
+                for _ in range(unacked):
+                    await ws.send(ACK)
+                unacked = 0
+
+        drawing = asyncio.create_task(display())
+        start = time.monotonic() + 1.0  # every client has joined
+        end = start + seconds
+        try:
+            while time.monotonic() < end:
+                frame = await ws.recv()
+                now = time.time()
+                unacked += 1
+                if time.monotonic() < start:
+                    continue
+                text = frame if isinstance(frame, str) else frame.decode()
+                for device, ts in STATE.findall(text):
+                    counts[device] += 1
+                    ages.append((now - float(ts)) * 1000.0)
+        finally:
+            drawing.cancel()
+    return counts, ages
+
+
+async def main(url: str, clients: int, seconds: float) -> None:
+    results = await asyncio.gather(*(client(url, seconds) for _ in range(clients)))
+    print(json.dumps([{"counts": c, "ages": a} for c, a in results]), flush=True)
+
+
+if __name__ == "__main__":
+    asyncio.run(main(sys.argv[1], int(sys.argv[2]), float(sys.argv[3])))
