@@ -9,7 +9,7 @@ from pathlib import Path
 import httpx
 from playwright.sync_api import BrowserContext, expect
 
-from tests.browser.conftest import PageErrors, fits_the_screen
+from tests.browser.conftest import PageErrors, add_robot, fits_the_screen
 from tests.support.processes import Runtime, SimRobotProc
 
 
@@ -80,6 +80,39 @@ def test_a_hostile_device_name_is_shown_as_text(
         assert page.locator("img[src=x]").count() == 0
     finally:
         sim.stop()
+
+
+def test_another_device_claiming_an_added_robot_is_shown_and_not_followed(
+    runtime: Runtime, tablet: BrowserContext, tmp_path: Path, artifacts: Path
+) -> None:
+    add_robot(runtime)
+    real = runtime.api("GET", "/devices/robot").json()
+    impostor = SimRobotProc(tmp_path, name="sim-ur5", extra=["--uuid", real["uuid"]])
+    try:
+        impostor.wait_ready()
+        page = tablet.new_page()
+        errors = PageErrors(page)
+        page.goto(f"{runtime.url}/#/devices")
+        card = page.get_by_test_id("device-card").filter(has_text="robot")
+        notice = card.get_by_test_id("device-claim")
+        expect(notice).to_be_visible(timeout=15_000)
+        try:
+            expect(notice).to_contain_text(impostor.url)
+        except AssertionError:  # seen once, not reproduced in 12 runs: say what was shown
+            claim = runtime.api("GET", "/devices/robot").json()["address_claim"]
+            print(f"shown {notice.inner_text()!r}; claim {claim}; real {real['url']}")
+            raise
+        expect(notice).to_contain_text("not followed")
+        expect(card.get_by_test_id("device-status")).to_have_text("Connected")
+        page.screenshot(path=artifacts / "claim.png")
+        card.get_by_test_id("repoint-device").tap()
+        expect(page.get_by_test_id("confirm-repoint")).to_be_visible()
+        page.get_by_role("button", name="Cancel").tap()
+        assert runtime.api("GET", "/devices/robot").json()["url"] == real["url"]
+        assert errors.errors == []
+    finally:
+        impostor.stop()
+        runtime.api("DELETE", "/devices/robot")
 
 
 def test_phone_layout_has_big_targets_and_no_sideways_scroll(

@@ -92,12 +92,37 @@ def start_slow_move(cell: Cell) -> dict[str, Any]:
     return status
 
 
-def test_a_killed_motion_service_halts_its_move(ready: Cell) -> None:
-    start_slow_move(ready)
+def start_slow_program(cell: Cell, name: str) -> None:
+    source = f"set_speed(10)\nmove_joint({FAR_DEGREES!r})\nprint('arrived')"
+    saved = cell.runtime.api("PUT", f"/programs/{name}", json={"python": source})
+    assert saved.status_code == 200, saved.text
+    body = {"leases": {"robot": cell.token}, "robot": "robot"}
+    started = cell.runtime.api("POST", f"/programs/{name}/run", json=body)
+    assert started.status_code == 202, started.text
+    wait_for(lambda: moving(cell), 10, what="the robot moving")
+    time.sleep(0.3)
+
+
+def run_failed(cell: Cell, name: str) -> dict[str, Any]:
+    def ended() -> dict[str, Any] | None:
+        status: dict[str, Any] = cell.runtime.api("GET", f"/programs/{name}/status").json()
+        return None if status["state"] in ("starting", "running", "paused") else status
+
+    status = wait_for(ended, 20, what="the run to end")
+    assert status["state"] == "error", status
+    assert status["error"]["message"]
+    assert all(o["text"] != "arrived" for o in status["output"])
+    return status
+
+
+def test_a_killed_motion_service_halts_its_move_and_the_run_fails(ready: Cell) -> None:
+    start_slow_program(ready, "through_motion")
     before = ready.robot.last_command_seq()
     killed = kill(ready, "motion")
     assert halted_after(ready, killed, before) < HALT_WITHIN
     assert_stays_still(ready)
+    failed = run_failed(ready, "through_motion")
+    print("run failed with:", failed["error"]["message"])
 
 
 def test_a_killed_jog_service_halts_a_held_jog(ready: Cell) -> None:
@@ -115,6 +140,16 @@ def test_a_killed_jog_service_halts_a_held_jog(ready: Cell) -> None:
     finally:
         jog.close()
     assert_stays_still(ready)
+
+
+def test_a_killed_device_manager_halts_a_program_and_the_run_fails(ready: Cell) -> None:
+    start_slow_program(ready, "on_the_link")
+    before = ready.robot.last_command_seq()
+    killed = kill(ready, "device_manager")
+    assert halted_after(ready, killed, before) < HALT_WITHIN
+    assert_stays_still(ready)
+    failed = run_failed(ready, "on_the_link")
+    print("run failed with:", failed["error"]["message"])
 
 
 def test_a_killed_device_manager_halts_a_move_and_the_move_fails(ready: Cell) -> None:
