@@ -39,6 +39,9 @@ MAX_QUEUED = 1000  # commands waiting for a slow link: more means it is not a li
 MAX_ROUTED = 4096  # recent command ids whose refusals go back to their sender
 
 Refusal = Callable[[dict[str, Any]], None]
+# Generations count up from this process's start time (ms), so a restarted device manager
+# never hands out a generation a service could still hold from before.
+GENERATION_BASE = int(time.time() * 1000)
 
 
 class WrongDevice(Exception):
@@ -70,7 +73,8 @@ class DeviceConnection:
         self.connected_since: float | None = None
         self.info: dict[str, Any] | None = None
         self.last_state: str | None = None
-        self.generation = 0  # one per session: a new session continues nothing of the old
+        # One per session: a new session continues nothing of the old.
+        self.generation = GENERATION_BASE
         self.freshness = Freshness()
         self._on_state = on_state
         self._on_status = on_status

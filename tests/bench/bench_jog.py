@@ -1,7 +1,8 @@
 """Hold-to-run timing, measured where it matters, at the driver (its command log):
 
 - deadman: the client's last heartbeat → the halt the driver received (window included);
-- command latency: a press sent to the webui → the first jog command the driver received;
+- command latency: a press sent on the jog socket (as the UI does) → the first jog command
+  the driver received;
 - the Cartesian jog step (kinematics + QP), in-process.
 
 Client and driver run on this machine, so their wall clocks agree."""
@@ -122,8 +123,9 @@ def run() -> list[Figure]:
                 "trials": trials,
                 "max": max(command),
                 "within_target": round(sum(c <= 5 for c in command) / len(command), 3),
-                "measured": "press sent to the webui → first command logged by the driver "
-                "(through webui, jog service, driver command stream)",
+                "measured": "press sent on the jog socket (the jog service's own port, as "
+                "the UI) → first command logged by the driver (through the jog service and "
+                "the device manager's link)",
             },
         ),
         Figure("jog_command_latency_p50", percentile(command, 50), "ms"),
