@@ -69,10 +69,13 @@ def finish(cell: Cell, status: dict[str, Any]) -> dict[str, Any]:
 
 
 def setpoints_during(cell: Cell, request: dict[str, Any]) -> np.ndarray[Any, Any]:
+    before = int(cell.robot.state()["seqno"])
     status = start(cell, request)
     # The trajectory began a moment ago (planning, which can take a while, came first): the
-    # history from 0.2 s back holds all of it, and a little rest before.
-    after = int(cell.robot.state()["seqno"]) - 100
+    # history from 0.2 s back holds all of it, and a little rest before. But not from before
+    # the request: when planning was quick, those 0.2 s reach back into the end of the
+    # previous move (the fixture's move home, up to 0.85 mm off a line through home).
+    after = max(before, int(cell.robot.state()["seqno"]) - 100)
     rows: list[list[float]] = []
 
     def collect() -> None:
@@ -141,7 +144,7 @@ def test_move_linear_stays_on_the_line(ready: Cell) -> None:
         np.linalg.norm(np.cross(KINEMATICS.tcp(q).translation - start.translation, direction))
         for q in positions
     )
-    assert worst < 0.5e-3
+    assert worst < 0.5e-3, f"{worst * 1e3:.3f} mm off the line"
     reached = KINEMATICS.tcp(ready.robot.q())
     assert np.linalg.norm(reached.translation - goal.translation) < 1e-4
     assert np.linalg.norm(pin.log3(reached.rotation.T @ goal.rotation)) < 1e-4
