@@ -165,7 +165,10 @@ class LinkServer:
                 except ValueError:
                     client.push_event(_error(None, "bad_message", "a message is a JSON object"))
                     continue
-                self._handle(client, message)
+                try:
+                    self._handle(client, message)
+                except (ValueError, TypeError, KeyError) as exc:
+                    client.push_event(_error(message.get("ref"), "bad_message", str(exc)[:200]))
 
     def _handle(self, client: LinkClient, message: dict[str, Any]) -> None:
         op = message.get("op")

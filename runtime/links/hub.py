@@ -32,7 +32,6 @@ CALL_TIMEOUT = 10.0
 RETRY = 0.2
 LINK_FAULTS = ("link_stale", "link_changed", "device_disconnected", "device_not_found")
 
-Listener = Callable[["DeviceView"], None]
 Refusal = Callable[[dict[str, Any]], None]
 
 
@@ -52,7 +51,6 @@ class DeviceView:
     freshness: Freshness = field(default_factory=Freshness)
     ready: asyncio.Event = field(default_factory=asyncio.Event)
     on_refused: Refusal | None = None
-    listeners: list[Listener] = field(default_factory=list)
 
 
 class LinkHub:
@@ -198,9 +196,14 @@ class LinkHub:
                     async for frame in ws:
                         text = frame if isinstance(frame, str) else frame.decode()
                         for line in text.split("\n"):
-                            self._line(line)
+                            try:
+                                self._line(line)
+                            except (ValueError, KeyError, TypeError) as exc:
+                                log.warning("bad line on the link socket (%s): %.80s", exc, line)
             except (OSError, websockets.WebSocketException, TimeoutError) as exc:
                 log.info("link socket to the device manager dropped: %s", exc)
+            except Exception:  # the links must come back whatever went wrong
+                log.exception("link socket to the device manager failed")
             finally:
                 self._lost()
             await asyncio.sleep(RETRY)
@@ -283,5 +286,3 @@ class LinkHub:
         if view.status != "connected":
             view.text, view.parsed = None, None
             view.ready.clear()
-        for listener in list(view.listeners):
-            listener(view)

@@ -14,6 +14,7 @@ from typing import Any
 
 import httpx
 import pytest
+from websockets.sync.client import connect
 from zeroconf import ServiceInfo, Zeroconf
 
 from runtime.kit.discovery import SERVICE_TYPE
@@ -223,3 +224,35 @@ def test_a_device_can_be_re_pointed_by_the_user_and_an_impostor_is_refused(
         for proc in (first, second, other):
             proc.stop()
         runtime.api("DELETE", "/devices/mover")
+
+
+def test_malformed_link_socket_messages_are_refused_and_the_socket_stays(
+    runtime: Runtime,
+) -> None:
+    """The device manager's link socket (for services) answers bad messages with a refusal
+    and keeps serving."""
+    base = runtime.api("GET", "/health").json()["services"]["device_manager"]["url"]
+    with connect(base.replace("http://", "ws://") + "/devices/_links") as ws:
+        bad = [
+            "not json",
+            "[1, 2]",
+            json.dumps({"op": "teleport"}),
+            json.dumps({"op": "send", "device": "nobody", "command": {"type": "halt"}}),
+            json.dumps({"op": "claim", "device": "nobody", "gen": "x"}),
+            json.dumps({"op": "call", "ref": 7, "device": "nobody", "gen": 1, "path": "x"}),
+            json.dumps({"op": "send", "device": "nobody", "gen": 1, "command": {"type": "x"}}),
+        ]
+        for message in bad:
+            ws.send(message)
+        refusals: list[dict[str, Any]] = []
+        deadline = time.monotonic() + 5
+        while len(refusals) < len(bad) - 1 and time.monotonic() < deadline:
+            for line in str(ws.recv(timeout=5)).split("\n"):
+                body = json.loads(line)
+                if body.get("type") in ("refused", "reply"):
+                    refusals.append(body)
+        codes = [r.get("error", {}).get("code") or r["body"]["error"]["code"] for r in refusals]
+        assert codes.count("bad_message") >= 4
+        assert "device_not_found" in codes
+        ws.send(json.dumps({"op": "watch", "devices": "*"}))  # still served
+        ws.send(json.dumps({"op": "hello", "service": "tests"}))
