@@ -233,6 +233,8 @@ class DeviceConnection:
             await http.aclose()
 
     def _failed(self, error: str) -> None:
+        if short(error) != self.last_error:  # once per new reason, not once per attempt
+            log.warning("%s: %s", self.name, short(error))
         self._set_status("disconnected", error)
 
     async def _connected(

@@ -216,9 +216,10 @@ class DeviceRegistry:
             if not isinstance(identity, dict):
                 raise TypeError("identity is not an object")
         except (httpx.HTTPError, ValueError, KeyError, TypeError) as exc:
+            reason = short(describe(exc))
+            log.warning("refused to add the device at %s: %s", url, reason)
             raise DeviceError(
-                f"no OpenPendant device answers at {url}: {short(describe(exc))}",
-                code="device_unreachable",
+                f"no OpenPendant device answers at {url}: {reason}", code="device_unreachable"
             ) from exc
         try:
             return DeviceRecord(
@@ -230,6 +231,7 @@ class DeviceRegistry:
                 url=url,
             )
         except ValueError as exc:
+            log.warning("refused to add the device at %s: %s", url, short(str(exc)))
             raise DeviceError(
                 f"the device at {url} does not identify itself properly: {exc}",
                 code="device_invalid",

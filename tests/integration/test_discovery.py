@@ -160,6 +160,7 @@ def test_info_answers_too_big_or_malformed_are_refused_and_memory_stays_bounded(
             assert error["code"] in ("device_unreachable", "device_invalid"), case
             assert len(response.content) < 2000, case
         assert runtime.api("GET", "/devices/fake").status_code == 404
+        assert manager_log(runtime).count("refused to add the device at") >= len(cases)
     finally:
         fake.close()
     assert rss_kib(pid) - before < 50_000  # KiB: a 5 MB answer was never read whole
