@@ -161,6 +161,15 @@ class Runs:
         await active.run.stop()
         return self.status(name)
 
+    async def stop_live(self, reason: str) -> list[str]:
+        """Every run still going, stopped at once (all together: stop always wins)."""
+        live = [(n, a) for n, a in self.runs.items() if not a.run.ended_state]
+        now = time.time()
+        for _, active in live:
+            active.received_stop = now
+        await asyncio.gather(*(a.run.stop(reason) for _, a in live), return_exceptions=True)
+        return [name for name, _ in live]
+
     async def stop_all(self) -> None:
         for active in list(self.runs.values()):
             with contextlib.suppress(Exception):

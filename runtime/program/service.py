@@ -82,6 +82,11 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
         initial = [runs.status(name).model_dump_json() for name in runs.runs]
         await fanout.serve(ws, initial, on_message=control)
 
+    @router.post("/_stop")
+    async def stop_all() -> dict[str, list[str]]:
+        """The pendant's STOP: every running program stops (and halts what it moved)."""
+        return {"stopped": await runs.stop_live("STOP pressed")}
+
     @router.get("")
     async def listing() -> list[ProgramSummary]:
         return await library.list()

@@ -33,12 +33,6 @@ export class DeviceFeed extends EventTarget {
     return this.devices.filter((d) => d.kind === "robot");
   }
 
-  /** `current` while it is still an added robot, else the first robot ("" without any). */
-  pickRobot(current: string): string {
-    const robots = this.robots();
-    return robots.some((r) => r.local_name === current) ? current : robots[0]?.local_name ?? "";
-  }
-
   start(): void {
     if (this.socket) return;
     const socket = new WebSocket(socketUrl(this.path));

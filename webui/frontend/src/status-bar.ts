@@ -1,10 +1,14 @@
 import { LitElement, css, html } from "lit";
+import { api } from "./api";
+import { FocusController, focus } from "./focus";
 import { modeLabel } from "./format";
 import { FeedController, feed } from "./live";
 import { shared } from "./styles";
 import type { AddedDevice, RobotState } from "./types";
 
-// Always on screen: is the runtime reachable, and for each robot its link, mode and faults.
+// Always on screen, above every panel and never scrolled away: the runtime link, the robots
+// with the one in focus (tap another to focus it), its mode and faults, the speed override,
+// and STOP.
 export class OpStatusBar extends LitElement {
   static styles = [
     shared,
@@ -12,10 +16,10 @@ export class OpStatusBar extends LitElement {
       :host {
         display: flex;
         align-items: center;
-        gap: 12px;
+        gap: 10px;
         flex-wrap: wrap;
-        padding: 8px 14px;
-        min-height: 64px;
+        padding: 8px 12px;
+        min-height: 72px;
         background: #0b1015;
         border-bottom: 1px solid var(--line);
       }
@@ -23,7 +27,6 @@ export class OpStatusBar extends LitElement {
         font-weight: 800;
         font-size: 20px;
         letter-spacing: 0.02em;
-        margin-right: 8px;
       }
       .brand span {
         color: var(--accent);
@@ -32,17 +35,57 @@ export class OpStatusBar extends LitElement {
         display: flex;
         gap: 8px;
         flex-wrap: wrap;
-        flex: 1;
+        flex: 1 1 260px;
+        min-width: 0;
       }
-      .robot {
+      button.robot {
         display: flex;
         align-items: center;
         gap: 8px;
-        padding: 6px 12px;
-        border-radius: 10px;
-        background: var(--panel);
-        border: 1px solid var(--line);
+        padding: 4px 12px;
+        min-height: 52px;
         font-size: 16px;
+        background: var(--panel);
+      }
+      button.robot[aria-pressed="true"] {
+        border-color: var(--accent);
+        background: var(--raised);
+        box-shadow: inset 0 -4px 0 var(--accent);
+      }
+      .choose {
+        color: var(--warn);
+        font-weight: 700;
+        align-self: center;
+      }
+      .speed {
+        display: flex;
+        align-items: center;
+        gap: 8px;
+        flex: 0 1 260px;
+        font-size: 16px;
+      }
+      .speed input {
+        flex: 1;
+        min-width: 90px;
+        min-height: 48px;
+        padding: 0;
+        border: none;
+        background: transparent;
+        accent-color: var(--accent);
+      }
+      .speed strong {
+        min-width: 3.2em;
+        text-align: right;
+        font-variant-numeric: tabular-nums;
+      }
+      .stop {
+        background: #c62828;
+        border-color: #ff8a80;
+        color: white;
+        font-size: 22px;
+        font-weight: 800;
+        min-width: 120px;
+        min-height: 60px;
       }
       .offline {
         background: var(--bad);
@@ -51,44 +94,92 @@ export class OpStatusBar extends LitElement {
         padding: 8px 14px;
         border-radius: 10px;
       }
+      @media (max-width: 700px) {
+        :host {
+          gap: 6px;
+          padding: 6px 8px;
+        }
+        .brand {
+          display: none;
+        }
+        .speed {
+          flex: 1 1 150px;
+        }
+        .stop {
+          min-width: 96px;
+        }
+      }
     `,
   ];
 
   constructor() {
     super();
     new FeedController(this);
+    new FocusController(this);
   }
 
-  private robotChip(device: AddedDevice, state: RobotState | undefined) {
+  /** Stop always wins: every robot halts and every program stops, whatever is in focus. */
+  private async stop(): Promise<void> {
+    window.dispatchEvent(new Event("op-stop")); // panels let go of what they hold
+    const robots = feed.robots().map((r) => r.local_name);
+    await Promise.allSettled([
+      ...robots.map((r) => api("POST", `/api/jog/robots/${encodeURIComponent(r)}/halt`)),
+      api("POST", "/api/programs/_stop"),
+    ]);
+  }
+
+  private robotChip(device: AddedDevice, state: RobotState | undefined, inFocus: boolean) {
     const link = device.status === "connected" ? "ok" : device.status === "connecting" ? "warn" : "bad";
+    const live = feed.online && device.status === "connected";
     let badge = html``;
-    if (state?.flags.estop) badge = html`<span class="chip bad">E-STOP</span>`;
-    else if (state?.flags.error) badge = html`<span class="chip bad" title=${state.error_message}>ERROR</span>`;
-    else if (state && !state.flags.enabled) badge = html`<span class="chip">Disabled</span>`;
-    return html`<div class="robot" data-testid="status-robot" data-name=${device.local_name}>
-      <span class="dot ${link}" title=${device.status}></span>
+    if (live && state?.flags.estop) badge = html`<span class="chip bad">E-STOP</span>`;
+    else if (live && state?.flags.error)
+      badge = html`<span class="chip bad" title=${state.error_message}>ERROR</span>`;
+    else if (live && state && !state.flags.enabled) badge = html`<span class="chip">Disabled</span>`;
+    return html`<button class="robot" data-testid="status-robot" data-name=${device.local_name}
+      aria-pressed=${inFocus ? "true" : "false"}
+      title=${inFocus ? "The robot in focus" : `Focus ${device.local_name}`}
+      @click=${() => focus.choose(device.local_name)}>
+      <span class="dot ${feed.online ? link : "bad"}" title=${device.status}></span>
       <strong>${device.local_name}</strong>
-      ${state
+      ${live && state
         ? html`<span class="muted">${modeLabel(state.operational_mode)}</span>`
-        : html`<span class="muted">${device.status}</span>`}
+        : html`<span class="muted">${feed.online ? device.status : "unknown"}</span>`}
       ${badge}
-    </div>`;
+    </button>`;
   }
 
   render() {
     const robots = feed.robots();
+    const inFocus = focus.robot;
     return html`
       <div class="brand">Open<span>Pendant</span></div>
-      <div class="robots">
+      <div class="robots" role="group" aria-label="Robot in focus">
         ${robots.length === 0 && feed.online
           ? html`<span class="muted">No robot added</span>`
-          : robots.map((d) => this.robotChip(d, feed.states.get(d.local_name)))}
+          : robots.map((d) =>
+              this.robotChip(d, feed.states.get(d.local_name), d.local_name === inFocus),
+            )}
+        ${robots.length > 1 && !inFocus
+          ? html`<span class="choose" data-testid="focus-missing" role="alert">
+              Tap the robot to work with</span>`
+          : ""}
       </div>
+      <label class="speed" title="Speed override: jogging and running programs">
+        <span>Speed</span>
+        <input type="range" min="1" max="100" .value=${String(focus.speed)}
+          data-testid="speed" aria-label="Speed override"
+          @input=${(e: Event) => focus.setSpeed(Number((e.target as HTMLInputElement).value))} />
+        <strong data-testid="speed-value">${focus.speed} %</strong>
+      </label>
       ${feed.online
         ? html`<span class="chip ok" data-testid="runtime-link">Runtime connected</span>`
         : html`<span class="offline" data-testid="runtime-link" role="alert"
             >No connection to the runtime — retrying…</span
           >`}
+      <button class="stop" data-testid="safety-stop"
+        title="Halts every robot and stops every program (a software stop, not an E-stop)"
+        @click=${() => this.stop()}>STOP</button>
     `;
   }
 }

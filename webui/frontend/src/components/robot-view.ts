@@ -3,6 +3,7 @@ import { shared } from "../styles";
 import type { Marker, RobotScene, WorldContents } from "../three/scene";
 
 export interface RobotModel {
+  name: string; // the robot it describes: joints of another robot are never drawn on it
   urdf: string | null;
   packages: Record<string, string>;
   info: { base_link: string; joints: { name: string }[] };
@@ -48,7 +49,7 @@ export class OpRobotView extends LitElement {
         width: 100%;
         height: 100%;
         display: block;
-        touch-action: none;
+        touch-action: pan-y; /* one finger scrolls the page; two turn and zoom the view */
       }
       .overlay {
         position: absolute;
@@ -129,7 +130,8 @@ export class OpRobotView extends LitElement {
   }
 
   render() {
-    return html`<div class="canvas" data-testid="robot-view" data-status=${this.status}></div>
+    return html`<div class="canvas" data-testid="robot-view" data-status=${this.status}
+        data-robot=${this.model?.name ?? ""}></div>
       ${this.progress ? html`<div class="overlay muted">${this.progress}</div>` : ""}`;
   }
 }

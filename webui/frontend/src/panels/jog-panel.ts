@@ -1,6 +1,7 @@
 import { LitElement, css, html } from "lit";
 import { api, ApiError, errorText } from "../api";
 import { control } from "../control";
+import { FocusController, focus } from "../focus";
 import { deg, mm } from "../format";
 import { JogSocket, type JogMessage, type JogStatus } from "../jog-socket";
 import { FeedController, feed } from "../live";
@@ -38,7 +39,6 @@ export class OpJogPanel extends LitElement {
     model: { state: true },
     mode: { state: true },
     stepping: { state: true },
-    speed: { state: true },
     status: { state: true },
     message: { state: true },
     waypoints: { state: true },
@@ -51,7 +51,6 @@ export class OpJogPanel extends LitElement {
   declare model: RobotModel | null;
   declare mode: Mode;
   declare stepping: Stepping;
-  declare speed: number;
   declare status: JogStatus | null;
   declare message: string;
   declare waypoints: Waypoint[];
@@ -64,6 +63,7 @@ export class OpJogPanel extends LitElement {
   private onVisibility = () => document.hidden && this.socket.releaseAll();
   private onBlur = () => this.socket.releaseAll();
   private onControl = () => this.requestUpdate();
+  private onStop = () => this.socket.releaseAll();
 
   static styles = [
     shared,
@@ -77,14 +77,6 @@ export class OpJogPanel extends LitElement {
       }
       .top .spacer {
         flex: 1;
-      }
-      .stop {
-        background: #c62828;
-        border-color: #ff8a80;
-        color: white;
-        font-size: 22px;
-        min-width: 140px;
-        min-height: 64px;
       }
       .layout {
         display: grid;
@@ -150,17 +142,6 @@ export class OpJogPanel extends LitElement {
         margin-bottom: 10px;
         font-weight: 600;
       }
-      .speed {
-        display: flex;
-        gap: 10px;
-        align-items: center;
-        margin-bottom: 10px;
-      }
-      .speed input[type="range"] {
-        flex: 1;
-        min-height: 48px;
-        accent-color: var(--accent);
-      }
       section.card {
         margin-bottom: 14px;
       }
@@ -185,11 +166,11 @@ export class OpJogPanel extends LitElement {
   constructor() {
     super();
     new FeedController(this);
-    this.robot = localStorage.getItem("op.robot") ?? "";
+    new FocusController(this);
+    this.robot = "";
     this.model = null;
     this.mode = "joint";
     this.stepping = "continuous";
-    this.speed = 25;
     this.status = null;
     this.message = "";
     this.waypoints = [];
@@ -207,6 +188,7 @@ export class OpJogPanel extends LitElement {
     document.addEventListener("visibilitychange", this.onVisibility);
     window.addEventListener("blur", this.onBlur);
     control.addEventListener("change", this.onControl);
+    window.addEventListener("op-stop", this.onStop);
     try {
       const settings = await api<{ heartbeat_ms: number }>("GET", "/api/jog/settings");
       this.socket.heartbeatMs = settings.heartbeat_ms;
@@ -221,19 +203,22 @@ export class OpJogPanel extends LitElement {
     document.removeEventListener("visibilitychange", this.onVisibility);
     window.removeEventListener("blur", this.onBlur);
     control.removeEventListener("change", this.onControl);
+    window.removeEventListener("op-stop", this.onStop);
     super.disconnectedCallback();
   }
 
   // Robot selection and its model --------------------------------------------------------------
 
   protected willUpdate(): void {
-    const robot = feed.pickRobot(this.robot);
-    if (robot) this.robot = robot;
+    const robot = focus.robot;
+    if (robot !== this.robot) {
+      this.socket.releaseAll(); // nothing held on one robot carries over to another
+      this.robot = robot;
+    }
   }
 
   protected updated(changed: Map<string, unknown>): void {
     if (changed.has("robot") && this.robot) {
-      localStorage.setItem("op.robot", this.robot);
       control.resume(this.robot);
       void this.loadRobot();
     }
@@ -244,7 +229,8 @@ export class OpJogPanel extends LitElement {
     this.model = null;
     try {
       const model = await api<RobotModel>("GET", `/api/jog/robots/${encodeURIComponent(robot)}`);
-      if (robot === this.robot) this.model = model;
+      if (robot !== this.robot) return; // the focus moved on meanwhile
+      this.model = model;
       await this.loadWaypoints();
     } catch (err) {
       this.message = errorText(err);
@@ -286,21 +272,10 @@ export class OpJogPanel extends LitElement {
     }
   }
 
-  private async stop(): Promise<void> {
-    // Stop always wins: over the socket when it is up, and over HTTP regardless.
-    this.socket.releaseAll();
-    this.socket.send({ type: "halt", robot: this.robot });
-    try {
-      await api("POST", `/api/jog/robots/${encodeURIComponent(this.robot)}/halt`);
-    } catch (err) {
-      this.message = errorText(err);
-    }
-  }
-
   // Jogging --------------------------------------------------------------------------------
 
   private base(): Record<string, unknown> {
-    return { robot: this.robot, token: control.token(this.robot), speed: this.speed / 100 };
+    return { robot: this.robot, token: control.token(this.robot), speed: focus.speed / 100 };
   }
 
   private hold(axis: string, direction: number): void {
@@ -495,7 +470,11 @@ export class OpJogPanel extends LitElement {
     if (!this.socket.online) {
       return html`<div class="deadman chip bad" data-testid="deadman">Jog link down — reconnecting</div>`;
     }
-    if (!s) return html`<div class="deadman chip" data-testid="deadman">Ready: hold a button to jog</div>`;
+    if (!s) {
+      const ready = control.holds(this.robot) ? "Ready: hold a button to jog"
+        : "Take control to jog this robot";
+      return html`<div class="deadman chip" data-testid="deadman">${ready}</div>`;
+    }
     const cls = s.state === "moving" ? "ok" : s.state === "halted" || s.state === "refused" ? "bad" : "";
     const text = s.state === "moving" ? "Moving — hold to continue"
       : s.state === "halted" ? `Halted: ${s.reason ?? ""}`
@@ -544,6 +523,12 @@ export class OpJogPanel extends LitElement {
         <button class="primary" @click=${() => (location.hash = "#/devices")}>Go to Devices</button>
       </div>`;
     }
+    if (!this.robot) {
+      return html`<div class="card" data-testid="choose-robot">
+        <h2>Which robot?</h2>
+        <p>Tap the robot to work with in the bar at the top.</p>
+      </div>`;
+    }
     const state = feed.states.get(this.robot);
     const device = robots.find((r) => r.local_name === this.robot);
     const mine = control.holds(this.robot);
@@ -555,12 +540,7 @@ export class OpJogPanel extends LitElement {
     const mice = this.mice();
     return html`
       <div class="top">
-        ${robots.length > 1
-          ? html`<select aria-label="Robot" data-testid="robot-select" .value=${this.robot}
-              @change=${(e: Event) => (this.robot = (e.target as HTMLSelectElement).value)}>
-              ${robots.map((r) => html`<option value=${r.local_name}>${r.local_name}</option>`)}
-            </select>`
-          : html`<h2 style="margin:0">${this.robot}</h2>`}
+        <h2 style="margin:0" data-testid="jog-robot">${this.robot}</h2>
         <button data-testid="control" class=${mine ? "" : "primary"} @click=${this.toggleControl}>
           ${mine ? "Release control" : "Take control"}</button>
         <span class="chip ${mine ? "ok" : controlledBy ? "warn" : ""}" data-testid="lease">
@@ -574,13 +554,12 @@ export class OpJogPanel extends LitElement {
         ${state?.flags.error
           ? html`<button ?disabled=${!mine} @click=${() => this.power("reset_errors")}>Reset error</button>`
           : ""}
-        <span class="spacer"></span>
-        <button class="stop" data-testid="stop" @click=${this.stop}>STOP</button>
       </div>
       ${this.message ? html`<p class="error" role="alert" data-testid="jog-message">${this.message}</p>` : ""}
       <div class="layout">
         <div class="view">
-          <op-robot-view .model=${this.model} .joints=${state?.joint_position ?? null}
+          <op-robot-view .model=${this.model}
+            .joints=${this.model?.name === this.robot ? state?.joint_position ?? null : null}
             .markers=${markers}></op-robot-view>
           <op-clearance-chip .robot=${this.robot}></op-clearance-chip>
           <div class="readout" data-testid="tcp-readout">
@@ -628,12 +607,6 @@ export class OpJogPanel extends LitElement {
               @click=${() => (this.stepping = s)}>${s === "continuous" ? "Continuous"
                 : s === "fine" ? "Step 0.1 mm / 0.1°" : "Step 1 mm / 1°"}</button>`)}
           </div>
-          <label class="speed">Speed
-            <input type="range" min="1" max="100" .value=${String(this.speed)}
-              data-testid="speed" aria-label="Jog speed"
-              @input=${(e: Event) => (this.speed = Number((e.target as HTMLInputElement).value))} />
-            <strong>${this.speed} %</strong>
-          </label>
           <op-jog-pad .axes=${this.axes(state)} ?disabled=${!canMove}
             @jog-hold=${(e: CustomEvent) => this.hold(e.detail.axis, e.detail.direction)}
             @jog-release=${() => this.release()}></op-jog-pad>

@@ -1,6 +1,7 @@
 import { LitElement, css, html, nothing } from "lit";
 import { api, ApiError, errorText } from "../api";
 import { control } from "../control";
+import { FocusController, focus } from "../focus";
 import { FeedController, feed } from "../live";
 import { shared } from "../styles";
 import type { DeviceDetails } from "../types";
@@ -92,7 +93,6 @@ export class OpProgramPanel extends LitElement {
     dialog: { state: true },
     dialogError: { state: true },
     tab: { state: true },
-    robot: { state: true },
     history: { state: true },
     selected: { state: true },
   };
@@ -108,7 +108,6 @@ export class OpProgramPanel extends LitElement {
   declare dialog: Dialog;
   declare dialogError: string;
   declare tab: "output" | "python";
-  declare robot: string;
   declare history: { undo: boolean; redo: boolean };
   declare selected: string | null;
 
@@ -353,10 +352,10 @@ export class OpProgramPanel extends LitElement {
     this.dialog = null;
     this.dialogError = "";
     this.tab = "output";
-    this.robot = "";
     this.history = { undo: false, redo: false };
     this.selected = null;
     new FeedController(this);
+    new FocusController(this);
   }
 
   private onRuns = (event: Event) => {
@@ -621,7 +620,7 @@ export class OpProgramPanel extends LitElement {
   private async run(): Promise<void> {
     if (!this.editor) return;
     if (this.source === "blocks" && (this.dirty || !this.name) && !(await this.save())) return;
-    const robot = feed.pickRobot(this.robot);
+    const robot = focus.robot; // the robot blocks start with, until a "use robot" block
     const leases: Record<string, string> = {};
     for (const r of feed.robots()) {
       const token = control.token(r.local_name);
@@ -711,8 +710,7 @@ export class OpProgramPanel extends LitElement {
     const status = this.status();
     const state = status?.state ?? "idle";
     const live = LIVE_STATES.includes(state);
-    const robots = feed.robots();
-    const robot = feed.pickRobot(this.robot);
+    const robot = focus.robot;
     const onBreakpoint = this.selected !== null && this.editor?.breakpoints.has(this.selected);
     return html`<div class="runpad">
         ${live
@@ -741,13 +739,9 @@ export class OpProgramPanel extends LitElement {
               at “${this.editor?.describe(status.block) || status.block}”</span>`
           : nothing}
         <span class="spacer"></span>
-        ${robots.length > 1
-          ? html`<select aria-label="Robot" data-testid="run-robot" .value=${robot}
-              @change=${(e: Event) => (this.robot = (e.target as HTMLSelectElement).value)}>
-              ${robots.map((r) => html`<option value=${r.local_name}
-                ?selected=${r.local_name === robot}>${r.local_name}</option>`)}
-            </select>`
-          : html`<span class="muted">${robot || "no robot added"}</span>`}
+        <span class="muted" data-testid="run-robot">${robot
+          ? `runs on ${robot}` : feed.robots().length ? "tap a robot in the bar above"
+          : "no robot added"}</span>
       </div>
       ${state === "paused" && status?.pause_reason === "confirm"
         ? html`<div class="confirm" role="alert" data-testid="confirm">

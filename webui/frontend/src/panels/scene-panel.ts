@@ -1,5 +1,6 @@
 import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
+import { FocusController, focus } from "../focus";
 import { FeedController, feed } from "../live";
 import { shared } from "../styles";
 import type { Obstacle, PathPreview, PoseJson, WorldContents } from "../three/scene";
@@ -156,6 +157,7 @@ export class OpScenePanel extends LitElement {
   constructor() {
     super();
     new FeedController(this);
+    new FocusController(this);
     this.robot = "";
     this.model = null;
     this.objects = {};
@@ -173,8 +175,7 @@ export class OpScenePanel extends LitElement {
   }
 
   protected willUpdate(): void {
-    const robot = feed.pickRobot(this.robot);
-    if (robot) this.robot = robot;
+    this.robot = focus.robot;
   }
 
   protected updated(changed: Map<string, unknown>): void {
@@ -182,9 +183,13 @@ export class OpScenePanel extends LitElement {
   }
 
   private async loadRobot(): Promise<void> {
-    const robot = encodeURIComponent(this.robot);
+    const name = this.robot;
+    const robot = encodeURIComponent(name);
+    this.model = null;
     try {
-      this.model = await api<RobotModel>("GET", `/api/jog/robots/${robot}`);
+      const model = await api<RobotModel>("GET", `/api/jog/robots/${robot}`);
+      if (name !== this.robot) return; // the focus moved on meanwhile
+      this.model = model;
       this.waypoints = await api<Waypoint[]>("GET", `/api/jog/robots/${robot}/waypoints`);
       await this.loadScene();
     } catch (err) {
@@ -377,7 +382,8 @@ export class OpScenePanel extends LitElement {
       <div class="layout">
         <div class="view">
           <op-robot-view .model=${this.model}
-            .joints=${feed.states.get(this.robot)?.joint_position ?? null}
+            .joints=${this.model?.name === this.robot
+              ? feed.states.get(this.robot)?.joint_position ?? null : null}
             .world=${this.world()}></op-robot-view>
           <div class="row" style="margin-top:8px">
             <op-clearance-chip .robot=${this.robot}></op-clearance-chip></div>

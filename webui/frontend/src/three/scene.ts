@@ -112,6 +112,10 @@ export class RobotScene {
     this.camera.up.set(0, 0, 1); // URDFs are Z-up
     this.camera.position.set(1.4, -1.2, 1.0);
     this.controls = new OrbitControls(this.camera, this.renderer.domElement);
+    // One finger scrolls the page, as everywhere else on a pendant; two fingers turn and
+    // zoom the view (and the mouse still orbits).
+    this.controls.touches = { ONE: null, TWO: THREE.TOUCH.DOLLY_ROTATE };
+    this.renderer.domElement.style.touchAction = "pan-y";
     this.controls.target.set(0, 0, 0.35);
     this.controls.addEventListener("change", () => this.requestRender());
     this.scene.add(new THREE.HemisphereLight(0xe8eef5, 0x202830, 2.2));

@@ -1,0 +1,202 @@
+"""What a technician on a tablet or a phone relies on: one robot in focus everywhere (a robot
+added later never takes it; the one shown is the one moved), STOP and the speed override on
+screen whatever is scrolled, and a swipe that starts on a jog key or the 3D view scrolls the
+page and moves nothing."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+from playwright.sync_api import BrowserContext, Locator, Page, expect
+
+from tests.browser.conftest import Finger, PageErrors, add_robot, robot_at_rest, robot_joints
+from tests.support.processes import STILL, Runtime, SimRobotProc, wait_for
+
+PANELS = ("jog", "program", "scene", "devices", "system")
+
+
+@pytest.fixture(scope="module")
+def robot(runtime: Runtime) -> str:
+    return add_robot(runtime)
+
+
+@pytest.fixture
+def panda(runtime: Runtime, robot: str, tmp_path: Path) -> Iterator[SimRobotProc]:
+    """A second robot, started and announced; the test adds it when it wants."""
+    sim = SimRobotProc(tmp_path, name="cell-2-panda", model="panda")
+    sim.wait_ready()
+    try:
+        yield sim
+    finally:
+        runtime.api("DELETE", "/devices/panda")
+        sim.stop()
+
+
+def chip(page: Page, name: str) -> Locator:
+    return page.locator(f"[data-testid=status-robot][data-name={name}]")
+
+
+def take_control_and_enable(page: Page) -> None:
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("You have control")
+    enable = page.get_by_test_id("enable")
+    if enable.count():
+        enable.tap()
+    expect(page.get_by_test_id("disable")).to_be_visible()
+
+
+def hold(page: Page, axis: int, seconds: float) -> None:
+    finger = Finger(page)
+    finger.down(page.locator(f"[data-testid=jog-row][data-axis='{axis}'] [data-testid=jog-plus]"))
+    time.sleep(seconds)
+    finger.up()
+
+
+def in_viewport(page: Page, target: Locator) -> bool:
+    box = target.bounding_box()
+    size = page.viewport_size
+    assert size is not None
+    return (
+        box is not None
+        and box["y"] >= 0
+        and box["x"] >= 0
+        and box["y"] + box["height"] <= size["height"]
+        and box["x"] + box["width"] <= size["width"]
+    )
+
+
+def scroll_to_bottom(page: Page) -> int:
+    """The panel area scrolled as far as it goes; how far that was (px)."""
+    scrolled: int = page.evaluate(
+        """() => {
+            const main = document.querySelector('op-app').shadowRoot.querySelector('main');
+            main.scrollTo(0, main.scrollHeight);
+            return main.scrollTop;
+        }"""
+    )
+    return scrolled
+
+
+def scroll_top(page: Page) -> int:
+    top: int = page.evaluate(
+        "() => document.querySelector('op-app').shadowRoot.querySelector('main').scrollTop"
+    )
+    return top
+
+
+def test_the_robot_in_focus_is_the_one_shown_and_moved(
+    runtime: Runtime, robot: str, panda: SimRobotProc, tablet: BrowserContext, artifacts: Path
+) -> None:
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/jog")
+    expect(chip(page, "robot")).to_have_attribute("aria-pressed", "true")
+    expect(page.get_by_test_id("jog-robot")).to_have_text("robot")
+    take_control_and_enable(page)
+
+    # A second robot is added (elsewhere): the focus stays where the user put it. It stands
+    # 2 m away (at the origin it would stand inside the UR5, and avoidance holds both).
+    frame = {"type": "frame", "value": {"pose": {"position": [2.0, 0.0, 0.0]}}}
+    assert runtime.api("PUT", "/variables/frames.panda", json=frame).is_success
+    added = runtime.api("POST", "/devices", json={"uuid": panda.uuid, "local_name": "panda"})
+    assert added.status_code == 201, added.text
+    expect(chip(page, "panda")).to_be_visible(timeout=10_000)
+    expect(chip(page, "panda")).to_have_attribute("aria-pressed", "false")
+    expect(chip(page, "robot")).to_have_attribute("aria-pressed", "true")
+    expect(page.get_by_test_id("jog-robot")).to_have_text("robot")
+    page.screenshot(path=artifacts / "1-second-robot-added.png")
+
+    # The robot shown is the robot that moves.
+    ur5, other = robot_joints(runtime, "robot"), robot_joints(runtime, "panda")
+    hold(page, 0, 0.6)
+    wait_for(lambda: robot_at_rest(runtime, "robot"), 5, what="the UR5 stopped")
+    assert robot_joints(runtime, "robot")[0] > ur5[0] + 0.01
+    assert np.abs(robot_joints(runtime, "panda") - other).max() < STILL
+
+    # Focus the Panda by a tap: every panel, the 3D view and the jog keys follow.
+    chip(page, "panda").tap()
+    expect(chip(page, "panda")).to_have_attribute("aria-pressed", "true")
+    expect(page.get_by_test_id("jog-robot")).to_have_text("panda")
+    expect(page.get_by_test_id("jog-row")).to_have_count(7)
+    view = page.get_by_test_id("robot-view")
+    expect(view).to_have_attribute("data-robot", "panda", timeout=20_000)
+    take_control_and_enable(page)
+    ur5, other = robot_joints(runtime, "robot"), robot_joints(runtime, "panda")
+    hold(page, 0, 0.6)
+    wait_for(lambda: robot_at_rest(runtime, "panda"), 5, what="the Panda stopped")
+    assert robot_joints(runtime, "panda")[0] > other[0] + 0.01
+    assert np.abs(robot_joints(runtime, "robot") - ur5).max() < STILL
+    page.get_by_test_id("nav-program").tap()
+    expect(page.get_by_test_id("run-robot")).to_have_text("runs on panda")
+    page.get_by_test_id("nav-jog").tap()
+    page.get_by_test_id("control").tap()  # hand the Panda back
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+    chip(page, "robot").tap()
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+    assert errors.errors == []
+
+
+@pytest.mark.parametrize("device", ["tablet", "phone"])
+def test_stop_and_the_speed_override_stay_on_screen_on_every_panel(
+    runtime: Runtime, robot: str, device: str, request: pytest.FixtureRequest
+) -> None:
+    context: BrowserContext = request.getfixturevalue(device)
+    page = context.new_page()
+    page.goto(f"{runtime.url}/#/jog")
+    expect(page.get_by_test_id("jog-robot")).to_be_visible()
+    for panel in PANELS:
+        page.get_by_test_id(f"nav-{panel}").tap()
+        page.wait_for_timeout(300)
+        scroll_to_bottom(page)
+        page.wait_for_timeout(100)
+        for part in ("safety-stop", "speed", "status-robot"):
+            assert in_viewport(page, page.get_by_test_id(part).first), (panel, part)
+    # STOP halts the robot, whoever moves it.
+    page.get_by_test_id("nav-jog").tap()
+    take_control_and_enable(page)
+    finger = Finger(page)
+    finger.down(page.locator("[data-testid=jog-row][data-axis='5'] [data-testid=jog-plus]"))
+    try:
+        wait_for(lambda: not robot_at_rest(runtime), 5, what="J6 moving")
+        page.get_by_test_id("safety-stop").tap()
+        wait_for(lambda: robot_at_rest(runtime), 2, what="halted by STOP")
+    finally:
+        finger.up()
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+
+
+def test_a_swipe_that_starts_on_a_jog_key_or_the_view_scrolls_and_moves_nothing(
+    runtime: Runtime, robot: str, phone: BrowserContext
+) -> None:
+    page = phone.new_page()
+    page.goto(f"{runtime.url}/#/jog")
+    take_control_and_enable(page)
+    key = page.locator("[data-testid=jog-row][data-axis='4'] [data-testid=jog-plus]")
+    key.scroll_into_view_if_needed()
+    page.wait_for_timeout(200)
+    before = robot_joints(runtime)
+    finger = Finger(page)
+    for target in (key, page.get_by_test_id("robot-view")):
+        target.scroll_into_view_if_needed()
+        page.wait_for_timeout(200)
+        top = scroll_top(page)
+        box = target.bounding_box()
+        assert box is not None
+        x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+        finger.down(target)
+        for step in range(1, 9):  # a quick flick upwards, as a thumb scrolls
+            finger.move(x, y - 25 * step)
+            page.wait_for_timeout(8)
+        finger.up()
+        page.wait_for_timeout(600)
+        assert scroll_top(page) != top, "the page did not scroll"
+    assert np.abs(robot_joints(runtime) - before).max() < STILL
+    assert robot_at_rest(runtime)
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
