@@ -226,6 +226,20 @@ def test_stop_during_a_long_move_halts_the_robot(ready: Cell) -> None:
     assert all(o["text"] != "never" for o in status(ready, "long_move")["output"])
 
 
+def test_the_pendants_stop_stops_every_running_program(ready: Cell) -> None:
+    """The safety bar's STOP: POST /programs/_stop stops whatever runs, and halts it."""
+    save_python(ready, "stopped_by_stop", f"set_speed(10)\nmove_joint({FAR_DEGREES!r})")
+    run(ready, "stopped_by_stop")
+    wait_for(lambda: not ready.robot.stopped(), 10, what="the robot moving")
+    before = ready.robot.last_command_seq()
+    stopped = ready.runtime.api("POST", "/programs/_stop").json()
+    assert stopped["stopped"] == ["stopped_by_stop"]
+    assert status(ready, "stopped_by_stop")["state"] == "stopped"
+    assert "halt" in [c["type"] for c in ready.robot.commands(before)]
+    ready.robot.wait_stopped(2.0)
+    assert ready.runtime.api("POST", "/programs/_stop").json()["stopped"] == []
+
+
 def test_stop_over_the_program_socket_halts_the_robot(ready: Cell) -> None:
     save_python(ready, "socket_stop", f"set_speed(10)\nmove_joint({FAR_DEGREES!r})")
     url = ready.runtime.url.replace("http", "ws") + "/api/programs/_ws"
