@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from device_drivers.sim_robot.reference import TrajectoryReference
+from device_drivers.sim_robot.scaling import TimeScaling
 from device_drivers.sim_robot.tracker import JointTracker, TrackerError
 from runtime.interfaces.limits import CheckedTrajectory, FloatArray
 from runtime.interfaces.robot import (
@@ -52,7 +53,7 @@ class StreamCommand:
 class RunningTrajectory:
     id: str
     reference: TrajectoryReference
-    t: float = 0.0
+    t: float = 0.0  # where on the trajectory's own clock the reference is
     state: TrajectoryState = TrajectoryState.running
     message: str = ""
 
@@ -90,6 +91,7 @@ class SimCore:
         self.cycle_time = time.time()  # wall-clock time of the latest cycle
         self.command: StreamCommand | None = None
         self.trajectory: RunningTrajectory | None = None
+        self.scaling = TimeScaling(self.tracker.max_acceleration, self.tracker.max_jerk)
         self._finished: dict[str, TrajectoryStatus] = {}
         self._ids = itertools.count(1)
         self.command_timeouts = 0
@@ -187,7 +189,15 @@ class SimCore:
             raise RobotError("a trajectory is already running", code="busy")
         trajectory_id = f"traj-{next(self._ids)}"
         self.trajectory = RunningTrajectory(trajectory_id, TrajectoryReference(trajectory))
+        self.scaling.rate, self.scaling.rate_speed = self.speed_ratio, 0.0  # it starts at rest
         return trajectory_id
+
+    def pause_trajectory(self, paused: bool) -> TrajectoryStatus:
+        running = self.trajectory
+        if running is None:
+            raise RobotError("no trajectory is running", code="not_running")
+        running.state = TrajectoryState.paused if paused else TrajectoryState.running
+        return running.status()
 
     def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus:
         if self.trajectory is not None and self.trajectory.id == trajectory_id:
@@ -255,10 +265,19 @@ class SimCore:
         if running is None:
             self.tracker.hold()
             return
-        running.t += CYCLE * self.speed_ratio
+        # The trajectory's clock runs at the speed override, or comes to a stop when paused:
+        # the reference slows along its path, and the setpoints with it.
+        _, planned, planned_acceleration = running.reference.sample_with_acceleration(running.t)
+        paused = running.state is TrajectoryState.paused
+        target = 0.0 if paused else self.speed_ratio
+        before = self.scaling.rate
+        self.scaling.step(target, planned, planned_acceleration, CYCLE)
+        rate, rate_speed = self.scaling.rate, self.scaling.rate_speed
+        running.t += CYCLE * 0.5 * (before + rate)  # the clock's advance over the cycle
         position, velocity, acceleration = running.reference.sample_with_acceleration(running.t)
-        ratio = self.speed_ratio
-        self.tracker.step_position(position, velocity * ratio, acceleration * ratio * ratio)
+        self.tracker.step_position(
+            position, velocity * rate, acceleration * rate * rate + velocity * rate_speed
+        )
         if running.t >= running.reference.duration and self.tracker.settled(running.reference.end):
             self._end_trajectory(TrajectoryState.finished)
 

@@ -157,6 +157,10 @@ class SimRobot(RobotDriver):
                 CommandMode.position_command, velocity, position, timeout, time.monotonic()
             )
 
+    async def _pause_trajectory(self, paused: bool) -> TrajectoryStatus:
+        with self.lock:
+            return self.core.pause_trajectory(paused)
+
     async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str:
         with self.lock:
             return self.core.start_trajectory(trajectory)

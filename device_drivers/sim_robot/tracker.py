@@ -29,6 +29,10 @@ _VELOCITY = ControlInterface.Velocity
 LIMIT_LOOKAHEAD = 0.5  # s
 SETTLED_POSITION = 1e-7  # rad
 SETTLED_VELOCITY = 1e-6  # rad/s
+# A reference is followed as it is when its next state is where its motion leads (within
+# this, rad) and its jerk within the limit (this much over it: the interpolation's own).
+FOLLOW_TOLERANCE = 1e-5
+FOLLOW_JERK_SLACK = 1.05
 
 
 class TrackerError(RuntimeError):
@@ -128,7 +132,35 @@ class JointTracker:
         capped = np.clip(velocity, -bound, bound)
         accel = np.zeros_like(position) if acceleration is None else acceleration
         accel = np.where(capped == velocity, self._feasible_acceleration(capped, accel), 0.0)
+        if acceleration is not None and self._follows(target, capped, accel):
+            return
         self._run([_POSITION] * len(position), target, capped, self.max_velocity, accel)
+
+    def _follows(
+        self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray
+    ) -> bool:
+        """A smooth reference within the limits is followed exactly, as a controller
+        interpolating its own trajectory would; asking ruckig to reach each new reference
+        state as fast as it can instead let the joints pick different profiles and leave the
+        path. A reference that jumps, or would pass a limit, goes to ruckig."""
+        dt = self.dt
+        expected = self.position + 0.5 * dt * (self.velocity + velocity)
+        jerk = (acceleration - self.acceleration) / dt
+        smooth = (
+            np.all(np.abs(position - expected) <= FOLLOW_TOLERANCE)
+            and np.all(np.abs(velocity) <= self.max_velocity)
+            and np.all(np.abs(acceleration) <= self.max_acceleration)
+            and np.all(np.abs(jerk) <= self.max_jerk * FOLLOW_JERK_SLACK)
+        )
+        if not smooth or self._cannot_stop_from(position, velocity, acceleration).any():
+            return False
+        self.position = position.astype(float)
+        self.velocity = velocity.astype(float)
+        self.acceleration = acceleration.astype(float)
+        self._in.current_position = self.position.tolist()
+        self._in.current_velocity = self.velocity.tolist()
+        self._in.current_acceleration = self.acceleration.tolist()
+        return True
 
     def _feasible_acceleration(self, velocity: FloatArray, acceleration: FloatArray) -> FloatArray:
         """Arriving with the reference's acceleration avoids a lag. But jerk is limited, so a
@@ -195,10 +227,18 @@ class JointTracker:
     def _cannot_stop_in_limits(self) -> npt.NDArray[np.bool_]:
         """Joints whose fastest stop from the proposed new state would pass a limit (and
         move further out than they already are)."""
-        position = np.array(self._out.new_position)
-        self._brake_in.current_position = self._out.new_position
-        self._brake_in.current_velocity = self._out.new_velocity
-        self._brake_in.current_acceleration = self._out.new_acceleration
+        return self._cannot_stop_from(
+            np.array(self._out.new_position),
+            np.array(self._out.new_velocity),
+            np.array(self._out.new_acceleration),
+        )
+
+    def _cannot_stop_from(
+        self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray
+    ) -> npt.NDArray[np.bool_]:
+        self._brake_in.current_position = position.tolist()
+        self._brake_in.current_velocity = velocity.tolist()
+        self._brake_in.current_acceleration = acceleration.tolist()
         try:
             self._brake.calculate(self._brake_in, self._brake_path)
         except RuckigError:

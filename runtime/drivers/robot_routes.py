@@ -103,6 +103,19 @@ def robot_router(driver: RobotDriver, log: CommandLog) -> APIRouter:
         log.record("trajectory", accepted.id)
         return accepted
 
+    @router.post("/trajectory/pause")
+    async def pause_trajectory() -> TrajectoryStatus:
+        """A controlled stop along the running trajectory's path; resumable."""
+        status = await driver.pause_trajectory()
+        log.record("trajectory:pause", status.id)
+        return status
+
+    @router.post("/trajectory/resume")
+    async def resume_trajectory() -> TrajectoryStatus:
+        status = await driver.resume_trajectory()
+        log.record("trajectory:resume", status.id)
+        return status
+
     @router.get("/trajectory/{trajectory_id}")
     async def trajectory_status(trajectory_id: str) -> TrajectoryStatus:
         return await driver.trajectory_status(trajectory_id)

@@ -90,6 +90,7 @@ class RobotFlags(BaseModel):
 
 class TrajectoryState(StrEnum):
     running = "running"
+    paused = "paused"  # brought to a stop on its path; resumes where it stopped
     finished = "finished"
     aborted = "aborted"
     failed = "failed"

@@ -142,6 +142,16 @@ class RobotDriver(DeviceDriver):
     @abstractmethod
     async def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus: ...
 
+    async def pause_trajectory(self) -> TrajectoryStatus:
+        """Bring the running trajectory to a controlled stop along its path (it stays
+        `paused`, resumable). Allowed whenever one runs: slowing down is always safe."""
+        return await self._pause_trajectory(True)
+
+    async def resume_trajectory(self) -> TrajectoryStatus:
+        """Continue a paused trajectory from where it stopped, along its path."""
+        self._require_ready()
+        return await self._pause_trajectory(False)
+
     # Checks ---------------------------------------------------------------------------------
 
     def _require_no_estop(self) -> None:
@@ -202,6 +212,9 @@ class RobotDriver(DeviceDriver):
 
     @abstractmethod
     async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str: ...
+
+    async def _pause_trajectory(self, paused: bool) -> TrajectoryStatus:
+        raise RobotError(f"{self.info.model}: this driver cannot pause a trajectory", code="busy")
 
     async def _set_tool(self, open_: bool) -> None:
         raise RobotError(f"{self.info.model}: this driver cannot drive a tool", code="no_tool")

@@ -323,3 +323,83 @@ def test_tiny_velocities_far_from_the_limits_are_followed(core: SimCore) -> None
     clock.run(0.5, lambda now: core.stream(CommandMode.velocity_command, v, None, 0.1, now))
     assert not core.error, core.error_message
     assert np.allclose(core.tracker.velocity, v, atol=1e-12)
+
+
+def straight_trajectory(
+    core: SimCore, ur5: RobotInfo, offset: list[float]
+) -> tuple[str, FloatArray, FloatArray]:
+    """A time-optimal move along a straight line in joint space, sent as 8 ms waypoints with
+    velocities, as the motion service sends it; (trajectory id, start, goal)."""
+    from runtime.motion.joint_move import plan_joint_move
+
+    start = core.tracker.position.copy()
+    goal = start + np.array(offset)
+    move = plan_joint_move(core.kinematics, ur5, start, goal, 1.0, None)
+    times = np.arange(0.008, move.duration, 0.008).tolist() + [move.duration]
+    waypoints = []
+    for t in times:
+        position, velocity = move.sample(t)
+        waypoints.append(
+            TrajectoryWaypoint(time_from_start=t, position=list(position), velocity=list(velocity))
+        )
+    checked = JointLimitChecker(ur5).trajectory(JointTrajectory(waypoints=waypoints), start)
+    core.set_mode(CommandMode.trajectory)
+    return core.start_trajectory(checked), start, goal
+
+
+def off_the_line(q: FloatArray, start: FloatArray, goal: FloatArray) -> float:
+    direction = (goal - start) / np.linalg.norm(goal - start)
+    along = float((q - start) @ direction)
+    return float(np.linalg.norm(q - start - along * direction))
+
+
+def test_a_pause_stops_on_the_path_and_resume_finishes_it(core: SimCore, ur5: RobotInfo) -> None:
+    clock = Clock(core)
+    trajectory_id, start, goal = straight_trajectory(core, ur5, [1.2, -0.4, 0.5, 0.3, -0.3, 0.8])
+    clock.run(0.6)
+    assert np.max(np.abs(core.tracker.velocity)) > 0.3
+    core.pause_trajectory(True)
+    paused_at = core.sim_time
+    clock.run(1.0)
+    status = core.trajectory_status(trajectory_id)
+    assert status.state is TrajectoryState.paused and status.progress < 0.9
+    assert np.allclose(core.tracker.velocity, 0.0)
+    stopped = [s for s in core.setpoints if np.max(np.abs(s.velocity)) < 1e-9 and s.t > paused_at]
+    assert stopped and stopped[0].t - paused_at < 0.5  # a controlled stop, not a crawl
+    held = core.tracker.position.copy()
+    clock.run(0.5)
+    assert np.abs(core.tracker.position - held).max() < 1e-9  # paused means still
+    core.pause_trajectory(False)
+    clock.run(6.0)
+    assert core.trajectory_status(trajectory_id).state is TrajectoryState.finished
+    assert np.allclose(core.tracker.position, goal, atol=1e-9)
+    # On the straight line all the way: stopping and starting again never left it.
+    worst = max(off_the_line(s.position, start, goal) for s in core.setpoints)
+    assert worst < 1e-4, f"{worst:.2e} rad off the path"
+    assert_within_limits(core)
+
+
+def test_the_speed_override_slows_a_running_trajectory_on_its_path(
+    core: SimCore, ur5: RobotInfo
+) -> None:
+    clock = Clock(core)
+    trajectory_id, start, goal = straight_trajectory(core, ur5, [1.5, 0.0, 0.0, 0.0, 0.0, 0.0])
+    clock.run(0.5)
+    full = float(np.max(np.abs(core.tracker.velocity)))
+    core.set_speed_ratio(0.25)
+    clock.run(0.5)
+    slowed = float(np.max(np.abs(core.tracker.velocity)))
+    assert slowed < 0.35 * full
+    core.set_speed_ratio(1.0)
+    clock.run(6.0)
+    assert core.trajectory_status(trajectory_id).state is TrajectoryState.finished
+    assert np.allclose(core.tracker.position, goal, atol=1e-9)
+    worst = max(off_the_line(s.position, start, goal) for s in core.setpoints)
+    assert worst < 1e-6
+    assert_within_limits(core)
+
+
+def test_pausing_without_a_trajectory_is_refused(core: SimCore) -> None:
+    with pytest.raises(RobotError) as refused:
+        core.pause_trajectory(True)
+    assert refused.value.code == "not_running"
