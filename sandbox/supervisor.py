@@ -163,6 +163,7 @@ class ProgramRun:
         self.limits = limits or RunLimits()
         self.breakpoints = set(breakpoints or ())
         self.listener = listener
+        self._calls_in_flight = 0
         self.state = RunState.starting
         self.block: str | None = None
         self.pause_reason = ""
@@ -199,14 +200,26 @@ class ProgramRun:
     async def pause(self) -> None:
         self._require_live()
         await self._send({"t": "pause"})
+        # Inside a call (a move), the run is paused now: its robots are stopping on their
+        # paths, and the worker reaches its next block only once the call returns.
+        if self.state is RunState.running and self._calls_in_flight:
+            self.state, self.pause_reason = RunState.paused, "pause"
+            self._notify()
 
     async def resume(self) -> None:
         self._require_live()
         await self._send({"t": "resume"})
+        self._running_again()
 
     async def step(self) -> None:
         self._require_live()
         await self._send({"t": "step"})
+        self._running_again()
+
+    def _running_again(self) -> None:
+        if self.state is RunState.paused:
+            self.state, self.pause_reason, self.message = RunState.running, "", ""
+            self._notify()
 
     async def set_breakpoints(self, ids: set[str]) -> None:
         self.breakpoints = set(ids)
@@ -294,6 +307,13 @@ class ProgramRun:
         self._notify()
 
     async def _answer(self, message: dict[str, Any]) -> None:
+        self._calls_in_flight += 1
+        try:
+            await self._answer_call(message)
+        finally:
+            self._calls_in_flight -= 1
+
+    async def _answer_call(self, message: dict[str, Any]) -> None:
         call_id = message.get("id")
         fn, args = message.get("fn"), message.get("args")
         if not isinstance(fn, str) or not isinstance(args, dict):

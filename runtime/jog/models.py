@@ -98,3 +98,9 @@ class TeachRequest(Strict):
     tags: list[str] = Field(default_factory=list, max_length=32)
     doc: str = Field(default="", max_length=2000)
     overwrite: bool = False
+
+
+class SpeedRequest(Strict):
+    """The speed override, 0 to 1: it scales the robot's trajectories as they run."""
+
+    ratio: float = Field(gt=0, le=1)

@@ -11,7 +11,7 @@ from fastapi import APIRouter, FastAPI, Header, WebSocket
 
 from runtime.jog.clearance import PathCheck
 from runtime.jog.directory import Directory
-from runtime.jog.models import TeachRequest
+from runtime.jog.models import SpeedRequest, TeachRequest
 from runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
 from runtime.jog.velocity import MANUAL_TCP_SPEED
 from runtime.jog.waypoints import robot_waypoints, teach
@@ -87,6 +87,16 @@ def jog_router(
         jogger = directory.joggers.get(robot)
         state = jogger.link.latest() if jogger is not None else None
         return {"robot": robot, "halted": True, "state": state.model_dump() if state else None}
+
+    @router.put("/robots/{robot}/speed")
+    async def speed(robot: str, body: SpeedRequest, token: LeaseToken = None) -> dict[str, Any]:
+        """The speed override: a running program's moves slow down or speed up along their
+        paths. Anyone may lower it (slowing is always safe); raising it needs control."""
+        jogger = await directory.jogger(robot)
+        if body.ratio > jogger.link.current().speed_ratio + 1e-9:
+            await directory.check_lease(robot, token)
+        state: dict[str, Any] = await jogger.link.call("PUT", "/speed_ratio", body.model_dump())
+        return {"robot": robot, "speed_ratio": state["speed_ratio"]}
 
     for command in ("enable", "disable", "reset_errors"):
         router.add_api_route(

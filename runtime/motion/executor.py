@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import time
 
 import numpy as np
 
@@ -49,10 +48,20 @@ class Execution:
         self.mode_ready = mode_ready  # the driver was put in trajectory mode for this move
         self.progress = 0.0
         self.generation = -1
+        self.paused = False
+        self._uploaded = False
         self._cancel = asyncio.Event()
 
     def cancel(self) -> None:
         self._cancel.set()
+
+    async def pause(self, paused: bool) -> None:
+        """A controlled stop along the path (the driver slows the trajectory's clock to
+        zero), or on again from there. Before the upload, the move starts paused."""
+        self.paused = paused
+        if self._uploaded:
+            path = "/trajectory/pause" if paused else "/trajectory/resume"
+            await self.link.call("POST", path, generation=self.generation)
 
     async def run(self) -> None:
         """Returns when the robot has arrived; raises MoveFailed otherwise (robot halted)."""
@@ -79,15 +88,16 @@ class Execution:
                 raise MoveFailed(f"{exc.message}; plan again", code="wrong_mode") from exc
             raise
         trajectory_id = accepted["id"]
-        started = time.monotonic()
+        self._uploaded = True
         try:
-            await self._watch(trajectory_id, started)
+            if self.paused:  # paused while it was planned: it waits at its start
+                await self.link.call("POST", "/trajectory/pause", generation=gen)
+            await self._watch(trajectory_id)
         except BaseException:
             await self.link.halt("motion: stop")
             raise
 
-    async def _watch(self, trajectory_id: str, started: float) -> None:
-        duration = max(self.timed.duration, 1e-3)
+    async def _watch(self, trajectory_id: str) -> None:
         while True:
             if self._cancel.is_set():
                 raise MoveFailed("cancelled", code="cancelled")
@@ -97,9 +107,10 @@ class Execution:
                     await self._cancel.wait()
             state = self.link.current(self.generation)
             self._check(state)
-            self.progress = min(1.0, (time.monotonic() - started) / duration)
             running = state.trajectory
             if running is not None and running.id == trajectory_id:
+                # The driver's progress: a pause or the speed override slow the clock.
+                self.progress = running.progress
                 continue
             status = await self.link.call(
                 "GET", f"/trajectory/{trajectory_id}", generation=self.generation

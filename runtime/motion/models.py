@@ -93,6 +93,7 @@ class PlanReport(BaseModel):
 class MoveState(StrEnum):
     planning = "planning"
     running = "running"
+    paused = "paused"  # stopped on its path; resumes where it stopped
     finished = "finished"
     cancelled = "cancelled"
     failed = "failed"
@@ -107,3 +108,4 @@ class MoveStatus(BaseModel):
     progress: float = 0.0
     plan: PlanReport | None = None
     caller: str | None = None  # who asked for it (X-Caller), e.g. a program run
+    paused: bool = False  # asked to pause (it stops on its path, or starts paused)

@@ -48,10 +48,15 @@ class ReactiveExecution:
         self.tcp_cap = tcp_cap
         self.progress = 0.0
         self.generation = -1
+        self.paused = False
         self._cancel = asyncio.Event()
 
     def cancel(self) -> None:
         self._cancel.set()
+
+    async def pause(self, paused: bool) -> None:
+        """Paused, it steers nowhere: the robot slows to a stop under its limits and waits."""
+        self.paused = paused
 
     async def run(self) -> None:
         self.generation = self.link.generation  # the move ends with the link it began on
@@ -90,11 +95,12 @@ class ReactiveExecution:
             # A late loop: the other robots are met that much further ahead.
             self.avoidance.horizon = float(np.clip(now - last_tick, 2 * PERIOD, MAX_AGE))
             last_tick = now
-            if distance < best - PROGRESS:
-                best, best_at = distance, now
+            if distance < best - PROGRESS or self.paused:
+                best, best_at = min(best, distance), now  # a pause is not being blocked
             elif now - best_at > BLOCKED_AFTER:
                 raise MoveFailed(self._blocked(distance), code="blocked")
-            step = self.controller.from_twist(q, self._twist(error), self.tcp_cap, previous)
+            twist = np.zeros(6) if self.paused else self._twist(error)
+            step = self.controller.from_twist(q, twist, self.tcp_cap, previous)
             previous = step.velocity
             await self._send(step.velocity)
             next_tick = max(next_tick + PERIOD, time.monotonic())

@@ -169,9 +169,10 @@ class Moves:
         if status.robot in self.running:  # another move started while this one was planned
             status.state, status.message = MoveState.failed, "another move started first"
             self._check_free(status.robot)
+        execution.paused = status.paused  # paused while it was planned: it starts paused
         task = asyncio.create_task(self._run(status, execution))
         self.running[status.robot] = (status.id, execution, task)
-        status.state = MoveState.running
+        status.state = MoveState.paused if status.paused else MoveState.running
         self._forget_old()
         return status
 
@@ -253,6 +254,31 @@ class Moves:
             entry[1].cancel()
         await self.robots.hub.halt(robot, "motion: stop")
 
+    async def pause(self, robot: str, paused: bool, caller: str | None = None) -> MoveStatus:
+        """Pause (a controlled stop along its path) or resume the move on `robot`: the one
+        running, or the one being planned (it then starts paused). With `caller`, only that
+        caller's move."""
+        entry = self.running.get(robot)
+        if entry is not None:
+            move_id, execution, _ = entry
+            status = self.status[move_id]
+        else:
+            planned = [
+                s
+                for s in self.status.values()
+                if s.robot == robot and s.state is MoveState.planning
+            ]
+            if not planned:
+                raise NotFound(f"no move is running on {robot}", code="not_running")
+            status, execution = planned[-1], None
+        if caller is not None and status.caller != caller:
+            raise Conflict(f"the move on {robot} is not {caller}'s", code="not_yours")
+        status.paused = paused
+        if execution is not None:
+            await execution.pause(paused)
+            status.state = MoveState.paused if paused else MoveState.running
+        return status
+
     @staticmethod
     def _drop_planned(status: MoveStatus, code: str, message: str) -> None:
         status.state, status.code, status.message = MoveState.cancelled, code, message
@@ -269,7 +295,7 @@ class Moves:
         ended = [
             k
             for k, s in self.status.items()
-            if s.state not in (MoveState.planning, MoveState.running)
+            if s.state not in (MoveState.planning, MoveState.running, MoveState.paused)
         ]
         for key in ended[: max(0, len(ended) - KEEP_FINISHED)]:
             del self.status[key]
@@ -314,6 +340,16 @@ def motion_router(moves: Moves, robots: Robots) -> APIRouter:
     async def stop(robot: str, caller: Caller = None) -> dict[str, str]:
         await moves.stop(robot, caller)
         return {"robot": robot, "state": "halted"}
+
+    @router.post("/robots/{robot}/pause")
+    async def pause(robot: str, caller: Caller = None) -> MoveStatus:
+        """A controlled stop of the robot's move along its path (anyone may slow a robot)."""
+        return await moves.pause(robot, True, caller)
+
+    @router.post("/robots/{robot}/resume")
+    async def resume(robot: str, token: LeaseToken = None, caller: Caller = None) -> MoveStatus:
+        await robots.check_lease(robot, token)
+        return await moves.pause(robot, False, caller)
 
     @router.get("/robots/{robot}/clearance")
     async def clearance(robot: str) -> dict[str, Any]:

@@ -111,6 +111,21 @@ class RunHost:
             if isinstance(result, Exception):
                 log.warning("halting: %s", result)
 
+    async def pause_motion(self, paused: bool) -> None:
+        """Pause (a controlled stop along its path) or resume this run's move on each robot
+        it commands; a robot with no move of this run has nothing to do."""
+        for robot in self.commanded:
+            headers = dict(self._caller)
+            token = self.given.get(robot) or self.acquired.get(robot)
+            if token is not None:
+                headers["X-Lease-Token"] = token
+            verb = "pause" if paused else "resume"
+            try:
+                await self.motion.post(f"/motion/robots/{robot}/{verb}", headers=headers)
+            except OpenPendantError as exc:
+                if exc.code not in ("not_running", "not_yours"):
+                    log.warning("could not %s %s: %s", verb, robot, exc.message)
+
     @property
     def _caller(self) -> dict[str, str]:
         return {"X-Caller": self.caller}
@@ -217,7 +232,7 @@ class RunHost:
             status = await start
         else:  # the link is made while the move is planned, not before
             status, _ = await asyncio.gather(start, self._ready_to_halt(robot))
-        while status["state"] in ("planning", "running"):
+        while status["state"] in ("planning", "running", "paused"):
             status = await self.motion.get(
                 f"/motion/moves/{status['id']}",
                 params={"wait": MOVE_POLL},

@@ -142,15 +142,24 @@ class Runs:
         return run
 
     async def pause(self, name: str) -> RunStatus:
-        await self._live(name).pause()
+        """The robot stops on its path now (not at the end of its move), and the program
+        waits at its next block."""
+        run = self._live(name)
+        await self._active(name).host.pause_motion(True)
+        await run.pause()
         return self.status(name)
 
     async def resume(self, name: str) -> RunStatus:
-        await self._live(name).resume()
+        """The interrupted move goes on from where it stopped, and the program with it."""
+        run = self._live(name)
+        await self._active(name).host.pause_motion(False)
+        await run.resume()
         return self.status(name)
 
     async def step(self, name: str) -> RunStatus:
-        await self._live(name).step()
+        run = self._live(name)
+        await self._active(name).host.pause_motion(False)
+        await run.step()
         return self.status(name)
 
     async def stop(self, name: str, request_start: float | None = None) -> RunStatus:

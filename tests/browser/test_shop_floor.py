@@ -200,3 +200,38 @@ def test_a_swipe_that_starts_on_a_jog_key_or_the_view_scrolls_and_moves_nothing(
     assert robot_at_rest(runtime)
     page.get_by_test_id("control").tap()
     expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+
+
+def test_pause_stops_the_move_on_its_path_and_resume_finishes_it(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    far = [1.5, -1.2, 1.3, -1.6, -1.57, 0.8]
+    degrees = [round(float(np.degrees(v)), 6) for v in far]
+    source = f"set_speed(40)\nmove_joint({degrees!r})\nprint('there')"
+    saved = runtime.api("PUT", "/programs/pausing", json={"python": source})
+    assert saved.status_code == 200, saved.text
+    page = tablet.new_page()
+    page.goto(f"{runtime.url}/#/jog")
+    take_control_and_enable(page)
+    page.get_by_test_id("nav-program").tap()
+    page.get_by_test_id("program-select").select_option("pausing")
+    page.get_by_test_id("run").tap()
+    wait_for(lambda: not robot_at_rest(runtime), 20, what="the robot moving")
+    time.sleep(0.3)
+    asked = time.monotonic()
+    page.get_by_test_id("pause").tap()
+    # A controlled stop on the path at once, not at the end of the move.
+    wait_for(lambda: robot_at_rest(runtime), 3, what="the robot stopped by pause")
+    stopped_after = time.monotonic() - asked
+    expect(page.get_by_test_id("run-state")).to_have_text("paused")
+    held = robot_joints(runtime)
+    time.sleep(0.5)
+    assert np.abs(robot_joints(runtime) - held).max() < STILL
+    assert np.abs(held - np.array(far)).max() > 0.2
+    assert stopped_after < 2.0, f"{stopped_after:.2f} s to stop"
+    page.get_by_test_id("resume").tap()
+    expect(page.get_by_test_id("run-state")).to_have_text("finished", timeout=60_000)
+    assert np.abs(robot_joints(runtime) - np.array(far)).max() < 1e-4
+    page.get_by_test_id("nav-jog").tap()
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")

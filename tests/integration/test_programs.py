@@ -184,6 +184,66 @@ def test_pause_step_resume(ready: Cell) -> None:
     ]
 
 
+def off_the_joint_line(rows: list[list[float]], start: np.ndarray, goal: np.ndarray) -> float:
+    direction = (goal - start) / np.linalg.norm(goal - start)
+    points = np.array(rows) - start
+    along = points @ direction
+    return float(np.max(np.linalg.norm(points - np.outer(along, direction), axis=1)))
+
+
+def test_pause_stops_the_robot_on_its_path_and_resume_finishes_the_move(ready: Cell) -> None:
+    """Pause during a move: the robot comes to a controlled stop on its path at once (not
+    at the end of the move) and stays; resume continues the same move to its target."""
+    save_python(ready, "pausing", f"set_speed(40)\nmove_joint({FAR_DEGREES!r})\nprint('there')")
+    start = ready.robot.q()
+    after = int(ready.robot.state()["seqno"])
+    run(ready, "pausing")
+    wait_for(lambda: np.abs(ready.robot.state()["joint_velocity"]).max() > 0.3, 10, what="moving")
+    asked = time.monotonic()
+    paused = ready.runtime.api("POST", "/programs/pausing/pause").json()
+    assert paused["state"] == "paused"
+    ready.robot.wait_stopped(2.0)
+    stopped_after = time.monotonic() - asked
+    held = ready.robot.q()
+    time.sleep(0.5)
+    assert np.abs(ready.robot.q() - held).max() < STILL  # paused means still
+    assert np.abs(held - np.array(FAR)).max() > 0.3  # it did not finish the move first
+    assert status(ready, "pausing")["state"] == "paused"
+    assert stopped_after < 1.5, f"took {stopped_after:.2f} s to stop"
+    ready.runtime.api("POST", "/programs/pausing/resume")
+    finished = watch(ready, "pausing", ("finished", "error", "stopped"), 60)
+    assert finished["state"] == "finished", finished
+    assert [o["text"] for o in finished["output"]] == ["there"]
+    assert np.abs(ready.robot.q() - np.array(FAR)).max() < 1e-4
+    rows = ready.robot.setpoints(after)["position"]
+    worst = off_the_joint_line(rows, start, np.array(FAR))
+    assert worst < 1e-3, f"{worst:.2e} rad off the straight joint path"
+
+
+def test_the_speed_override_slows_a_running_program_on_its_path(ready: Cell) -> None:
+    save_python(ready, "override", f"set_speed(60)\nmove_joint({FAR_DEGREES!r})")
+    start = ready.robot.q()
+    after = int(ready.robot.state()["seqno"])
+    run(ready, "override")
+    wait_for(lambda: np.abs(ready.robot.state()["joint_velocity"]).max() > 0.1, 10, what="moving")
+    time.sleep(0.4)  # at its cruising speed (manual mode: the TCP at 250 mm/s)
+    full = np.abs(ready.robot.state()["joint_velocity"]).max()
+    slower = ready.runtime.api("PUT", "/jog/robots/robot/speed", json={"ratio": 0.2})
+    assert slower.status_code == 200, slower.text  # lowering needs no control
+    time.sleep(1.0)
+    slowed = np.abs(ready.robot.state()["joint_velocity"]).max()
+    assert 0 < slowed < 0.35 * full
+    faster = ready.runtime.api("PUT", "/jog/robots/robot/speed", json={"ratio": 1.0})
+    assert faster.status_code == 409  # raising it does
+    back = ready.runtime.api(
+        "PUT", "/jog/robots/robot/speed", json={"ratio": 1.0}, headers=ready.headers()
+    )
+    assert back.status_code == 200, back.text
+    assert watch(ready, "override", ("finished", "error", "stopped"), 60)["state"] == "finished"
+    rows = ready.robot.setpoints(after)["position"]
+    assert off_the_joint_line(rows, start, np.array(FAR)) < 1e-3
+
+
 def test_a_breakpoint_pauses_before_its_block(ready: Cell) -> None:
     ws, ids = counting_loop()
     save(ready, "breaking", ws)

@@ -1,5 +1,6 @@
 import { LitElement, css, html } from "lit";
-import { api } from "./api";
+import { ApiError, api, errorText } from "./api";
+import { control } from "./control";
 import { FocusController, focus } from "./focus";
 import { modeLabel } from "./format";
 import { FeedController, feed } from "./live";
@@ -10,6 +11,11 @@ import type { AddedDevice, RobotState } from "./types";
 // with the one in focus (tap another to focus it), its mode and faults, the speed override,
 // and STOP.
 export class OpStatusBar extends LitElement {
+  static properties = { notice: { state: true } };
+  declare notice: string;
+  private sending = 0;
+  private shownRobot = "";
+
   static styles = [
     shared,
     css`
@@ -116,6 +122,41 @@ export class OpStatusBar extends LitElement {
     super();
     new FeedController(this);
     new FocusController(this);
+    this.notice = "";
+  }
+
+  protected willUpdate(): void {
+    // A robot newly in focus brings its own speed override to the slider.
+    const robot = focus.robot;
+    const ratio = feed.states.get(robot)?.speed_ratio;
+    if (robot !== this.shownRobot && ratio !== undefined) {
+      this.shownRobot = robot;
+      if (Math.round(ratio * 100) !== focus.speed) focus.setSpeed(ratio * 100);
+    }
+  }
+
+  /** The override goes to the robot in focus: a running program slows or speeds up on its
+   * path. Lowering it is always allowed; raising it needs control of the robot. */
+  private setSpeed(percent: number): void {
+    focus.setSpeed(percent);
+    window.clearTimeout(this.sending);
+    this.sending = window.setTimeout(() => void this.sendSpeed(), 150);
+  }
+
+  private async sendSpeed(): Promise<void> {
+    const robot = focus.robot;
+    if (!robot) return;
+    const token = control.token(robot);
+    try {
+      await api("PUT", `/api/jog/robots/${encodeURIComponent(robot)}/speed`,
+        { ratio: focus.speed / 100 }, token ? { "X-Lease-Token": token } : {});
+      this.notice = "";
+    } catch (err) {
+      const ratio = feed.states.get(robot)?.speed_ratio;
+      if (ratio !== undefined) focus.setSpeed(ratio * 100);
+      this.notice = err instanceof ApiError && err.code.startsWith("lease")
+        ? "Take control to raise the speed" : errorText(err);
+    }
   }
 
   /** Stop always wins: every robot halts and every program stops, whatever is in focus. */
@@ -169,9 +210,10 @@ export class OpStatusBar extends LitElement {
         <span>Speed</span>
         <input type="range" min="1" max="100" .value=${String(focus.speed)}
           data-testid="speed" aria-label="Speed override"
-          @input=${(e: Event) => focus.setSpeed(Number((e.target as HTMLInputElement).value))} />
+          @input=${(e: Event) => this.setSpeed(Number((e.target as HTMLInputElement).value))} />
         <strong data-testid="speed-value">${focus.speed} %</strong>
       </label>
+      ${this.notice ? html`<span class="chip warn" role="alert">${this.notice}</span>` : ""}
       ${feed.online
         ? html`<span class="chip ok" data-testid="runtime-link">Runtime connected</span>`
         : html`<span class="offline" data-testid="runtime-link" role="alert"
