@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import ast
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from blockly_blocks.names import NameTable
@@ -51,10 +51,18 @@ def known_types() -> frozenset[str]:
 
 
 @dataclass(frozen=True)
+class Problem:
+    block: str
+    message: str
+
+
+@dataclass(frozen=True)
 class Generated:
     python: str
     blocks: int
     block_lines: dict[str, int]  # block id -> line of its marker
+    # What keeps it from running: empty inputs, blocks that are not part of the program.
+    problems: list[Problem] = field(default_factory=list)
 
 
 class Generator:
@@ -63,6 +71,7 @@ class Generator:
         self.names = NameTable()
         self.procedure: Block | None = None  # the definition being generated
         self.procedures: dict[str, Block] = {}
+        self.problems: list[Problem] = []
 
     # Fields --------------------------------------------------------------------------------
 
@@ -108,9 +117,15 @@ class Generator:
 
     # Code ----------------------------------------------------------------------------------
 
-    def value(self, block: Block, name: str, default: str = "None") -> str:
+    def value(
+        self, block: Block, name: str, default: str = "None", *, optional: bool = False
+    ) -> str:
+        """The code of the block plugged into input `name`; an empty one is a problem (the
+        program may be saved, not run), unless the input is optional."""
         child = block.inputs.get(name)
         if child is None:
+            if not optional:
+                self.problem(block, f"{describe(block)}: {input_label(name)} is empty")
             return default
         gen = VALUES.get(child.type)
         if gen is None or (child.type in DUAL and DUAL[child.type](child)):
@@ -136,6 +151,9 @@ class Generator:
             block = block.next
         return lines
 
+    def problem(self, block: Block, message: str) -> None:
+        self.problems.append(Problem(block.id, message))
+
     def program(self) -> list[str]:
         top = sorted(self.workspace.top, key=lambda b: (b.y, b.x))
         for block in top:
@@ -152,17 +170,50 @@ class Generator:
                 lines += ["", *STATEMENTS[block.type](block, self)]
                 self.procedure = None
         runnable = [b for b in top if b.type not in DEFINITIONS and _is_statement(b)]
-        for loose in [b for b in top if b.type not in DEFINITIONS and not _is_statement(b)]:
+        values = [b for b in top if b.type not in DEFINITIONS and not _is_statement(b)]
+        if lines and runnable:
+            lines.append("")
+        for block in runnable:
+            lines += self.stack(block)
+        for loose in values:
             if loose.next is not None:
                 raise WorkspaceError(
                     f"a {loose.type} block cannot be used as a statement", loose.id
                 )
             VALUES[loose.type](loose, self)  # not run, as in Blockly, but still checked
-        if lines and runnable:
-            lines.append("")
-        for block in runnable:
-            lines += self.stack(block)
+        # The program is the stack that starts highest (then leftmost); another stack lying
+        # apart would run after it unseen: it must be attached, or deleted.
+        for loose in [*runnable[1:], *values]:
+            self.problem(loose, f"{describe(loose)} is not part of the program: {LOOSE}")
         return lines
+
+
+LOOSE = "attach it to the program's blocks, or delete it"
+INPUT_LABELS = {
+    "BOOL": "the condition",
+    "CONDITION": "the condition",
+    "TIMES": "the number of times",
+    "TARGET": "the target",
+    "LIST": "the list",
+    "TEXT": "the text",
+    "VALUE": "the value",
+    "NUM": "the number",
+    "FROM": "the start",
+    "TO": "the end",
+    "BY": "the step",
+}
+
+
+def input_label(name: str) -> str:
+    if name.startswith("IF") and name[2:].isdigit():
+        return "the condition"
+    return INPUT_LABELS.get(name, f"the {name.lower().replace('_', ' ')} input")
+
+
+def describe(block: Block) -> str:
+    """A block as people see it: its type without the category prefix."""
+    kind = block.type.split("_", 1)[-1].replace("_", " ")
+    return f"the '{kind}' block"
 
 
 def _is_statement(block: Block) -> bool:
@@ -186,7 +237,8 @@ def generate(workspace_json: Any) -> Generated:
     """Python for a workspace (its JSON text, bytes or parsed form), or WorkspaceError."""
     data = parse_json(workspace_json) if isinstance(workspace_json, str | bytes) else workspace_json
     workspace = Reader(known_types()).workspace(data)
-    lines = [HEADER, *Generator(workspace).program()]
+    generator = Generator(workspace)
+    lines = [HEADER, *generator.program()]
     python = "\n".join(lines) + "\n"
     block_lines: dict[str, int] = {}
     for number, line in enumerate(lines, start=1):
@@ -194,7 +246,7 @@ def generate(workspace_json: Any) -> Generated:
         if stripped.startswith("at_block("):
             block_id = str(ast.literal_eval(stripped[len("at_block(") : -1]))
             block_lines.setdefault(block_id, number)
-    return Generated(python, workspace.count, block_lines)
+    return Generated(python, workspace.count, block_lines, generator.problems)
 
 
 def _load_generators() -> None:

@@ -216,7 +216,7 @@ def text(block: Block, g: Generator) -> str:
 @value("text_join")
 def text_join(block: Block, g: Generator) -> str:
     count = _count(block, "itemCount", 2)
-    parts = [g.value(block, f"ADD{i}", "''") for i in range(count)]
+    parts = [g.value(block, f"ADD{i}", "''", optional=True) for i in range(count)]
     return f"text_join({', '.join(parts)})"
 
 
@@ -314,7 +314,7 @@ def lists_create_empty(block: Block, g: Generator) -> str:
 @value("lists_create_with")
 def lists_create_with(block: Block, g: Generator) -> str:
     count = _count(block, "itemCount", 3)
-    return "[" + ", ".join(g.value(block, f"ADD{i}") for i in range(count)) + "]"
+    return "[" + ", ".join(g.value(block, f"ADD{i}", optional=True) for i in range(count)) + "]"
 
 
 @value("lists_repeat")

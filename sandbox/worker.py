@@ -277,11 +277,14 @@ def run(worker: Worker, start: dict[str, Any], isolation: list[str]) -> None:
     except BaseException as exc:  # every error in a program is the program's error
         kind = type(exc).__name__
         message = str(exc) or kind
+        # The runtime's own refusals read as they are ("the target … is out of reach");
+        # a Python error keeps its name ("ZeroDivisionError: division by zero").
+        shown = message if isinstance(exc, ProgramError) else f"{kind}: {message}"
         worker.send(
             {
                 "t": "error",
                 "kind": kind,
-                "message": f"{kind}: {message}"[:MAX_OUTPUT_CHARS],
+                "message": shown[:MAX_OUTPUT_CHARS],
                 "line": error_line(exc),
                 "block": worker.block,
                 "code": getattr(exc, "code", None) if isinstance(exc, ProgramError) else None,

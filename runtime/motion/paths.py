@@ -106,6 +106,18 @@ def sample_tcp_path(
     """Joint positions that keep the TCP on the lines between `poses` (the first being where
     it is), corners blended within `radii` (m), orientation slerped along each segment. Fails
     before any motion if a sample is unreachable or the arm would have to jump."""
+    for pose in poses[1:]:
+        # A target nothing reaches is said so, not found as a "singularity" on the way.
+        try:
+            kinematics.inverse(pose, start)
+        except Unreachable as exc:
+            where = np.round(pose.translation * 1000).astype(int).tolist()
+            away = round(float(np.linalg.norm(pose.translation)) * 1000)
+            raise PathError(
+                f"the target {where} mm ({away} mm from the base) is out of reach: no joint "
+                "position puts the tool there within the joint limits",
+                code="unreachable",
+            ) from exc
     positions = np.array([p.translation for p in poses])
     quats = [pin.Quaternion(p.rotation) for p in poses]
     for k in range(1, len(quats)):

@@ -13,6 +13,7 @@ from runtime.kit.errors import InvalidValue, NotFound
 from runtime.program.models import (
     PREFIX,
     TAG,
+    ProblemInfo,
     Program,
     ProgramSummary,
     Saved,
@@ -35,6 +36,10 @@ def compile_error(exc: ProgramCompileError) -> InvalidValue:
         code="invalid_program",
         details={"errors": exc.errors, "line": exc.line},
     )
+
+
+def problem_infos(generated: Generated) -> list[ProblemInfo]:
+    return [ProblemInfo(block=p.block, message=p.message) for p in generated.problems]
 
 
 def read_request(body: bytes) -> dict[str, Any]:
@@ -84,7 +89,7 @@ class ProgramLibrary:
             except ProgramCompileError as exc:
                 raise compile_error(exc) from None
             stored = StoredProgram(source="python", python=python)
-            blocks = 0
+            blocks, problems = 0, []
         else:
             workspace_json = workspace_text(data)
             # Generation is CPU work (a 5,000-block workspace takes a while): off the loop.
@@ -93,8 +98,18 @@ class ProgramLibrary:
                 source="blocks", workspace_json=workspace_json, python=generated.python
             )
             python, blocks = generated.python, generated.blocks
+            problems = problem_infos(generated)
         variable = await self.storage.put(PREFIX + name, "program", stored.model_dump(), tags=[TAG])
-        return Saved(name=name, python=python, version=variable.version, blocks=blocks)
+        return Saved(
+            name=name, python=python, version=variable.version, blocks=blocks, problems=problems
+        )
+
+    async def problems(self, program: Program) -> list[ProblemInfo]:
+        """Why a saved program may not run (none for hand-written Python)."""
+        if program.source != "blocks":
+            return []
+        generated = await asyncio.to_thread(generate_checked, dump_json(program.workspace))
+        return problem_infos(generated)
 
     async def get(self, name: str) -> Program:
         return _program(name, await self._variable(name))

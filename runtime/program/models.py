@@ -50,11 +50,19 @@ class ProgramSummary(BaseModel):
     updated: float
 
 
+class ProblemInfo(BaseModel):
+    """What keeps a program from running, at a block: an empty input, a loose block."""
+
+    block: str
+    message: str
+
+
 class Saved(BaseModel):
     name: str
     python: str
     version: int
     blocks: int
+    problems: list[ProblemInfo] = Field(default_factory=list)  # saved, but it will not run
 
 
 class RenameRequest(Strict):

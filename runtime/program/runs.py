@@ -62,6 +62,15 @@ class Runs:
         if current is not None and not current.run.ended_state:
             raise Conflict(f"{name} is running; stop it first", code="busy")
         program = await self.library.get(name)
+        problems = await self.library.problems(program)
+        if problems:
+            first = problems[0].message
+            more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+            raise Conflict(
+                f"{name} cannot run until it is complete: {first}{more}",
+                code="program_has_problems",
+                details={"problems": [p.model_dump() for p in problems]},
+            )
         host = RunHost(
             f"program {name}",
             self.devices,

@@ -22,6 +22,7 @@ from runtime.links.hub import LinkHub
 from runtime.program.library import (
     ProgramLibrary,
     generate_checked,
+    problem_infos,
     read_request,
     workspace_text,
 )
@@ -63,7 +64,11 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
         if "workspace" not in data:
             raise InvalidValue('send {"workspace": <Blockly JSON>}')
         generated = await asyncio.to_thread(generate_checked, workspace_text(data))
-        return {"python": generated.python, "blocks": generated.blocks}
+        return {
+            "python": generated.python,
+            "blocks": generated.blocks,
+            "problems": [p.model_dump() for p in problem_infos(generated)],
+        }
 
     @router.websocket("/_ws")
     async def live(ws: WebSocket) -> None:

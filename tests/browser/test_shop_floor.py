@@ -14,6 +14,7 @@ import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
 
 from tests.browser.conftest import Finger, PageErrors, add_robot, robot_at_rest, robot_joints
+from tests.support.blocks import block, text, workspace
 from tests.support.processes import STILL, Runtime, SimRobotProc, wait_for
 
 PANELS = ("jog", "program", "scene", "devices", "system")
@@ -235,3 +236,31 @@ def test_pause_stops_the_move_on_its_path_and_resume_finishes_it(
     page.get_by_test_id("nav-jog").tap()
     page.get_by_test_id("control").tap()
     expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+
+
+def test_a_program_with_an_empty_input_or_a_loose_block_shows_them_and_does_not_run(
+    runtime: Runtime, robot: str, tablet: BrowserContext, artifacts: Path
+) -> None:
+    empty_if = block("controls_if", None, DO0=block("text_print", None, TEXT=text("x")))
+    stray = block("text_print", None, TEXT=text("stray"))
+    stray["x"], stray["y"] = 40, 400
+    ws = workspace(empty_if, stray)
+    saved = runtime.api("PUT", "/programs/unfinished", json={"workspace": ws})
+    assert saved.status_code == 200, saved.text
+    page = tablet.new_page()
+    page.goto(f"{runtime.url}/#/program")
+    page.get_by_test_id("program-select").select_option("unfinished")
+    items = page.get_by_test_id("problem-item")
+    expect(items).to_have_count(2, timeout=10_000)
+    expect(items.first).to_contain_text("the condition is empty")
+    expect(items.nth(1)).to_contain_text("not part of the program")
+    expect(page.get_by_test_id("run")).to_be_disabled()
+    for problem in (empty_if, stray):  # the blocks themselves carry the warning
+        warned = page.locator(f'g.blocklyDraggable[data-id="{problem["id"]}"] .blocklyWarningIcon')
+        expect(warned).to_have_count(1)
+    items.first.tap()
+    expect(page.locator(f'g.blocklySelected[data-id="{empty_if["id"]}"]')).to_have_count(1)
+    page.get_by_test_id("tab-python").tap()
+    expect(page.get_by_test_id("python")).to_contain_text("if False:")
+    expect(page.get_by_test_id("python")).not_to_contain_text("at_block")
+    page.screenshot(path=artifacts / "problems.png")

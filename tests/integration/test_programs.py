@@ -453,3 +453,28 @@ def test_programs_are_listed_renamed_duplicated_and_deleted(ready: Cell) -> None
     assert ready.runtime.api("GET", "/programs/renamed").status_code == 404
     history = ready.runtime.api("GET", "/variables/program.renamed/history").json()
     assert history[0]["deleted"] is True  # deleted, but its history keeps it
+
+
+def test_a_program_with_empty_inputs_or_loose_blocks_is_saved_but_does_not_run(
+    ready: Cell,
+) -> None:
+    empty_if = block("controls_if", None, DO0=block("robot_move_joint", TARGET=waypoint("far")))
+    stray = block("robot_move_joint", TARGET=waypoint("far"))
+    stray["y"] = 400
+    ws = workspace(empty_if, stray)
+    saved = ready.runtime.api("PUT", "/programs/unfinished", json={"workspace": ws})
+    assert saved.status_code == 200, saved.text  # nothing that was built is lost
+    problems = {p["block"]: p["message"] for p in saved.json()["problems"]}
+    assert set(problems) == {empty_if["id"], stray["id"]}
+    preview = ready.runtime.api("POST", "/programs/_generate", json={"workspace": ws}).json()
+    assert {p["block"] for p in preview["problems"]} == set(problems)
+    before = ready.robot.last_command_seq()
+    refused = ready.runtime.api(
+        "POST", "/programs/unfinished/run", json={"leases": {"robot": ready.token}}
+    )
+    assert refused.status_code == 409
+    error = refused.json()["error"]
+    assert error["code"] == "program_has_problems"
+    assert "the condition is empty" in error["message"]
+    assert {p["block"] for p in error["details"]["problems"]} == set(problems)
+    assert ready.robot.commands(before) == []

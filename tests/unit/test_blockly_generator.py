@@ -19,6 +19,7 @@ from blockly_blocks.generator import generate, known_types
 from blockly_blocks.workspace import MAX_BLOCKS, MAX_NESTING, WorkspaceError
 from sandbox.policy import compile_program
 from sandbox.supervisor import ProgramRun, RunLimits, RunState
+from tests.support import blocks as wb
 from tests.unit.test_sandbox_attacks import RecordingHost
 
 # Blockly's standard blocks: each dropdown with its options (the first is the default).
@@ -530,3 +531,33 @@ def test_a_long_stack_is_read_without_recursion() -> None:
     generated = generate(dumps(ws(chain(*blocks))))
     compile_program(generated.python)
     assert generated.blocks == 4000
+
+
+def test_empty_inputs_and_loose_blocks_are_problems_that_name_their_block() -> None:
+    """An empty `if` condition would silently be `if False:`, and a stack lying apart would
+    run after the program unseen: both are reported at their blocks."""
+    empty_if = wb.block("controls_if", None, DO0=wb.block("text_print", None, TEXT=wb.text("x")))
+    no_target = wb.block("robot_move_joint")
+    main = wb.stack(empty_if, no_target)
+    apart = wb.block("text_print", None, TEXT=wb.text("stray"))
+    apart["y"] = 500
+    loose_value = wb.block("math_number", {"NUM": 3})
+    loose_value["y"] = 600
+    generated = generate(wb.workspace(main, apart, loose_value))
+    found = {p.block: p.message for p in generated.problems}
+    assert found[empty_if["id"]] == "the 'if' block: the condition is empty"
+    assert found[no_target["id"]] == "the 'move joint' block: the target is empty"
+    assert "not part of the program" in found[apart["id"]]
+    assert "not part of the program" in found[loose_value["id"]]
+    assert len(found) == 4
+    # The code is still generated (it is saved, and the preview shows it), but not run.
+    assert "if False:" in generated.python
+
+
+def test_optional_inputs_and_a_complete_program_have_no_problems() -> None:
+    items = wb.block("lists_create_with", None, ADD0=wb.number(1))
+    items["extraState"] = {"itemCount": 3}  # two empty slots: empty items, as in Blockly
+    ws = wb.workspace(
+        wb.block("text_print", None, TEXT=wb.block("lists_length", None, VALUE=items))
+    )
+    assert generate(ws).problems == []

@@ -13,6 +13,7 @@ import {
   LIVE_STATES,
   type Generated,
   type OutputEntry,
+  type Problem,
   type Program,
   type ProgramSummary,
   type RunStatus,
@@ -79,6 +80,14 @@ async function refreshChoices(): Promise<void> {
 
 // Programs as blocks: edit, save and load, run with the running block highlighted, pause,
 // step, stop, breakpoints, the output and the generated Python.
+/** The Python as people read it: without the block markers the runtime runs it with. */
+function readable(python: string): string {
+  return python
+    .split("\n")
+    .filter((line) => !/^\s*at_block\(/.test(line))
+    .join("\n");
+}
+
 export class OpProgramPanel extends LitElement {
   static properties = {
     programs: { state: true },
@@ -86,6 +95,7 @@ export class OpProgramPanel extends LitElement {
     source: { state: true },
     python: { state: true },
     problem: { state: true },
+    problems: { state: true },
     dirty: { state: true },
     loading: { state: true },
     busy: { state: true },
@@ -101,6 +111,7 @@ export class OpProgramPanel extends LitElement {
   declare source: "blocks" | "python";
   declare python: string;
   declare problem: string; // why the blocks do not generate, if they do not
+  declare problems: Problem[]; // what keeps them from running (empty inputs, loose blocks)
   declare dirty: boolean;
   declare loading: boolean;
   declare busy: boolean;
@@ -266,6 +277,21 @@ export class OpProgramPanel extends LitElement {
         align-items: center;
         font-size: 15px;
       }
+      .problems {
+        display: flex;
+        flex-direction: column;
+        gap: 6px;
+        padding: 10px 12px;
+        border: 2px solid var(--warn);
+        border-radius: 12px;
+      }
+      button.problem {
+        text-align: left;
+        min-height: 48px;
+        font-weight: 500;
+        border-color: transparent;
+        background: var(--panel);
+      }
       .confirm {
         display: flex;
         gap: 12px;
@@ -345,6 +371,7 @@ export class OpProgramPanel extends LitElement {
     this.source = "blocks";
     this.python = "";
     this.problem = "";
+    this.problems = [];
     this.dirty = false;
     this.loading = true;
     this.busy = false;
@@ -453,9 +480,11 @@ export class OpProgramPanel extends LitElement {
       this.saved = JSON.stringify(this.editor.state());
       this.python = program.python;
       this.problem = "";
+      this.showProblems([]);
       this.dirty = false;
       this.notice = "";
       this.highlighted = null;
+      if (program.source === "blocks") void this.preview(); // its problems, if any
       await this.fetchStatus(name);
     } catch (err) {
       this.notice = errorText(err);
@@ -501,6 +530,7 @@ export class OpProgramPanel extends LitElement {
       this.dirty = JSON.stringify(this.editor.state()) !== this.saved;
       this.python = saved.python;
       this.problem = "";
+      this.showProblems(saved.problems);
       this.notice = "";
       await this.listPrograms();
       return true;
@@ -587,9 +617,16 @@ export class OpProgramPanel extends LitElement {
       if (ticket !== this.previewing) return;
       this.python = generated.python;
       this.problem = "";
+      this.showProblems(generated.problems);
     } catch (err) {
       if (ticket === this.previewing) this.problem = errorText(err);
     }
+  }
+
+  /** Warnings on the blocks, and the list under the run buttons; Run waits until none. */
+  private showProblems(problems: Problem[]): void {
+    this.problems = problems;
+    this.editor?.warn(problems);
   }
 
   private breakpointsChanged(): void {
@@ -718,7 +755,8 @@ export class OpProgramPanel extends LitElement {
               ■ Stop
             </button>`
           : html`<button class="run wide" data-testid="run"
-              ?disabled=${this.busy || this.loading || (this.source === "blocks" && this.problem !== "")}
+              ?disabled=${this.busy || this.loading || (this.source === "blocks"
+                && (this.problem !== "" || this.problems.length > 0))}
               @click=${() => this.run()}>▶ Run</button>`}
         ${state === "paused"
           ? html`<button data-testid="resume" @click=${() => this.command("resume")}>Resume</button>`
@@ -751,6 +789,15 @@ export class OpProgramPanel extends LitElement {
         : nothing}
       ${this.notice
         ? html`<p class="error" role="alert" data-testid="notice">${this.notice}</p>`
+        : nothing}
+      ${this.source === "blocks" && this.problems.length
+        ? html`<div class="problems" data-testid="problems" role="alert">
+            <strong>Fix ${this.problems.length === 1 ? "this" : `these ${this.problems.length}`}
+              before running:</strong>
+            ${this.problems.map((p) => html`<button class="problem" data-testid="problem-item"
+              data-block=${p.block} @click=${() => this.editor?.reveal(p.block)}>
+              ⚠ ${p.message}</button>`)}
+          </div>`
         : nothing}`;
   }
 
@@ -764,13 +811,13 @@ export class OpProgramPanel extends LitElement {
         : nothing}
       ${lines.map(
         (line) => line && html`<button class="line ${line.stream}" data-block=${line.block ?? ""}
+          data-testid=${line.stream === "error" ? "run-error" : "output-line"}
           @click=${() => line.block && this.editor?.reveal(line.block)}>${line.text}</button>`,
       )}
-      ${status?.error
+      ${status?.error && !lines.some((line) => line?.stream === "error")
         ? html`<button class="line error" data-testid="run-error"
-            @click=${() => status.error?.block && this.editor?.reveal(status.error.block)}>
-            ${status.error.message}${status.error.line ? ` (line ${status.error.line})` : ""}
-          </button>`
+            @click=${() => status.error?.block && this.editor?.reveal(status.error.block)}
+            >${status.error.message}${status.error.line ? ` (line ${status.error.line})` : ""}</button>`
         : nothing}
       ${status && !status.error && status.message && !LIVE_STATES.includes(status.state)
         ? html`<p class="muted">${status.message}</p>`
@@ -783,7 +830,7 @@ export class OpProgramPanel extends LitElement {
       ${this.problem
         ? html`<p class="error" role="alert" data-testid="problem">${this.problem}</p>`
         : nothing}
-      <pre>${this.python || "# The Python of the blocks shows here."}</pre>
+      <pre>${readable(this.python) || "# The Python of the blocks shows here."}</pre>
     </div>`;
   }
 

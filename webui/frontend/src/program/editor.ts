@@ -128,6 +128,16 @@ export class ProgramEditor extends EventTarget {
     block.select();
   }
 
+  /** Warnings on the blocks that keep the program from running; cleared on the rest. */
+  warn(problems: { block: string; message: string }[]): void {
+    const messages = new Map<string, string[]>();
+    for (const p of problems) messages.set(p.block, [...(messages.get(p.block) ?? []), p.message]);
+    for (const block of this.workspace.getAllBlocks(false)) {
+      const text = messages.get(block.id)?.join("\n") ?? null;
+      block.setWarningText(text);
+    }
+  }
+
   /** A block as text ("wait 0.2 s"), for the status line. */
   describe(id: string): string {
     return this.workspace.getBlockById(id)?.toString(40) ?? "";

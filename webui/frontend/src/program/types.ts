@@ -12,16 +12,24 @@ export interface Program extends ProgramSummary {
   python: string;
 }
 
+/** What keeps a program from running, at a block: an empty input, a loose block. */
+export interface Problem {
+  block: string;
+  message: string;
+}
+
 export interface Saved {
   name: string;
   python: string;
   version: number;
   blocks: number;
+  problems: Problem[];
 }
 
 export interface Generated {
   python: string;
   blocks: number;
+  problems: Problem[];
 }
 
 export type RunState =
