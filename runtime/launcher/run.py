@@ -9,6 +9,7 @@ import signal
 import socket
 import sys
 import time
+import uuid
 from types import FrameType
 
 import httpx
@@ -22,6 +23,7 @@ from runtime.services import SERVICES, URLS_ENV, WEBUI
 log = logging.getLogger("openpendant.launcher")
 
 STARTUP_TIMEOUT = 60.0
+SIM_NAMESPACE = uuid.UUID("3d0f54a8-5b0e-4a8e-9c5e-0f8d4b6a2c11")
 
 
 class StartupFailed(RuntimeError):
@@ -50,9 +52,23 @@ def _service_child(
     )
 
 
+def runtime_id(settings: RuntimeSettings) -> str:
+    """This installation's own id (made once, kept in the data directory)."""
+    path = settings.data_dir / "runtime-id"
+    try:
+        return path.read_text().strip()
+    except FileNotFoundError:
+        made = uuid.uuid4().hex
+        path.write_text(made + "\n")
+        return made
+
+
 def _sim_children(settings: RuntimeSettings, env: dict[str, str]) -> list[Child]:
     if not settings.sim:
         return []
+    # Two runtimes on one network each simulate their own "sim-ur5": the uuid is this
+    # installation's, not just the model's and name's, so neither adds the other's robot.
+    installation = runtime_id(settings)
     return [
         Child(
             name=f"sim-robot:{spec.name}",
@@ -64,6 +80,8 @@ def _sim_children(settings: RuntimeSettings, env: dict[str, str]) -> list[Child]
                 spec.model,
                 "--name",
                 spec.name,
+                "--uuid",
+                str(uuid.uuid5(SIM_NAMESPACE, f"{installation}/{spec.model}/{spec.name}")),
                 "--host",
                 settings.host if settings.host != "localhost" else "127.0.0.1",
                 "--port",

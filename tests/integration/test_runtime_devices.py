@@ -216,3 +216,47 @@ def test_add_by_url_and_a_vanished_device_reports_disconnected(home: Path) -> No
     finally:
         sim.stop()
         runtime.stop()
+
+
+def test_two_runtimes_on_one_network_do_not_share_a_robot(tmp_path: Path) -> None:
+    """Each runtime's default simulated UR5 is its own device (its uuid is the
+    installation's, kept across restarts): both are listed, each runtime adds its own."""
+    first = Runtime(tmp_path / "a")
+    second = Runtime(tmp_path / "b")
+    try:
+        first.wait_ready()
+        second.wait_ready()
+        wait_for(
+            lambda: len(first.api("GET", "/devices/detected").json()) == 2,
+            10,
+            what="both simulated robots seen",
+        )
+        own = []
+        for runtime in (first, second):
+            detected = runtime.api("GET", "/devices/detected").json()
+            assert len({d["uuid"] for d in detected}) == 2
+            port = runtime_sim_port(runtime)
+            mine = next(d for d in detected if d["url"].endswith(f":{port}"))
+            added = runtime.api("POST", "/devices", json={"uuid": mine["uuid"], "local_name": "r"})
+            assert added.status_code == 201, added.text
+            own.append(mine["uuid"])
+        assert own[0] != own[1]
+        first.stop()
+        first = Runtime(tmp_path / "a", port=first.port)
+        first.wait_ready()
+        wait_for(lambda: connected(first, "r"), 10, what="the same robot after a restart")
+        assert added_uuid(first, "r") == own[0]
+    finally:
+        first.stop()
+        second.stop()
+
+
+def runtime_sim_port(runtime: Runtime) -> int:
+    """The port of the simulated robot this runtime started (from its launcher's log)."""
+    log = (runtime.data_dir / "logs" / "sim-robot-sim-ur5.log").read_text()
+    ready = next(line for line in log.splitlines() if line.startswith('{"event": "ready"'))
+    return int(json.loads(ready)["url"].rsplit(":", 1)[1])
+
+
+def added_uuid(runtime: Runtime, name: str) -> str:
+    return str(runtime.api("GET", f"/devices/{name}").json()["uuid"])
