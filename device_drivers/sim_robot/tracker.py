@@ -243,9 +243,12 @@ class JointTracker:
             self._brake.calculate(self._brake_in, self._brake_path)
         except RuckigError:
             return np.ones(len(position), dtype=bool)
-        extrema = self._brake_path.position_extrema
-        low = np.array([e.min for e in extrema])
-        high = np.array([e.max for e in extrema])
+        # Where each joint comes to rest. A time-optimal brake to zero velocity never turns
+        # back, so its end is its extreme. (ruckig 0.19's position_extrema report 0 for a
+        # joint whose stop takes no time: a joint whose range excludes 0, such as the Panda's
+        # joint 4, then seemed unable to stop anywhere, and never moved.)
+        end = np.array(self._brake_path.at_time(self._brake_path.duration)[0])
+        low, high = np.minimum(position, end), np.maximum(position, end)
         eps = 1e-9
         result: npt.NDArray[np.bool_] = (high > np.maximum(self.upper, position) + eps) | (
             low < np.minimum(self.lower, position) - eps
