@@ -14,12 +14,13 @@ from typing import Any
 import numpy as np
 
 from runtime.interfaces.robot import CommandMode, OperationalMode
-from runtime.jog.actions import Action
+from runtime.jog.actions import Action, RampedJog
 from runtime.jog.velocity import MANUAL_TCP_SPEED, Constraint, VelocityController
 from runtime.kinematics import Kinematics
 from runtime.kit.errors import OpenPendantError, RobotError
 from runtime.links.hub import LINK_FAULTS
 from runtime.links.robot import RobotLink
+from runtime.motion.avoidance import SAFETY
 
 log = logging.getLogger(__name__)
 
@@ -35,6 +36,10 @@ class Ended:
 
 
 Listener = Callable[[Ended], None]
+# A press whose motion the robot's limits or the avoidance hold back: (press, why or "").
+HeldListener = Callable[[str, str], None]
+HELD_SPEED = 1e-3  # rad/s: a fully ramped-up jog commanding less than this is held back
+HELD_CLEARANCE = SAFETY + 0.01  # m: nearer than this, the avoidance is what holds it
 
 
 class Jogger:
@@ -53,6 +58,8 @@ class Jogger:
         )
         self.action: Action | None = None
         self.listener: Listener | None = None
+        self.on_held: HeldListener | None = None
+        self._held = ""  # why the current press is held back, if it is
         self._wake = asyncio.Event()
         self._task = asyncio.create_task(self._run(), name=f"jog:{link.name}")
         link.on_error = self._refused
@@ -74,7 +81,9 @@ class Jogger:
             return None
         return MANUAL_TCP_SPEED
 
-    async def start(self, action: Action, listener: Listener) -> None:
+    async def start(
+        self, action: Action, listener: Listener, on_held: HeldListener | None = None
+    ) -> None:
         # The press belongs to the link it began on: if that link is lost, the next one
         # refuses its commands, and it ends.
         action.generation = self.link.generation
@@ -89,10 +98,12 @@ class Jogger:
             raise RobotError("the robot is not enabled", code="not_enabled")
         previous = self.action
         self.action = None
+        self._held = ""
         if previous is not None and previous.press != action.press:
             self._end(previous, "stopped", "replaced by a new press")
         await self.link.ensure_mode(action.mode, action.generation)
         self.listener = listener
+        self.on_held = on_held
         self.action = action
         await self._tick(action)  # the first command goes out now, not at the next cycle
         self._wake.set()
@@ -138,6 +149,34 @@ class Jogger:
         if self.listener is not None:
             self.listener(Ended(action.press, state, reason, message or reason))
 
+    def _report_held(self, action: Action, now: float) -> None:
+        """Say why a press moves nothing though held (once per change of reason): the
+        operator must not be left with "Moving" while the robot stands still."""
+        held = ""
+        if (
+            isinstance(action, RampedJog)
+            and action.released is None
+            and action.level(now) >= 1.0
+            and action.previous is not None
+            and float(np.max(np.abs(action.previous))) < HELD_SPEED
+        ):
+            held = self.held_reason()
+        if held != self._held:
+            self._held = held
+            if self.on_held is not None:
+                self.on_held(action.press, held)
+
+    def held_reason(self) -> str:
+        for constraint in self.controller.constraints:
+            contact = getattr(constraint, "nearest", None)
+            if contact is not None and contact.proximity.distance < HELD_CLEARANCE:
+                p = contact.proximity
+                return (
+                    f"held back: {p.body} is {p.distance * 1000:.0f} mm from {p.other} "
+                    f"(the robot keeps {SAFETY * 1000:.0f} mm clear)"
+                )
+        return "held back by a joint limit or a singularity"
+
     def _refused(self, error: dict[str, Any]) -> None:
         action = self.action
         if action is not None:
@@ -148,9 +187,11 @@ class Jogger:
 
     async def _tick(self, action: Action) -> None:
         state = self.link.current(action.generation)
-        command = action.tick(state, time.monotonic())
+        now = time.monotonic()
+        command = action.tick(state, now)
         if command is not None:
             await self.link.send(command, action.generation)
+        self._report_held(action, now)
         if action.done and self.action is action:
             self.action = None
             self._end(action, *action.outcome)

@@ -142,7 +142,7 @@ class JogSession:
             self.ended = deque((p for p in self.ended if p != press), maxlen=1000)
             self.touched.add(request.robot)
             self.held[press] = Held(request.robot, None, time.monotonic())
-            await jogger.start(action, self._ended)
+            await jogger.start(action, self._ended, self._held_back)
         except OpenPendantError as exc:
             self._forget(press)
             self.send(
@@ -206,7 +206,7 @@ class JogSession:
                 loop = asyncio.get_running_loop()
                 timer = loop.call_later(self.deadman, self._deadman_lapsed, request.press)
             self.held[request.press] = Held(request.robot, timer, time.monotonic())
-            await jogger.start(action, self._ended)
+            await jogger.start(action, self._ended, self._held_back)
         except OpenPendantError as exc:
             self._forget(request.press)
             self.send(
@@ -336,6 +336,16 @@ class JogSession:
             await self.directory.halt(name, "stop requested")
         for press in list(self.held):
             self._forget(press)
+
+    def _held_back(self, press: str, why: str) -> None:
+        held = self.held.get(press)
+        if held is None:
+            return
+        status = {"type": "status", "press": press, "robot": held.robot}
+        if why:
+            self.send({**status, "state": "held", "reason": "held_back", "message": why})
+        else:
+            self.send({**status, "state": "moving"})
 
     def _ended(self, ended: Ended) -> None:
         held = self.held.get(ended.press)

@@ -264,3 +264,55 @@ def test_a_program_with_an_empty_input_or_a_loose_block_shows_them_and_does_not_
     expect(page.get_by_test_id("python")).to_contain_text("if False:")
     expect(page.get_by_test_id("python")).not_to_contain_text("at_block")
     page.screenshot(path=artifacts / "problems.png")
+
+
+def test_a_robot_added_inside_another_is_reported_then_mounted_elsewhere_and_jogged(
+    runtime: Runtime, robot: str, panda: SimRobotProc, tablet: BrowserContext, artifacts: Path
+) -> None:
+    runtime.api("DELETE", "/variables/frames.panda")  # added at the world origin: in the UR5
+    added = runtime.api("POST", "/devices", json={"uuid": panda.uuid, "local_name": "panda"})
+    assert added.status_code == 201, added.text
+    page = tablet.new_page()
+    page.goto(f"{runtime.url}/#/jog")
+    expect(chip(page, "panda")).to_be_visible(timeout=10_000)
+    chip(page, "panda").tap()
+    expect(page.get_by_test_id("jog-robot")).to_have_text("panda")
+    # Reported, with the reason: it stands inside the other robot.
+    expect(page.get_by_test_id("clearance")).to_contain_text("Inside robot", timeout=10_000)
+    take_control_and_enable(page)
+    # A joint whose motion the overlap holds back says so, instead of "Moving" (which joints
+    # those are depends on how the two arms stand inside each other).
+    finger = Finger(page)
+    said = ""
+    for axis in range(4):
+        key = f"[data-testid=jog-row][data-axis='{axis}'] [data-testid=jog-plus]"
+        finger.down(page.locator(key))
+        try:
+            deadline = time.monotonic() + 2.0
+            while time.monotonic() < deadline and "held back" not in said:
+                said = page.get_by_test_id("deadman").inner_text()
+                page.wait_for_timeout(50)
+            if "held back" in said:
+                page.screenshot(path=artifacts / "1-held-back.png")
+        finally:
+            finger.up()
+        if "held back" in said:
+            break
+    assert "Not moving: held back" in said and "robot/" in said, said
+
+    # Mounted 1.5 m away on the cell setup (Scene) screen, it jogs.
+    page.get_by_test_id("nav-scene").tap()
+    page.get_by_test_id("mount-x").fill("1500")
+    page.get_by_test_id("mount-x").dispatch_event("change")
+    page.get_by_test_id("save-mount").tap()
+    expect(page.get_by_test_id("mount-x")).to_have_value("1500")
+    frame = runtime.api("GET", "/variables/frames.panda").json()
+    assert abs(frame["value"]["pose"]["position"][0] - 1.5) < 1e-9
+    page.get_by_test_id("nav-jog").tap()
+    expect(page.get_by_test_id("clearance")).not_to_contain_text("Inside", timeout=10_000)
+    before = robot_joints(runtime, "panda")
+    hold(page, 0, 0.8)
+    wait_for(lambda: robot_at_rest(runtime, "panda"), 5, what="the Panda stopped")
+    assert robot_joints(runtime, "panda")[0] > before[0] + 0.01
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")

@@ -9,7 +9,7 @@ export interface JogStatus {
   type: "status";
   press: string;
   robot: string | null;
-  state: "moving" | "stopped" | "halted" | "done" | "refused";
+  state: "moving" | "held" | "stopped" | "halted" | "done" | "refused";
   reason?: string;
   message?: string;
 }
@@ -67,7 +67,9 @@ export class JogSocket extends EventTarget {
     };
     socket.onmessage = (event) => {
       const message = JSON.parse(event.data as string) as JogMessage;
-      if (message.type === "status" && message.state !== "moving") this.stopBeating(message.press);
+      // "held": still pressed, held back (an obstacle, a limit): the heartbeat goes on.
+      const live = message.type === "status" && (message.state === "moving" || message.state === "held");
+      if (message.type === "status" && !live) this.stopBeating(message.press);
       this.dispatchEvent(new CustomEvent<JogMessage>("message", { detail: message }));
     };
     socket.onclose = () => {

@@ -8,3 +8,21 @@ export function quaternionToRpy([x, y, z, w]: number[]): [number, number, number
   const deg = (r: number) => (r * 180) / Math.PI;
   return [deg(roll), deg(pitch), deg(yaw)];
 }
+
+/** The quaternion [x, y, z, w] of roll, pitch, yaw in degrees (about fixed X, Y, Z). */
+export function rpyToQuaternion(
+  rollDeg: number,
+  pitchDeg: number,
+  yawDeg: number,
+): [number, number, number, number] {
+  const half = Math.PI / 360;
+  const [cr, sr] = [Math.cos(rollDeg * half), Math.sin(rollDeg * half)];
+  const [cp, sp] = [Math.cos(pitchDeg * half), Math.sin(pitchDeg * half)];
+  const [cy, sy] = [Math.cos(yawDeg * half), Math.sin(yawDeg * half)];
+  return [
+    sr * cp * cy - cr * sp * sy,
+    cr * sp * cy + sr * cp * sy,
+    cr * cp * sy - sr * sp * cy,
+    cr * cp * cy + sr * sp * sy,
+  ];
+}

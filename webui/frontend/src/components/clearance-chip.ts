@@ -57,7 +57,10 @@ export class OpClearanceChip extends LitElement {
     if (!c) return html`<span class="chip" data-testid="clearance">Clearance unknown</span>`;
     const text = c.distance == null
       ? "Nothing near"
-      : `Closest: ${(c.distance * 1000).toFixed(0)} mm (${c.robot_part} – ${c.other})`;
+      : c.distance < 0
+        ? `Inside ${c.other} by ${(-c.distance * 1000).toFixed(0)} mm (${c.robot_part}): ` +
+          "set where the robot is mounted (Scene)"
+        : `Closest: ${(c.distance * 1000).toFixed(0)} mm (${c.robot_part} – ${c.other})`;
     const near = c.distance != null && c.distance < NEAR;
     return html`<span class="chip ${near ? "bad" : ""}" data-testid="clearance">${text}</span>`;
   }

@@ -475,8 +475,10 @@ export class OpJogPanel extends LitElement {
         : "Take control to jog this robot";
       return html`<div class="deadman chip" data-testid="deadman">${ready}</div>`;
     }
-    const cls = s.state === "moving" ? "ok" : s.state === "halted" || s.state === "refused" ? "bad" : "";
+    const cls = s.state === "moving" ? "ok" : s.state === "held" ? "warn"
+      : s.state === "halted" || s.state === "refused" ? "bad" : "";
     const text = s.state === "moving" ? "Moving — hold to continue"
+      : s.state === "held" ? `Not moving: ${s.message ?? "held back"}`
       : s.state === "halted" ? `Halted: ${s.reason ?? ""}`
       : s.state === "refused" ? `Refused: ${s.message ?? s.reason ?? ""}`
       : s.state === "done" ? "Arrived" : "Stopped";

@@ -2,6 +2,7 @@ import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
 import { FocusController, focus } from "../focus";
 import { FeedController, feed } from "../live";
+import { quaternionToRpy, rpyToQuaternion } from "../math";
 import { shared } from "../styles";
 import type { Obstacle, PathPreview, PoseJson, WorldContents } from "../three/scene";
 import "../components/clearance-chip";
@@ -10,6 +11,33 @@ import type { RobotModel } from "../components/robot-view";
 import type { Waypoint } from "../components/waypoint-list";
 
 type SceneObject = Omit<Obstacle, "name" | "selected">;
+
+/** Where a robot's base stands in the world: mm and degrees, as people set it. */
+interface Mount {
+  x: number;
+  y: number;
+  z: number;
+  roll: number;
+  pitch: number;
+  yaw: number;
+}
+
+const MOUNT_FIELDS: [keyof Mount, string][] = [
+  ["x", "X mm"],
+  ["y", "Y mm"],
+  ["z", "Z mm"],
+  ["roll", "Roll °"],
+  ["pitch", "Pitch °"],
+  ["yaw", "Yaw °"],
+];
+
+function mountOf(base: PoseJson | null): Mount {
+  const p = base?.position ?? [0, 0, 0];
+  const [roll, pitch, yaw] = quaternionToRpy(base?.orientation ?? [0, 0, 0, 1]);
+  const r = (v: number) => Math.round(v * 10) / 10;
+  return { x: r(p[0] * 1000), y: r(p[1] * 1000), z: r(p[2] * 1000),
+    roll: r(roll), pitch: r(pitch), yaw: r(yaw) };
+}
 
 interface SceneResponse {
   robots: Record<string, { base: PoseJson; joints: number[] }>;
@@ -51,6 +79,7 @@ export class OpScenePanel extends LitElement {
     previewing: { state: true },
     message: { state: true },
     confirmDelete: { state: true },
+    mount: { state: true },
   };
   declare robot: string;
   declare model: RobotModel | null;
@@ -58,6 +87,7 @@ export class OpScenePanel extends LitElement {
   declare base: PoseJson | null;
   declare selected: string;
   declare draft: SceneObject | null;
+  declare mount: Mount | null; // where the robot in focus stands, as edited
   declare waypoints: Waypoint[];
   declare target: string;
   declare kind: "joint" | "linear";
@@ -106,6 +136,21 @@ export class OpScenePanel extends LitElement {
       .objects button[aria-pressed="true"] {
         border-color: var(--accent);
         color: var(--accent);
+      }
+      .mount {
+        display: grid;
+        grid-template-columns: repeat(3, minmax(0, 1fr));
+        gap: 8px;
+        margin-bottom: 10px;
+      }
+      .mount label {
+        display: flex;
+        flex-direction: column;
+        gap: 4px;
+        font-size: 15px;
+      }
+      .mount input {
+        width: 100%;
       }
       .grid {
         display: grid;
@@ -172,6 +217,7 @@ export class OpScenePanel extends LitElement {
     this.previewing = false;
     this.message = "";
     this.confirmDelete = false;
+    this.mount = null;
   }
 
   protected willUpdate(): void {
@@ -201,6 +247,7 @@ export class OpScenePanel extends LitElement {
     const scene = await api<SceneResponse>("GET", "/api/motion/scene");
     this.objects = scene.objects;
     this.base = scene.robots[this.robot]?.base ?? null;
+    this.mount = mountOf(this.base);
     if (this.selected && !(this.selected in this.objects)) this.select("");
   }
 
@@ -283,6 +330,51 @@ export class OpScenePanel extends LitElement {
     const draft = structuredClone(this.draft);
     update(draft, value);
     this.draft = draft;
+  }
+
+  // Mounting ---------------------------------------------------------------------------------
+
+  /** Where the robot stands in the world: the frame the jog, motion and 3D view use. */
+  private async saveMount(): Promise<void> {
+    const m = this.mount;
+    if (!m || !this.robot) return;
+    if (!Object.values(m).every(Number.isFinite)) {
+      this.message = "Every mounting value must be a number.";
+      return;
+    }
+    const pose = {
+      position: [m.x / 1000, m.y / 1000, m.z / 1000],
+      orientation: rpyToQuaternion(m.roll, m.pitch, m.yaw),
+    };
+    try {
+      await api("PUT", `/api/variables/frames.${encodeURIComponent(this.robot)}`, {
+        type: "frame",
+        value: { pose },
+      });
+      this.message = "";
+      await this.loadScene();
+      await this.runPreview();
+    } catch (err) {
+      this.message = errorText(err);
+    }
+  }
+
+  private mounting() {
+    const m = this.mount;
+    if (!m) return html`<p class="muted">Loading…</p>`;
+    return html`<div class="mount" data-testid="mount-editor">
+        ${MOUNT_FIELDS.map(([key, label]) => html`<label>
+          <span>${label}</span>
+          <input type="number" inputmode="decimal" step="10" data-testid="mount-${key}"
+            .value=${String(m[key])}
+            @change=${(e: Event) => (this.mount = { ...m,
+              [key]: Number((e.target as HTMLInputElement).value) })} /></label>`)}
+      </div>
+      <div class="row">
+        <button class="primary" data-testid="save-mount" @click=${() => this.saveMount()}>
+          Save mounting</button>
+        <span class="muted">Where ${this.robot}'s base stands in the cell (the world frame).</span>
+      </div>`;
   }
 
   // Path preview ----------------------------------------------------------------------------
@@ -389,6 +481,10 @@ export class OpScenePanel extends LitElement {
             <op-clearance-chip .robot=${this.robot}></op-clearance-chip></div>
         </div>
         <div class="side">
+          <section class="card">
+            <h2>Mounting of ${this.robot}</h2>
+            ${this.mounting()}
+          </section>
           <section class="card">
             <h2>Path preview</h2>
             <div class="row">
