@@ -75,6 +75,7 @@ export class JogSocket extends EventTarget {
     socket.onclose = () => {
       this.socket = null;
       this.online = false;
+      direct = null; // a restarted runtime may listen on another port: ask again
       for (const press of [...this.held.keys()]) this.stopBeating(press);
       this.dispatchEvent(new Event("change"));
       if (!this.closed) window.setTimeout(() => this.connect(), 1000);

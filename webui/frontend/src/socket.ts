@@ -1,5 +1,6 @@
 // WebSockets to the runtime: the URL for a path on this page's host, the wait before a
-// dropped socket tries again (doubling from 0.5 s, at most 5 s), and a socket that does so.
+// dropped socket tries again (doubling from 0.5 s, at most 2 s: a page is usable again soon
+// after the runtime is back), and a socket that does so.
 
 export function socketUrl(path: string, port?: number): string {
   const scheme = location.protocol === "https:" ? "wss" : "ws";
@@ -8,7 +9,7 @@ export function socketUrl(path: string, port?: number): string {
 }
 
 export function retryDelay(attempt: number): number {
-  return Math.min(500 * 2 ** attempt, 5000);
+  return Math.min(500 * 2 ** attempt, 2000);
 }
 
 /** A socket to a path on this host that reconnects itself until stopped. */

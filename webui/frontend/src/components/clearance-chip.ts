@@ -1,5 +1,6 @@
 import { LitElement, html } from "lit";
 import { api } from "../api";
+import { feed } from "../live";
 import { shared } from "../styles";
 
 interface Clearance {
@@ -41,6 +42,10 @@ export class OpClearanceChip extends LitElement {
 
   private async poll(): Promise<void> {
     if (!this.robot || document.hidden || this.busy) return;
+    if (!feed.online) {
+      this.clearance = null; // nothing asked of a runtime that is not there
+      return;
+    }
     this.busy = true;
     try {
       const path = `/api/motion/robots/${encodeURIComponent(this.robot)}/clearance`;

@@ -124,6 +124,7 @@ export class OpRobotView extends LitElement {
       this.shownWorld = "";
       this.showWorld();
     } catch (err) {
+      this.loadedUrdf = ""; // the same model given again is tried again
       this.status = "error";
       this.progress = `3D view unavailable: ${err instanceof Error ? err.message : String(err)}`;
     }

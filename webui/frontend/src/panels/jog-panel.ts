@@ -6,6 +6,7 @@ import { deg, mm } from "../format";
 import { JogSocket, type JogMessage, type JogStatus } from "../jog-socket";
 import { FeedController, feed } from "../live";
 import { quaternionToRpy } from "../math";
+import { RobotLoader } from "../robot-loader";
 import { shared } from "../styles";
 import type { Marker } from "../three/scene";
 import type { RobotState } from "../types";
@@ -60,6 +61,7 @@ export class OpJogPanel extends LitElement {
   declare mouseOn: boolean;
   private socket = new JogSocket();
   private press = "";
+  private loadError = "";
   private onVisibility = () => document.hidden && this.socket.releaseAll();
   private onBlur = () => this.socket.releaseAll();
   private onControl = () => this.requestUpdate();
@@ -167,6 +169,7 @@ export class OpJogPanel extends LitElement {
     super();
     new FeedController(this);
     new FocusController(this);
+    new RobotLoader(this, (robot) => this.loadRobot(robot));
     this.robot = "";
     this.model = null;
     this.mode = "joint";
@@ -179,7 +182,10 @@ export class OpJogPanel extends LitElement {
     this.mouse = "";
     this.mouseOn = false;
     this.socket.addEventListener("message", (e) => this.onMessage((e as CustomEvent<JogMessage>).detail));
-    this.socket.addEventListener("change", () => this.requestUpdate());
+    this.socket.addEventListener("change", () => {
+      if (!this.socket.online) this.status = null; // what was held ended with the link
+      this.requestUpdate();
+    });
   }
 
   async connectedCallback(): Promise<void> {
@@ -218,33 +224,34 @@ export class OpJogPanel extends LitElement {
   }
 
   protected updated(changed: Map<string, unknown>): void {
-    if (changed.has("robot") && this.robot) {
-      control.resume(this.robot);
-      void this.loadRobot();
-    }
+    if (changed.has("robot") && this.robot) control.resume(this.robot);
   }
 
-  private async loadRobot(): Promise<void> {
-    const robot = this.robot;
-    this.model = null;
+  private async loadRobot(robot: string): Promise<boolean> {
+    if (this.model?.name !== robot) this.model = null;
     try {
       const model = await api<RobotModel>("GET", `/api/jog/robots/${encodeURIComponent(robot)}`);
-      if (robot !== this.robot) return; // the focus moved on meanwhile
+      if (robot !== this.robot) return true; // the focus moved on meanwhile
       this.model = model;
-      await this.loadWaypoints();
+      if (this.message === this.loadError) this.message = "";
+      this.loadError = "";
+      return await this.loadWaypoints();
     } catch (err) {
-      this.message = errorText(err);
+      this.loadError = this.message = errorText(err);
+      return false;
     }
   }
 
-  private async loadWaypoints(): Promise<void> {
+  private async loadWaypoints(): Promise<boolean> {
     try {
       this.waypoints = await api<Waypoint[]>(
         "GET",
         `/api/jog/robots/${encodeURIComponent(this.robot)}/waypoints`,
       );
+      return true;
     } catch (err) {
       this.message = errorText(err);
+      return false;
     }
   }
 
@@ -457,12 +464,11 @@ export class OpJogPanel extends LitElement {
         value: state ? `${deg(state.joint_position[i])}°` : "–",
       }));
     }
-    const [x, y, z] = state?.tcp_pose.position ?? [0, 0, 0];
-    const rpy = state ? quaternionToRpy(state.tcp_pose.orientation) : [0, 0, 0];
+    if (!state) return CARTESIAN.map((a) => ({ key: a, label: a.toUpperCase(), value: "–" }));
+    const [x, y, z] = state.tcp_pose.position;
     const values = [`${mm(x)} mm`, `${mm(y)} mm`, `${mm(z)} mm`,
-      ...rpy.map((a) => `${a.toFixed(1)}°`)];
-    return CARTESIAN.map((a, i) => ({ key: a, label: a.toUpperCase(),
-      value: state ? values[i] : "–" }));
+      ...quaternionToRpy(state.tcp_pose.orientation).map((a) => `${a.toFixed(1)}°`)];
+    return CARTESIAN.map((a, i) => ({ key: a, label: a.toUpperCase(), value: values[i] }));
   }
 
   private deadman() {
@@ -536,7 +542,9 @@ export class OpJogPanel extends LitElement {
     const mine = control.holds(this.robot);
     const controlledBy = device?.controlled_by;
     const canMove = mine && !!state?.flags.ready;
-    const rpy = state ? quaternionToRpy(state.tcp_pose.orientation) : [0, 0, 0];
+    const canPower = mine && !!state; // no state: the runtime or the robot's link is down
+    const rpy = state ? quaternionToRpy(state.tcp_pose.orientation).map((a) => a.toFixed(1))
+      : ["–", "–", "–"];
     const markers: Marker[] = this.waypoints.map((w) => ({
       name: w.name, position: w.tcp_position, selected: w.name === this.selected }));
     const mice = this.mice();
@@ -549,12 +557,12 @@ export class OpJogPanel extends LitElement {
           ${mine ? `You have control (${control.holder})`
             : controlledBy ? `Controlled by ${controlledBy}` : "Nobody has control"}</span>
         ${state?.flags.enabled
-          ? html`<button data-testid="disable" ?disabled=${!mine} @click=${() => this.power("disable")}>
+          ? html`<button data-testid="disable" ?disabled=${!canPower} @click=${() => this.power("disable")}>
               Disable</button>`
-          : html`<button data-testid="enable" ?disabled=${!mine} @click=${() => this.power("enable")}>
+          : html`<button data-testid="enable" ?disabled=${!canPower} @click=${() => this.power("enable")}>
               Enable</button>`}
         ${state?.flags.error
-          ? html`<button ?disabled=${!mine} @click=${() => this.power("reset_errors")}>Reset error</button>`
+          ? html`<button ?disabled=${!canPower} @click=${() => this.power("reset_errors")}>Reset error</button>`
           : ""}
       </div>
       ${this.message ? html`<p class="error" role="alert" data-testid="jog-message">${this.message}</p>` : ""}
@@ -568,9 +576,9 @@ export class OpJogPanel extends LitElement {
             <div><small>X mm</small>${state ? mm(state.tcp_pose.position[0]) : "–"}</div>
             <div><small>Y mm</small>${state ? mm(state.tcp_pose.position[1]) : "–"}</div>
             <div><small>Z mm</small>${state ? mm(state.tcp_pose.position[2]) : "–"}</div>
-            <div><small>Roll °</small>${rpy[0].toFixed(1)}</div>
-            <div><small>Pitch °</small>${rpy[1].toFixed(1)}</div>
-            <div><small>Yaw °</small>${rpy[2].toFixed(1)}</div>
+            <div><small>Roll °</small>${rpy[0]}</div>
+            <div><small>Pitch °</small>${rpy[1]}</div>
+            <div><small>Yaw °</small>${rpy[2]}</div>
           </div>
         </div>
         <section class="card waypoints">

@@ -3,6 +3,7 @@ import { api, errorText } from "../api";
 import { FocusController, focus } from "../focus";
 import { FeedController, feed } from "../live";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
+import { RobotLoader } from "../robot-loader";
 import { shared } from "../styles";
 import type { Obstacle, PathPreview, PoseJson, WorldContents } from "../three/scene";
 import "../components/clearance-chip";
@@ -95,6 +96,7 @@ export class OpScenePanel extends LitElement {
   declare preview: PlanReport | null;
   declare previewing: boolean;
   declare message: string;
+  private loadError = "";
   declare confirmDelete: boolean;
 
   static styles = [
@@ -203,6 +205,7 @@ export class OpScenePanel extends LitElement {
     super();
     new FeedController(this);
     new FocusController(this);
+    new RobotLoader(this, (robot) => this.loadRobot(robot));
     this.robot = "";
     this.model = null;
     this.objects = {};
@@ -224,22 +227,21 @@ export class OpScenePanel extends LitElement {
     this.robot = focus.robot;
   }
 
-  protected updated(changed: Map<string, unknown>): void {
-    if (changed.has("robot") && this.robot) void this.loadRobot();
-  }
-
-  private async loadRobot(): Promise<void> {
-    const name = this.robot;
+  private async loadRobot(name: string): Promise<boolean> {
     const robot = encodeURIComponent(name);
-    this.model = null;
+    if (this.model?.name !== name) this.model = null;
     try {
       const model = await api<RobotModel>("GET", `/api/jog/robots/${robot}`);
-      if (name !== this.robot) return; // the focus moved on meanwhile
+      if (name !== this.robot) return true; // the focus moved on meanwhile
       this.model = model;
       this.waypoints = await api<Waypoint[]>("GET", `/api/jog/robots/${robot}/waypoints`);
       await this.loadScene();
+      if (this.message === this.loadError) this.message = "";
+      this.loadError = "";
+      return true;
     } catch (err) {
-      this.message = errorText(err);
+      this.loadError = this.message = errorText(err);
+      return false;
     }
   }
 
