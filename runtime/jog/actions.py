@@ -23,6 +23,8 @@ ARRIVED = 1e-7  # rad: a planned move is done when every joint is this close to 
 # Cartesian jog holds its line and orientation: error fed back at this rate (1/s).
 CORRECTION_GAIN = 10.0
 RAMP = 0.15  # s from standstill to jog speed and back
+MOUSE_LAG = 0.005  # m: how far off its course the 3D mouse's TCP is pulled back from, at most
+MOUSE_LAG_ANGLE = 0.05  # rad: the same for its orientation
 
 
 class Action(ABC):
@@ -242,6 +244,50 @@ class MouseJog(Action):
         self.last_report: tuple[int, float] | None = None  # (seqno, when it arrived here)
         self.buttons: set[int] = set()
         self.idle = False
+        self.course: pin.SE3 | None = None  # where the deflection so far should have led
+        self.last_tick: float | None = None
+        self.tick_dt = 0.0
+        self.level = np.zeros(6)  # the deflection as followed: it changes in RAMP at most
+
+    def follow(self, axes: FloatArray, dt: float) -> FloatArray:
+        """The deflection, changing from rest to full (or back) in RAMP at the quickest: a
+        cap let go at full speed then stops along the path it was moving on, not with every
+        joint braking on its own."""
+        most = dt / RAMP
+        self.level = self.level + np.clip(axes - self.level, -most, most)
+        return self.level
+
+    def dt(self, now: float) -> float:
+        """Seconds since the last tick (none before the first, at most 50 ms)."""
+        self.tick_dt = 0.0 if self.last_tick is None else min(now - self.last_tick, 0.05)
+        self.last_tick = now
+        return self.tick_dt
+
+    def keep_course(self, current: pin.SE3, twist: FloatArray) -> FloatArray:
+        """The twist, plus a pull back onto the course it commands: the QP gives the nearest
+        joint velocities, which near limits or a singularity are a little off, and a mouse
+        held for seconds would add that up to centimetres. Only drift across the motion is
+        corrected (nothing pulls along it, so letting go stops at once), and at most by
+        MOUSE_LAG, so a robot held back is not pushed harder."""
+        dt = self.tick_dt
+        linear, angular = twist[:3], twist[3:]
+        if self.course is None or not np.any(twist):
+            self.course = current.copy()
+            return twist
+        position = self.course.translation + linear * dt - current.translation
+        rotation = pin.log3(pin.exp3(angular * dt) @ self.course.rotation @ current.rotation.T)
+        for error, direction, most in (
+            (position, linear, MOUSE_LAG),
+            (rotation, angular, MOUSE_LAG_ANGLE),
+        ):
+            norm = float(np.linalg.norm(direction))
+            if norm > 1e-12:
+                error -= direction * float(direction @ error) / norm**2
+            size = float(np.linalg.norm(error))
+            if size > most:
+                error *= most / size
+        self.course = pin.SE3(pin.exp3(rotation) @ current.rotation, current.translation + position)
+        return twist + CORRECTION_GAIN * np.concatenate((position, rotation))
 
     def _halt(self, reason: str) -> dict[str, Any]:
         self.done = True
@@ -264,13 +310,17 @@ class MouseJog(Action):
         self.buttons = set(device.buttons)
         q = np.array(state.joint_position_command)
         previous = np.array(state.joint_velocity) if self.previous is None else self.previous
+        axes = self.follow(axes, self.dt(now))
         if self.cartesian:
             twist = axes * self.speeds
+            current = self.kinematics.tcp(q)
             if self.frame == "tool":
-                rotation = self.kinematics.tcp(q).rotation
+                rotation = current.rotation
                 twist = np.concatenate((rotation @ twist[:3], rotation @ twist[3:]))
+            twist = self.keep_course(current, twist)
             step = self.controller.from_twist(q, twist, self.tcp_cap, previous)
         else:
+            self.course = None
             wanted = np.zeros(q.size)
             for axis, joint in enumerate(self.joints):
                 wanted[joint] = axes[axis] * self.speeds[axis]

@@ -67,6 +67,14 @@ class Held:
     last_beat: float = 0.0
 
 
+def mouse_speeds(binding: MouseBinding) -> FloatArray:
+    """Full deflection on each axis: m/s and rad/s (Cartesian), rad/s (joints)."""
+    linear, angular = (
+        (LINEAR_SPEED, ANGULAR_SPEED) if binding.mode == "cartesian" else (JOINT_SPEED, JOINT_SPEED)
+    )
+    return np.array([linear] * 3 + [angular] * 3) * binding.speed
+
+
 class JogSession:
     def __init__(
         self, directory: Directory, storage: StorageClient, deadman: float, paths: PathCheck
@@ -112,20 +120,15 @@ class JogSession:
             if held is not None:
                 await self._stop(held.robot, press, "3D mouse disabled", halt=True)
             return
-        if press in self.held:
-            return
         try:
+            if await self._rebind(press, request):
+                return
             await self.directory.check_lease(request.robot, request.token)
             jogger = await self.directory.jogger(request.robot)
             feed = await self.directory.input_feed(request.device)
             if any(j >= jogger.link.info.dof or j < 0 for j in request.joints):
                 raise InvalidValue(f"the robot has joints 0 to {jogger.link.info.dof - 1}")
-            linear, angular = (
-                (LINEAR_SPEED, ANGULAR_SPEED)
-                if request.mode == "cartesian"
-                else (JOINT_SPEED, JOINT_SPEED)
-            )
-            speeds = np.array([linear] * 3 + [angular] * 3) * request.speed
+            speeds = mouse_speeds(request)
             action = MouseJog(
                 press,
                 jogger.controller,
@@ -159,6 +162,40 @@ class JogSession:
         if press in self.held:
             self.send({"type": "status", "press": press, "robot": request.robot, "state": "moving"})
 
+    async def _rebind(self, press: str, request: MouseBinding) -> bool:
+        """A binding sent again while the mouse drives a robot: the same robot takes the new
+        mode, frame, speed and joints at once (the page's frame buttons drive the mouse too);
+        another robot: the first one halts and the mouse is bound afresh. True when done."""
+        held = self.held.get(press)
+        if held is None:
+            return False
+        jogger = self.directory.joggers.get(held.robot)
+        action = jogger.action if jogger is not None else None
+        if jogger is None or held.robot != request.robot or not isinstance(action, MouseJog):
+            await self._stop(held.robot, press, "3D mouse bound to another robot", halt=True)
+            return False
+        try:
+            await self.directory.check_lease(request.robot, request.token)
+            if any(j >= jogger.link.info.dof or j < 0 for j in request.joints):
+                raise InvalidValue(f"the robot has joints 0 to {jogger.link.info.dof - 1}")
+        except OpenPendantError:
+            await self._stop(held.robot, press, "3D mouse binding refused", halt=True)
+            raise
+        action.cartesian = request.mode == "cartesian"
+        action.frame = request.frame
+        action.joints = request.joints
+        action.speeds = mouse_speeds(request)
+        self.send(
+            {
+                "type": "mouse_frame",
+                "device": request.device,
+                "frame": action.frame,
+                "mode": request.mode,
+            }
+        )
+        self.send({"type": "status", "press": press, "robot": request.robot, "state": "moving"})
+        return True
+
     def _mouse_button(self, request: MouseBinding, button: int) -> None:
         action = request.buttons.get(str(button))
         if action == "toggle_frame":
@@ -166,7 +203,15 @@ class JogSession:
             current = jogger.action if jogger is not None else None
             if isinstance(current, MouseJog):
                 current.frame = "tool" if current.frame == "base" else "base"
-                self.send({"type": "mouse_frame", "device": request.device, "frame": current.frame})
+                mode = "cartesian" if current.cartesian else "joint"
+                self.send(
+                    {
+                        "type": "mouse_frame",
+                        "device": request.device,
+                        "frame": current.frame,
+                        "mode": mode,
+                    }
+                )
         elif action == "teach":
             self._spawn(self._teach_from_mouse(request.robot))
 

@@ -9,13 +9,24 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+import httpx
 import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
 
-from tests.browser.conftest import Finger, PageErrors, add_robot, robot_at_rest, robot_joints
+from tests.browser.conftest import (
+    PHONE,
+    Finger,
+    PageErrors,
+    add_robot,
+    fits_the_screen,
+    robot_at_rest,
+    robot_joints,
+    robot_state,
+)
+from tests.integration.test_jog import mouse_recording
 from tests.support.blocks import block, text, workspace
-from tests.support.processes import STILL, Runtime, SimRobotProc, wait_for
+from tests.support.processes import STILL, Runtime, SimRobotProc, SpaceMouseProc, wait_for
 
 PANELS = ("jog", "program", "scene", "devices", "system")
 
@@ -316,3 +327,56 @@ def test_a_robot_added_inside_another_is_reported_then_mounted_elsewhere_and_jog
     assert robot_joints(runtime, "panda")[0] > before[0] + 0.01
     page.get_by_test_id("control").tap()
     expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+
+
+def test_the_3d_mouse_follows_the_frame_buttons_and_shows_its_axes(
+    runtime: Runtime, robot: str, phone: BrowserContext, tmp_path: Path, artifacts: Path
+) -> None:
+    """Switched on in Joints and then set to Base, a lift raises the tool (in Joints it would
+    turn joint 3); at rest the mouse says so; each axis shows live what it drives; the halt
+    banner (the mouse unplugged) stays on the screen."""
+    recording = mouse_recording(
+        tmp_path / "lift.jsonl",
+        [(0.6, [0, 0, -300, 0, 0, 0], 0), (0.5, [0, 0, 0, 0, 0, 0], 0)],
+        end="stuck",  # silent at rest: nothing to halt
+    )
+    mouse = SpaceMouseProc(tmp_path, "ui-mouse", recording)
+    mouse.wait_ready()
+    try:
+        wait_for(lambda: runtime.is_detected(mouse.uuid), 10, what="mouse detected")
+        added = runtime.api("POST", "/devices", json={"uuid": mouse.uuid, "local_name": "mouse"})
+        assert added.status_code == 201, added.text
+        page = phone.new_page()
+        page.goto(f"{runtime.url}/#/jog")
+        take_control_and_enable(page)
+        page.get_by_test_id("mode-joint").tap()
+        toggle = page.get_by_test_id("mouse-toggle")
+        expect(toggle).to_be_enabled(timeout=10_000)
+        toggle.tap()
+        expect(page.get_by_test_id("deadman")).to_have_text("3D mouse on — at rest")
+        drives = page.get_by_test_id("mouse-drives")
+        expect(drives.nth(2)).to_have_text("J3")
+        page.get_by_test_id("mode-base").tap()
+        expect(drives.nth(2)).to_have_text("Base Z")
+        before = robot_state(runtime)["tcp_pose"]["position"]
+        assert httpx.post(f"{mouse.url}/replay/start", timeout=5).status_code == 204
+        expect(page.get_by_test_id("mouse-value").nth(2)).not_to_have_text("0 %")
+        expect(page.get_by_test_id("deadman")).to_have_text("Moving with the 3D mouse")
+        expect(page.get_by_test_id("deadman")).to_have_text("3D mouse on — at rest", timeout=5000)
+        wait_for(lambda: robot_at_rest(runtime), 5, what="the robot stopped")
+        after = robot_state(runtime)["tcp_pose"]["position"]
+        moved = np.array(after) - np.array(before)
+        assert moved[2] > 0.005, moved  # lifted, as the mouse was
+        assert np.abs(moved[:2]).max() < 0.001, moved  # straight up
+        mouse.stop()  # unplugged: the binding ends with a halt, said in full on the screen
+        banner = page.get_by_test_id("deadman")
+        expect(banner).to_contain_text("Halted", timeout=10_000)
+        assert in_viewport(page, banner) or fits_the_screen(page)
+        box = banner.bounding_box()
+        assert box is not None and box["x"] + box["width"] <= PHONE["width"]
+        page.screenshot(path=artifacts / "mouse-halted.png")
+        page.get_by_test_id("control").tap()
+        expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+    finally:
+        runtime.api("DELETE", "/devices/mouse")
+        mouse.stop()

@@ -369,3 +369,30 @@ def test_an_unplugged_mouse_stops_the_robot_and_buttons_teach(
     finally:
         mouse.stop()
         cell.runtime.api("DELETE", "/devices/mouse2")
+
+
+def test_a_mouse_bound_again_takes_the_new_mode_at_once(
+    cell: Cell, jog: JogClient, tmp_path: Path
+) -> None:
+    """The page's Joints/Base/Tool buttons re-send the binding: the mouse follows them."""
+    recording = mouse_recording(
+        tmp_path / "lift.jsonl", [(0.8, [0, 0, -300, 0, 0, 0], 0)], end="stuck"
+    )
+    mouse = add_mouse(cell, tmp_path, "mouse3", recording)
+    try:
+        before = cell.robot.q()
+        press = bind_mouse(jog, "mouse3", mode="cartesian", frame="base", speed=0.5)
+        jog.messages.clear()
+        again = bind_mouse(jog, "mouse3", mode="joint", frame="base", speed=0.5)
+        assert again == press
+        assert any(m.get("type") == "mouse_frame" for m in jog.messages)
+        httpx.post(f"{mouse.url}/replay/start", timeout=5)
+        jog.status(press, ("halted",), timeout=10)  # the recording ends deflected: stuck
+        cell.robot.wait_stopped(3)
+        moved = np.degrees(cell.robot.q() - before)
+        assert moved[2] > 0.5, moved  # the lift axis drives joint 3 in joint mode ...
+        others = np.delete(moved, 2)
+        assert np.abs(others).max() < 0.05, moved  # ... and nothing else (a Z move would)
+    finally:
+        mouse.stop()
+        cell.runtime.api("DELETE", "/devices/mouse3")

@@ -17,7 +17,7 @@ export interface JogStatus {
 export type JogMessage =
   | JogStatus
   | { type: "taught"; robot: string; name: string }
-  | { type: "mouse_frame"; device: string; frame: string }
+  | { type: "mouse_frame"; device: string; frame: string; mode: "joint" | "cartesian" }
   | { type: "error"; error: { code: string; message: string } };
 
 let counter = 0;

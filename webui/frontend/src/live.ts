@@ -6,7 +6,7 @@
 
 import type { ReactiveController, ReactiveControllerHost } from "lit";
 import { retryDelay, socketUrl } from "./socket";
-import type { AddedDevice, DetectedDevice, RobotState } from "./types";
+import type { AddedDevice, DetectedDevice, InputState, RobotState } from "./types";
 
 type Message =
   | { type: "detected"; detected: DetectedDevice[] }
@@ -31,6 +31,12 @@ export class DeviceFeed extends EventTarget {
   /** The added robots, connected or not. */
   robots(): AddedDevice[] {
     return this.devices.filter((d) => d.kind === "robot");
+  }
+
+  /** The live state of an input device (a 3D mouse), whose states come on this feed too. */
+  inputState(name: string): InputState | null {
+    const state = this.states.get(name) as unknown as InputState | undefined;
+    return state && Array.isArray(state.axes) ? state : null;
   }
 
   start(): void {

@@ -69,6 +69,16 @@ export interface RobotState {
   error_message: string;
 }
 
+/** A 3D mouse's state (runtime/interfaces/input.py): axes in [-1, 1], x y z rx ry rz. */
+export interface InputState {
+  seqno: number;
+  ts: number;
+  axes: number[];
+  buttons: number[];
+  connected: boolean;
+  error: string;
+}
+
 export interface JointLimits {
   name: string;
   lower: number;

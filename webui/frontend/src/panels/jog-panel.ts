@@ -12,6 +12,7 @@ import type { Marker } from "../three/scene";
 import type { RobotState } from "../types";
 import "../components/clearance-chip";
 import "../components/jog-pad";
+import "../components/mouse-card";
 import "../components/name-dialog";
 import "../components/robot-view";
 import "../components/waypoint-list";
@@ -47,6 +48,7 @@ export class OpJogPanel extends LitElement {
     dialog: { state: true },
     mouse: { state: true },
     mouseOn: { state: true },
+    sensitivity: { state: true },
   };
   declare robot: string;
   declare model: RobotModel | null;
@@ -59,8 +61,10 @@ export class OpJogPanel extends LitElement {
   declare dialog: Dialog;
   declare mouse: string;
   declare mouseOn: boolean;
+  declare sensitivity: number;
   private socket = new JogSocket();
   private press = "";
+  private boundMouse = "";
   private loadError = "";
   private onVisibility = () => document.hidden && this.socket.releaseAll();
   private onBlur = () => this.socket.releaseAll();
@@ -139,6 +143,9 @@ export class OpJogPanel extends LitElement {
         color: var(--accent);
       }
       .deadman {
+        display: block;
+        white-space: normal; /* a long halt reason wraps, never runs off the screen */
+        overflow-wrap: anywhere;
         padding: 10px 14px;
         border-radius: 10px;
         margin-bottom: 10px;
@@ -181,6 +188,7 @@ export class OpJogPanel extends LitElement {
     this.dialog = null;
     this.mouse = "";
     this.mouseOn = false;
+    this.sensitivity = Number(localStorage.getItem("op.mouseSensitivity") ?? "100") || 100;
     this.socket.addEventListener("message", (e) => this.onMessage((e as CustomEvent<JogMessage>).detail));
     this.socket.addEventListener("change", () => {
       if (!this.socket.online) this.status = null; // what was held ended with the link
@@ -219,12 +227,15 @@ export class OpJogPanel extends LitElement {
     const robot = focus.robot;
     if (robot !== this.robot) {
       this.socket.releaseAll(); // nothing held on one robot carries over to another
+      if (this.mouseOn) this.setMouse(false);
       this.robot = robot;
     }
   }
 
   protected updated(changed: Map<string, unknown>): void {
     if (changed.has("robot") && this.robot) control.resume(this.robot);
+    // The mouse follows the frame buttons, the speed override and its sensitivity at once.
+    if (this.mouseOn && this.mouseBinding() !== this.boundMouse) this.setMouse(true);
   }
 
   private async loadRobot(robot: string): Promise<boolean> {
@@ -331,12 +342,15 @@ export class OpJogPanel extends LitElement {
     if (message.type === "status") {
       this.status = message;
       if (message.state === "refused" && message.reason === "lease_held") control.forget(this.robot);
-      if (message.press.startsWith("mouse:") && message.state !== "moving") this.mouseOn = false;
+      if (message.press.startsWith("mouse:") && !["moving", "held"].includes(message.state)) {
+        this.mouseOn = false;
+        this.boundMouse = "";
+      }
     } else if (message.type === "taught") {
       this.message = `Saved waypoint ${message.name} (3D mouse button).`;
       void this.loadWaypoints();
     } else if (message.type === "mouse_frame") {
-      this.mode = message.frame === "tool" ? "tool" : "base";
+      this.mode = message.mode === "joint" ? "joint" : message.frame === "tool" ? "tool" : "base";
     } else if (message.type === "error") {
       this.message = message.error.message;
     }
@@ -348,6 +362,19 @@ export class OpJogPanel extends LitElement {
     return feed.devices.filter((d) => d.kind === "input" && d.status === "connected");
   }
 
+  /** What the mouse should be bound with now, as sent. */
+  private mouseBinding(): string {
+    return JSON.stringify({
+      type: "mouse",
+      ...this.base(),
+      speed: (focus.speed / 100) * (this.sensitivity / 100),
+      device: this.mouse || this.mice()[0]?.local_name,
+      mode: this.mode === "joint" ? "joint" : "cartesian",
+      frame: this.mode === "tool" ? "tool" : "base",
+      buttons: { "0": "teach", "1": "toggle_frame" },
+    });
+  }
+
   private setMouse(on: boolean): void {
     const device = this.mouse || this.mice()[0]?.local_name;
     if (!device) return;
@@ -357,15 +384,21 @@ export class OpJogPanel extends LitElement {
       return;
     }
     this.mouseOn = on;
-    this.socket.send({
-      type: "mouse",
-      ...this.base(),
-      device,
-      enabled: on,
-      mode: this.mode === "joint" ? "joint" : "cartesian",
-      frame: this.mode === "tool" ? "tool" : "base",
-      buttons: { "0": "teach", "1": "toggle_frame" },
-    });
+    const binding = this.mouseBinding();
+    this.boundMouse = on ? binding : "";
+    this.socket.send({ ...JSON.parse(binding), enabled: on });
+  }
+
+  private changeMouse(device: string): void {
+    const on = this.mouseOn;
+    if (on) this.setMouse(false); // the mouse that was on lets go first
+    this.mouse = device;
+    if (on) this.setMouse(true);
+  }
+
+  private setSensitivity(percent: number): void {
+    this.sensitivity = percent;
+    localStorage.setItem("op.mouseSensitivity", String(percent));
   }
 
   // Teaching -------------------------------------------------------------------------------
@@ -483,6 +516,12 @@ export class OpJogPanel extends LitElement {
     }
     const cls = s.state === "moving" ? "ok" : s.state === "held" ? "warn"
       : s.state === "halted" || s.state === "refused" ? "bad" : "";
+    const mouse = s.press.startsWith("mouse:") ? feed.inputState(s.press.slice(6)) : null;
+    if (mouse && s.state === "moving") {
+      const atRest = !mouse.axes.some((a) => a !== 0);
+      return html`<div class="deadman chip ${atRest ? "" : "ok"}" data-testid="deadman">
+        ${atRest ? "3D mouse on — at rest" : "Moving with the 3D mouse"}</div>`;
+    }
     const text = s.state === "moving" ? "Moving — hold to continue"
       : s.state === "held" ? `Not moving: ${s.message ?? "held back"}`
       : s.state === "halted" ? `Halted: ${s.reason ?? ""}`
@@ -624,18 +663,13 @@ export class OpJogPanel extends LitElement {
             : !state?.flags.ready ? html`<p class="muted">Enable the robot to jog it.</p>` : ""}
           <section class="card">
             <h2>3D mouse</h2>
-            ${mice.length
-              ? html`<div class="row">
-                  <select aria-label="3D mouse" .value=${this.mouse || mice[0].local_name}
-                    @change=${(e: Event) => (this.mouse = (e.target as HTMLSelectElement).value)}>
-                    ${mice.map((m) => html`<option value=${m.local_name}>${m.local_name}</option>`)}
-                  </select>
-                  <button data-testid="mouse-toggle" class=${this.mouseOn ? "primary" : ""}
-                    ?disabled=${!canMove} @click=${() => this.setMouse(!this.mouseOn)}>
-                    ${this.mouseOn ? "3D mouse on" : "Use 3D mouse"}</button>
-                </div>
-                <p class="muted">Button 1 saves a waypoint, button 2 switches base/tool.</p>`
-              : html`<p class="muted">No 3D mouse added (Devices panel).</p>`}
+            <op-mouse-card .mice=${mice} device=${this.mouse} ?on=${this.mouseOn}
+              ?disabled=${!canMove} mode=${this.mode} sensitivity=${this.sensitivity}
+              .input=${feed.inputState(this.mouse || mice[0]?.local_name || "")}
+              @mouse-device=${(e: CustomEvent<string>) => this.changeMouse(e.detail)}
+              @mouse-toggle=${(e: CustomEvent<boolean>) => this.setMouse(e.detail)}
+              @mouse-sensitivity=${(e: CustomEvent<number>) => this.setSensitivity(e.detail)}
+            ></op-mouse-card>
           </section>
         </div>
       </div>

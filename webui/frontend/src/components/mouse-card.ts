@@ -1,0 +1,151 @@
+import { LitElement, css, html } from "lit";
+import { shared } from "../styles";
+import type { AddedDevice, InputState } from "../types";
+
+// The 3D mouse on the Jog panel: which mouse, on or off, how sensitive, and a live readout
+// of each of its axes with what that axis drives right now (a joint in Joints mode, a
+// direction of the base or tool frame otherwise), so "lift" never surprises.
+
+const MOTIONS = ["Slide right", "Slide forward", "Lift", "Tilt forward", "Tilt right", "Twist left"];
+const CARTESIAN = ["X", "Y", "Z", "Rx", "Ry", "Rz"];
+
+export class OpMouseCard extends LitElement {
+  static properties = {
+    mice: { attribute: false },
+    device: { type: String },
+    on: { type: Boolean },
+    disabled: { type: Boolean },
+    mode: { type: String },
+    sensitivity: { type: Number },
+    input: { attribute: false },
+  };
+  declare mice: AddedDevice[];
+  declare device: string;
+  declare on: boolean;
+  declare disabled: boolean;
+  declare mode: "joint" | "base" | "tool";
+  declare sensitivity: number;
+  declare input: InputState | null;
+
+  static styles = [
+    shared,
+    css`
+      .row {
+        display: flex;
+        gap: 8px;
+        flex-wrap: wrap;
+        align-items: center;
+      }
+      select {
+        min-height: 56px;
+        font: inherit;
+        background: var(--bg);
+        color: var(--text);
+        border: 2px solid var(--line);
+        border-radius: 10px;
+        padding: 0 12px;
+      }
+      label.sensitivity {
+        display: flex;
+        align-items: center;
+        gap: 8px;
+        flex: 1 1 220px;
+      }
+      label.sensitivity input {
+        flex: 1;
+        min-height: 48px;
+        accent-color: var(--accent);
+      }
+      table {
+        width: 100%;
+        border-collapse: collapse;
+        margin-top: 8px;
+        font-variant-numeric: tabular-nums;
+      }
+      td {
+        padding: 4px 6px;
+        border-top: 1px solid var(--line);
+      }
+      td.bar {
+        width: 40%;
+      }
+      .track {
+        position: relative;
+        height: 12px;
+        border-radius: 6px;
+        background: var(--raised);
+      }
+      .fill {
+        position: absolute;
+        top: 0;
+        bottom: 0;
+        background: var(--accent);
+        border-radius: 6px;
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    this.mice = [];
+    this.device = "";
+    this.on = false;
+    this.disabled = false;
+    this.mode = "joint";
+    this.sensitivity = 100;
+    this.input = null;
+  }
+
+  private emit(name: string, detail: unknown): void {
+    this.dispatchEvent(new CustomEvent(name, { detail, bubbles: true, composed: true }));
+  }
+
+  private drives(axis: number): string {
+    if (this.mode === "joint") return `J${axis + 1}`;
+    return `${this.mode === "tool" ? "Tool" : "Base"} ${CARTESIAN[axis]}`;
+  }
+
+  private readout() {
+    const axes = this.input?.connected ? this.input.axes : null;
+    return html`<table data-testid="mouse-axes">
+      ${MOTIONS.map((motion, i) => {
+        const value = axes ? axes[i] : 0;
+        const left = value < 0 ? 50 + value * 50 : 50;
+        return html`<tr data-axis=${i}>
+          <td>${motion}</td>
+          <td data-testid="mouse-drives"><strong>${this.drives(i)}</strong></td>
+          <td class="bar"><div class="track"><div class="fill"
+            style="left:${left}%;width:${Math.abs(value) * 50}%"></div></div></td>
+          <td data-testid="mouse-value">${axes ? `${Math.round(value * 100)} %` : "–"}</td>
+        </tr>`;
+      })}
+    </table>`;
+  }
+
+  render() {
+    if (!this.mice.length) return html`<p class="muted">No 3D mouse added (Devices panel).</p>`;
+    const device = this.device || this.mice[0].local_name;
+    return html`<div class="row">
+        <select aria-label="3D mouse" .value=${device}
+          @change=${(e: Event) => this.emit("mouse-device", (e.target as HTMLSelectElement).value)}>
+          ${this.mice.map((m) => html`<option value=${m.local_name}>${m.local_name}</option>`)}
+        </select>
+        <button data-testid="mouse-toggle" class=${this.on ? "primary" : ""}
+          ?disabled=${this.disabled && !this.on} @click=${() => this.emit("mouse-toggle", !this.on)}>
+          ${this.on ? "3D mouse on — tap to turn off" : "Use 3D mouse"}</button>
+        <label class="sensitivity">
+          <span>Sensitivity</span>
+          <input type="range" min="10" max="100" step="5" .value=${String(this.sensitivity)}
+            data-testid="mouse-sensitivity" aria-label="3D mouse sensitivity"
+            @change=${(e: Event) =>
+              this.emit("mouse-sensitivity", Number((e.target as HTMLInputElement).value))} />
+          <strong>${this.sensitivity} %</strong>
+        </label>
+      </div>
+      ${this.readout()}
+      <p class="muted">Button 1 saves a waypoint, button 2 switches base/tool. The Joints, Base
+        and Tool buttons above set what the mouse drives.</p>`;
+  }
+}
+
+customElements.define("op-mouse-card", OpMouseCard);
