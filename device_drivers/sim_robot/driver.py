@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import threading
 import time
@@ -164,6 +165,12 @@ class SimRobot(RobotDriver):
     async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str:
         with self.lock:
             return self.core.start_trajectory(trajectory)
+
+    async def _set_tool_setup(self, info: RobotInfo) -> None:
+        kinematics = await asyncio.to_thread(Kinematics, info)  # loads the URDF: not under the lock
+        with self.lock:
+            self.core.info = info
+            self.core.kinematics = kinematics
 
     async def _set_tool(self, open_: bool) -> None:
         with self.lock:

@@ -13,7 +13,7 @@ import json
 import logging
 import time
 from collections import OrderedDict
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 import httpx
@@ -21,6 +21,7 @@ import websockets
 from websockets.asyncio.client import ClientConnection
 
 from runtime.device_manager.models import ConnectionStatus
+from runtime.device_manager.tools import send_tool_setup
 from runtime.kit.discovery import clean_text
 from runtime.kit.errors import OpenPendantError, Unavailable
 from runtime.kit.settings import LinkSettings
@@ -39,6 +40,7 @@ MAX_QUEUED = 1000  # commands waiting for a slow link: more means it is not a li
 MAX_ROUTED = 4096  # recent command ids whose refusals go back to their sender
 
 Refusal = Callable[[dict[str, Any]], None]
+ToolLoader = Callable[[str], Awaitable[dict[str, Any] | None]]
 # Generations count up from this process's start time (ms), so a restarted device manager
 # never hands out a generation a service could still hold from before.
 GENERATION_BASE = int(time.time() * 1000)
@@ -65,6 +67,7 @@ class DeviceConnection:
         on_state: Callable[[DeviceConnection, str], None],
         on_status: Callable[[DeviceConnection], None],
         timing: LinkSettings | None = None,
+        tool_setup: ToolLoader | None = None,
     ) -> None:
         self.record = record
         self.timing = timing or LinkSettings()
@@ -78,6 +81,7 @@ class DeviceConnection:
         self.freshness = Freshness()
         self._on_state = on_state
         self._on_status = on_status
+        self._tool_setup = tool_setup
         self._wake = asyncio.Event()
         self._stopping = False
         self._task: asyncio.Task[None] | None = None
@@ -213,6 +217,8 @@ class DeviceConnection:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT * 2):
                     info = await self._fetch_info(http, url)
+                    if self.record.kind == "robot":
+                        info = await self._apply_tool(http, info)
                     state_ws = await self._open(url, "/state/ws")
                     if self.record.kind == "robot":
                         command_ws = await self._open(url, "/command/ws")
@@ -231,6 +237,34 @@ class DeviceConnection:
                 if ws is not None:
                     ws.transport.abort()  # no handshake to wait for, no queued data sent
             await http.aclose()
+
+    async def _apply_tool(self, http: httpx.AsyncClient, info: dict[str, Any]) -> dict[str, Any]:
+        """The stored tool setup, applied before anything moves: a robot never runs on a
+        link with another TCP than the one its waypoints were taught with."""
+        if self._tool_setup is None:
+            return info
+        try:
+            setup = await self._tool_setup(self.name)
+            if setup is None:
+                return info
+            return await send_tool_setup(http, setup)
+        except OpenPendantError as exc:
+            raise ValueError(f"its tool setup could not be applied: {exc.message}") from exc
+
+    async def set_tool(self, setup: dict[str, Any]) -> dict[str, Any]:
+        """A new tool setup on the live session; the links and the UI get the new info."""
+        if not self.live or self._http is None:
+            code = "link_stale" if self.status == "stale" else "device_disconnected"
+            raise Unavailable(f"{self.name} is {self.status}: {self.last_error}", code=code)
+        try:
+            info = await send_tool_setup(self._http, setup)
+        except httpx.HTTPError as exc:
+            raise Unavailable(
+                f"{self.name} did not answer: {type(exc).__name__}", code="device_disconnected"
+            ) from exc
+        self.info = info
+        self._on_status(self)
+        return info
 
     def _failed(self, error: str) -> None:
         if short(error) != self.last_error:  # once per new reason, not once per attempt

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import logging
 import math
@@ -23,8 +24,17 @@ from runtime.device_manager.models import (
     DetectedDevice,
     DeviceDetails,
 )
+from runtime.device_manager.tools import stored_tool, tool_variable
+from runtime.interfaces.robot import RobotInfo, ToolSetup
 from runtime.kit.discovery import Detected, checked_uuid, clean_text
-from runtime.kit.errors import Conflict, DeviceError, NotFound, OpenPendantError, Unavailable
+from runtime.kit.errors import (
+    Conflict,
+    DeviceError,
+    InvalidValue,
+    NotFound,
+    OpenPendantError,
+    Unavailable,
+)
 from runtime.kit.settings import LinkSettings
 from runtime.kit.websocket import Fanout
 from runtime.variable_storage.client import StorageClient
@@ -238,7 +248,13 @@ class DeviceRegistry:
             ) from exc
 
     def _connect(self, record: DeviceRecord) -> DeviceConnection:
-        conn = DeviceConnection(record, self._on_state, self._on_status, self.timing)
+        conn = DeviceConnection(
+            record,
+            self._on_state,
+            self._on_status,
+            self.timing,
+            tool_setup=lambda name: stored_tool(self.storage, name),
+        )
         self.connections[record.local_name] = conn
         found = self.detected.get(record.uuid)
         if found is not None and found.url != record.url:
@@ -297,6 +313,26 @@ class DeviceRegistry:
     def check_lease(self, local_name: str, token: str | None) -> LeaseGranted:
         self._get(local_name)
         return self.leases.check(local_name, token)
+
+    async def set_tool(self, local_name: str, setup: ToolSetup, token: str | None) -> RobotInfo:
+        """A robot's new tool setup, by whoever controls it: applied to the robot (which
+        halts), then stored. Should storing fail, the robot is given back its old setup."""
+        conn = self._get(local_name)
+        if conn.record.kind != "robot":
+            raise InvalidValue(f"{local_name} is a {conn.record.kind}, not a robot")
+        self.leases.check(local_name, token)
+        old = conn.info
+        info = await conn.set_tool(setup.model_dump())
+        try:
+            await self.storage.put(tool_variable(local_name), "tool", setup.model_dump())
+        except OpenPendantError:
+            if old is not None:
+                before = RobotInfo.model_validate(old["info"])
+                back = ToolSetup(tcp=before.tcp, payload=before.payload)
+                with contextlib.suppress(OpenPendantError):
+                    await conn.set_tool(back.model_dump())
+            raise
+        return RobotInfo.model_validate(info["info"])
 
     def release_lease(self, local_name: str, token: str | None) -> None:
         self._get(local_name)

@@ -18,6 +18,7 @@ from runtime.device_manager.models import (
     RepointRequest,
 )
 from runtime.device_manager.registry import DeviceRegistry
+from runtime.interfaces.robot import RobotInfo, ToolSetup
 from runtime.kit.app import create_app
 from runtime.kit.discovery import Browser
 from runtime.kit.errors import Unavailable
@@ -93,6 +94,12 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
     async def release_lease(local_name: str, token: LeaseToken = None) -> Response:
         registry.release_lease(local_name, token)
         return Response(status_code=204)
+
+    @router.put("/{local_name}/tool")
+    async def set_tool(local_name: str, body: ToolSetup, token: LeaseToken = None) -> RobotInfo:
+        """The robot's TCP and payload (needs control; the robot halts). Stored as
+        `tools.<robot>` and applied again whenever the robot connects."""
+        return await registry.set_tool(local_name, body, token)
 
     @router.get("/{local_name}/state")
     async def state(local_name: str) -> Response:

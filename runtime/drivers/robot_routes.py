@@ -12,9 +12,11 @@ from runtime.interfaces.robot import (
     JogJointCommand,
     JointTrajectory,
     PositionCommand,
+    RobotDescription,
     RobotState,
     SpeedRatioRequest,
     ToolCommand,
+    ToolSetup,
     TrajectoryAccepted,
     TrajectoryStatus,
     VelocityCommand,
@@ -66,6 +68,13 @@ def robot_router(driver: RobotDriver, log: CommandLog) -> APIRouter:
         await driver.set_speed_ratio(body.ratio)
         log.record("speed_ratio")
         return driver.state()
+
+    @router.put("/tool_setup")
+    async def tool_setup(body: ToolSetup) -> RobotDescription:
+        """The mounted tool's TCP and payload; the robot halts first. Answers the new info."""
+        await driver.set_tool_setup(body)
+        log.record("tool_setup")
+        return driver.describe()
 
     @router.post("/tool")
     async def tool(body: ToolCommand) -> RobotState:

@@ -7,7 +7,7 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field, model_validator
 
-from runtime.interfaces.common import JointVector, Pose, Strict
+from runtime.interfaces.common import JointVector, Pose, Strict, Vector3
 from runtime.interfaces.device import DeviceIdentity
 
 MAX_COMMAND_TIMEOUT = 1.0
@@ -43,6 +43,32 @@ class JointLimits(Strict):
         return self
 
 
+MAX_TOOL_REACH = 2.0  # m from the flange: a TCP or centre of mass further out is a typo
+
+
+class Payload(Strict):
+    """What the robot carries beyond its flange: the tool and what it holds."""
+
+    mass: float = Field(default=0.0, ge=0.0, le=1000.0)  # kg
+    center_of_mass: Vector3 = Field(default_factory=lambda: [0.0, 0.0, 0.0])  # m, flange frame
+
+
+class ToolSetup(Strict):
+    """What is mounted on the flange: the tool centre point (its pose in the flange frame),
+    which jogging, moves and waypoints refer to, and the payload."""
+
+    tcp: Pose = Field(default_factory=Pose)
+    payload: Payload = Field(default_factory=Payload)
+
+    @model_validator(mode="after")
+    def _near_the_flange(self) -> ToolSetup:
+        points = (("TCP", self.tcp.position), ("centre of mass", self.payload.center_of_mass))
+        for what, point in points:
+            if sum(c * c for c in point) ** 0.5 > MAX_TOOL_REACH:
+                raise ValueError(f"the {what} is over {MAX_TOOL_REACH:g} m from the flange")
+        return self
+
+
 class RobotInfo(Strict):
     """Loaded from a robot-info YAML; the URDF gives kinematics and collision geometry."""
 
@@ -53,6 +79,8 @@ class RobotInfo(Strict):
     base_link: str
     flange_link: str
     tcp: Pose = Field(default_factory=Pose)
+    payload: Payload = Field(default_factory=Payload)
+    max_payload: float | None = Field(default=None, gt=0)  # kg, the rated payload
     joints: list[JointLimits] = Field(min_length=1, max_length=64)
     home: JointVector
     capabilities: list[str] = Field(default_factory=list)

@@ -17,11 +17,12 @@ from runtime.interfaces.robot import (
     RobotFlags,
     RobotInfo,
     RobotState,
+    ToolSetup,
     TrajectoryAccepted,
     TrajectoryStatus,
     VelocityCommand,
 )
-from runtime.kit.errors import RobotError
+from runtime.kit.errors import InvalidValue, RobotError
 
 
 @dataclass(frozen=True)
@@ -92,6 +93,21 @@ class RobotDriver(DeviceDriver):
         await self._set_command_mode(mode)
 
     # Tool and I/O: allowed whenever the E-stop is released --------------------------------
+
+    async def set_tool_setup(self, setup: ToolSetup) -> None:
+        """A new TCP and payload. The robot halts first: a TCP changed under a move would
+        change where the move goes."""
+        self._require_no_estop()
+        rated = self.info.max_payload
+        if rated is not None and setup.payload.mass > rated:
+            raise InvalidValue(
+                f"{setup.payload.mass:g} kg is over the {self.info.model}'s rated payload "
+                f"of {rated:g} kg"
+            )
+        await self.halt()
+        info = self.info.model_copy(update={"tcp": setup.tcp, "payload": setup.payload})
+        await self._set_tool_setup(info)
+        self.info = info
 
     async def set_tool(self, open_: bool) -> None:
         if "tool" not in self.info.capabilities:
@@ -215,6 +231,10 @@ class RobotDriver(DeviceDriver):
 
     async def _pause_trajectory(self, paused: bool) -> TrajectoryStatus:
         raise RobotError(f"{self.info.model}: this driver cannot pause a trajectory", code="busy")
+
+    async def _set_tool_setup(self, info: RobotInfo) -> None:
+        """Apply `info`'s TCP and payload (the controller's own TCP and payload settings)."""
+        raise RobotError(f"{self.info.model}: this driver cannot set a TCP", code="no_tool")
 
     async def _set_tool(self, open_: bool) -> None:
         raise RobotError(f"{self.info.model}: this driver cannot drive a tool", code="no_tool")

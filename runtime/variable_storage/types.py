@@ -12,6 +12,7 @@ from typing import Any
 from pydantic import BaseModel, Field, ValidationError
 
 from runtime.interfaces.common import JointVector, Pose, Strict, all_finite
+from runtime.interfaces.robot import ToolSetup
 from runtime.interfaces.scene import SceneObject
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue
@@ -151,5 +152,6 @@ register("frame", "a coordinate frame: pose in a parent frame", Frame)
 register("list", "a list of JSON values", _list)
 register("json", "any JSON value", _json)
 register("device", "a device added under a local name", DeviceRecord)
+register("tool", "what a robot carries: its TCP (in the flange frame) and payload", ToolSetup)
 register("scene_object", "an obstacle, keep-out zone or held object of the scene", SceneObject)
 register("program", "a program: its Blockly workspace and generated Python", StoredProgram)

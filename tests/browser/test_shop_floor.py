@@ -380,3 +380,47 @@ def test_the_3d_mouse_follows_the_frame_buttons_and_shows_its_axes(
     finally:
         runtime.api("DELETE", "/devices/mouse")
         mouse.stop()
+
+
+def test_the_tool_is_set_on_the_scene_panel_and_the_jog_readout_follows(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/jog")
+    take_control_and_enable(page)
+    flange_z = robot_state(runtime)["tcp_pose"]["position"][2]
+    page.get_by_test_id("nav-scene").tap()
+    editor = page.get_by_test_id("tool-z")
+    expect(editor).to_have_value("0")
+    for key, value in (("z", "150"), ("mass", "1.5")):
+        field = page.get_by_test_id(f"tool-{key}")
+        field.fill(value)
+        field.dispatch_event("change")
+    page.get_by_test_id("save-tool").tap()
+    expect(page.get_by_test_id("tool-saved")).to_be_visible()
+    stored = runtime.api("GET", "/variables/tools.robot").json()["value"]
+    assert stored["tcp"]["position"] == [0.0, 0.0, 0.15]
+    assert stored["payload"]["mass"] == 1.5
+    # At home the UR5's flange points down: the TCP is 150 mm lower, on the Jog panel too.
+    page.get_by_test_id("nav-jog").tap()
+    readout = page.get_by_test_id("tcp-readout")
+    expect(readout).to_contain_text(f"{(flange_z - 0.15) * 1000:.1f}", timeout=5000)
+
+    # Over the rated payload: refused with the reason, nothing changed.
+    page.get_by_test_id("nav-scene").tap()
+    page.get_by_test_id("tool-mass").fill("7")
+    page.get_by_test_id("tool-mass").dispatch_event("change")
+    page.get_by_test_id("save-tool").tap()
+    expect(page.get_by_test_id("tool-message")).to_contain_text("rated payload of 5 kg")
+    assert runtime.api("GET", "/variables/tools.robot").json()["value"]["payload"]["mass"] == 1.5
+
+    for key in ("z", "mass"):  # back to the bare flange for the other tests
+        page.get_by_test_id(f"tool-{key}").fill("0")
+        page.get_by_test_id(f"tool-{key}").dispatch_event("change")
+    page.get_by_test_id("save-tool").tap()
+    expect(page.get_by_test_id("tool-saved")).to_be_visible()
+    page.get_by_test_id("nav-jog").tap()
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+    assert [e for e in errors.errors if "422" not in e] == []

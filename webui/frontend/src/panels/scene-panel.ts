@@ -8,6 +8,7 @@ import { shared } from "../styles";
 import type { Obstacle, PathPreview, PoseJson, WorldContents } from "../three/scene";
 import "../components/clearance-chip";
 import "../components/robot-view";
+import "../components/tool-card";
 import type { RobotModel } from "../components/robot-view";
 import type { Waypoint } from "../components/waypoint-list";
 
@@ -486,6 +487,10 @@ export class OpScenePanel extends LitElement {
           <section class="card">
             <h2>Mounting of ${this.robot}</h2>
             ${this.mounting()}
+          </section>
+          <section class="card">
+            <h2>Tool of ${this.robot}</h2>
+            <op-tool-card robot=${this.robot}></op-tool-card>
           </section>
           <section class="card">
             <h2>Path preview</h2>
