@@ -389,7 +389,7 @@ def test_the_tool_is_set_on_the_scene_panel_and_the_jog_readout_follows(
     errors = PageErrors(page)
     page.goto(f"{runtime.url}/#/jog")
     take_control_and_enable(page)
-    flange_z = robot_state(runtime)["tcp_pose"]["position"][2]
+    flange = robot_state(runtime)["tcp_pose"]
     page.get_by_test_id("nav-scene").tap()
     editor = page.get_by_test_id("tool-z")
     expect(editor).to_have_value("0")
@@ -402,10 +402,18 @@ def test_the_tool_is_set_on_the_scene_panel_and_the_jog_readout_follows(
     stored = runtime.api("GET", "/variables/tools.robot").json()["value"]
     assert stored["tcp"]["position"] == [0.0, 0.0, 0.15]
     assert stored["payload"]["mass"] == 1.5
-    # At home the UR5's flange points down: the TCP is 150 mm lower, on the Jog panel too.
+    # The TCP is now 150 mm out along the flange's z axis, on the Jog panel too.
+    x, y, z, w = flange["orientation"]
+    along_z = np.array([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
+    expected = np.array(flange["position"]) + 0.15 * along_z
     page.get_by_test_id("nav-jog").tap()
     readout = page.get_by_test_id("tcp-readout")
-    expect(readout).to_contain_text(f"{(flange_z - 0.15) * 1000:.1f}", timeout=5000)
+
+    def shown() -> np.ndarray:
+        words = readout.inner_text().split()
+        return np.array([float(words[i]) for i in (2, 5, 8)]) / 1000  # "X mm <x> Y mm …"
+
+    wait_for(lambda: np.abs(shown() - expected).max() < 0.0002, 5, what="the TCP readout")
 
     # Over the rated payload: refused with the reason, nothing changed.
     page.get_by_test_id("nav-scene").tap()
@@ -424,3 +432,85 @@ def test_the_tool_is_set_on_the_scene_panel_and_the_jog_readout_follows(
     page.get_by_test_id("control").tap()
     expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
     assert [e for e in errors.errors if "422" not in e] == []
+
+
+def jog_value(page: Page, axis: str) -> float:
+    text = page.locator(f"[data-testid=jog-row][data-axis='{axis}'] [data-testid=jog-value]")
+    return float(text.inner_text().split()[0].rstrip("°"))
+
+
+def test_waypoints_say_where_they_go_filter_by_tag_and_show_the_move_under_way(
+    runtime: Runtime, robot: str, phone: BrowserContext
+) -> None:
+    page = phone.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/jog")
+    deadman = page.get_by_test_id("deadman")
+    expect(deadman).to_have_text("Take control to jog this robot")
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("You have control")
+    if page.get_by_test_id("disable").count():
+        page.get_by_test_id("disable").tap()
+    expect(deadman).to_have_text("Enable the robot to jog it")
+    page.get_by_test_id("enable").tap()
+    expect(deadman).to_have_text("Ready: hold a button to jog")
+
+    # A waypoint says where it puts the TCP: here, as the readout shows it.
+    name = "pick_from_the_long_conveyor"
+    page.get_by_test_id("teach-joint").tap()
+    taught = page.locator("[data-testid=waypoint].selected")
+    expect(taught.locator(".chip")).to_have_text("last used")
+    runtime.api(
+        "POST",
+        f"/variables/{taught.get_attribute('data-name')}/rename",
+        json={"to": name},
+    )
+    other = runtime.api("GET", f"/variables/{name}").json()
+    runtime.api(
+        "PUT",
+        "/variables/place_on_tray",
+        json={"type": "joint_waypoint", "value": other["value"], "tags": ["tray"]},
+    )
+    page.reload()
+    item = page.locator(f"[data-testid=waypoint][data-name={name}]")
+    expect(item.get_by_test_id("waypoint-coords")).to_contain_text("mm")
+    readout = page.get_by_test_id("tcp-readout").inner_text().split()
+    here = [float(readout[i]) for i in (2, 5, 8)]  # "X mm <x> Y mm <y> Z mm <z> ..."
+    coords = item.get_by_test_id("waypoint-coords").inner_text().split()
+    shown = [float(coords[i]) for i in (1, 4, 7)]  # "X <x> · Y <y> · Z <z> mm"
+    assert np.allclose(shown, here, atol=0.15), (shown, here)
+    box = item.locator(".name").bounding_box()
+    assert box is not None and box["width"] > 150  # not wrapped letter by letter on a phone
+
+    filter_box = page.get_by_test_id("waypoint-filter")
+    filter_box.fill("tray")
+    expect(page.get_by_test_id("waypoint")).to_have_count(1)
+    expect(page.get_by_test_id("waypoint-count")).to_contain_text("1 of")
+    filter_box.fill("")
+
+    # Tool frame: the readings count along the tool's axes from where Tool was chosen.
+    page.get_by_test_id("mode-tool").tap()
+    expect(page.get_by_test_id("tool-note")).to_be_visible()
+    assert abs(jog_value(page, "z")) < 0.05
+    finger = Finger(page)
+    finger.down(page.locator("[data-testid=jog-row][data-axis='z'] [data-testid=jog-plus]"))
+    try:
+        wait_for(lambda: jog_value(page, "z") > 5.0, 5, what="tool z counting up")
+    finally:
+        finger.up()
+    wait_for(lambda: robot_at_rest(runtime), 5, what="stopped")
+    assert abs(jog_value(page, "x")) < 1.0 and abs(jog_value(page, "y")) < 1.0
+
+    # Moving to a waypoint shows how far is left, then that it arrived.
+    finger.down(item.get_by_test_id("move-to"))
+    try:
+        expect(item.get_by_test_id("move-progress")).to_contain_text("mm to go")
+        expect(deadman).to_contain_text(f"Moving to {name}")
+        expect(deadman).to_contain_text("Arrived", timeout=20_000)
+    finally:
+        finger.up()
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+    for waypoint in (name, "place_on_tray"):
+        runtime.api("DELETE", f"/variables/{waypoint}")
+    assert errors.errors == []

@@ -26,3 +26,24 @@ export function rpyToQuaternion(
     cr * cp * cy + sr * sp * sy,
   ];
 }
+
+type Quaternion = number[]; // [x, y, z, w]
+
+export function multiply([ax, ay, az, aw]: Quaternion, [bx, by, bz, bw]: Quaternion): Quaternion {
+  return [
+    aw * bx + ax * bw + ay * bz - az * by,
+    aw * by - ax * bz + ay * bw + az * bx,
+    aw * bz + ax * by - ay * bx + az * bw,
+    aw * bw - ax * bx - ay * by - az * bz,
+  ];
+}
+
+export function conjugate([x, y, z, w]: Quaternion): Quaternion {
+  return [-x, -y, -z, w];
+}
+
+/** The vector v turned by the unit quaternion q. */
+export function rotate(q: Quaternion, [vx, vy, vz]: number[]): number[] {
+  const [x, y, z] = multiply(multiply(q, [vx, vy, vz, 0]), conjugate(q));
+  return [x, y, z];
+}

@@ -41,7 +41,7 @@ export class OpRobotView extends LitElement {
         min-height: 260px;
         border-radius: 14px;
         overflow: hidden;
-        background: #0b1015;
+        background: var(--view-bg);
         border: 1px solid var(--line);
       }
       .canvas,
@@ -50,6 +50,15 @@ export class OpRobotView extends LitElement {
         height: 100%;
         display: block;
         touch-action: pan-y; /* one finger scrolls the page; two turn and zoom the view */
+      }
+      .reset {
+        position: absolute;
+        top: 8px;
+        right: 8px;
+        min-height: 48px;
+        padding: 0 12px;
+        font-size: 15px;
+        opacity: 0.85;
       }
       .overlay {
         position: absolute;
@@ -133,6 +142,10 @@ export class OpRobotView extends LitElement {
   render() {
     return html`<div class="canvas" data-testid="robot-view" data-status=${this.status}
         data-robot=${this.model?.name ?? ""}></div>
+      ${this.status === "ready"
+        ? html`<button class="reset" data-testid="reset-view" title="Back to the first view"
+            @click=${() => this.scene?.resetView()}>Reset view</button>`
+        : ""}
       ${this.progress ? html`<div class="overlay muted">${this.progress}</div>` : ""}`;
   }
 }

@@ -5,11 +5,11 @@ import { FocusController, focus } from "../focus";
 import { deg, mm } from "../format";
 import { JogSocket, type JogMessage, type JogStatus } from "../jog-socket";
 import { FeedController, feed } from "../live";
-import { quaternionToRpy } from "../math";
+import { conjugate, multiply, quaternionToRpy, rotate } from "../math";
 import { RobotLoader } from "../robot-loader";
 import { shared } from "../styles";
 import type { Marker } from "../three/scene";
-import type { RobotState } from "../types";
+import type { Pose, RobotState } from "../types";
 import "../components/clearance-chip";
 import "../components/jog-pad";
 import "../components/mouse-card";
@@ -18,7 +18,7 @@ import "../components/robot-view";
 import "../components/waypoint-list";
 import type { JogAxis } from "../components/jog-pad";
 import type { RobotModel } from "../components/robot-view";
-import type { Waypoint } from "../components/waypoint-list";
+import type { MoveProgress, Waypoint } from "../components/waypoint-list";
 
 type Mode = "joint" | "base" | "tool";
 type Stepping = "continuous" | "fine" | "coarse";
@@ -64,6 +64,8 @@ export class OpJogPanel extends LitElement {
   declare sensitivity: number;
   private socket = new JogSocket();
   private press = "";
+  private movingTo = ""; // the waypoint a held Move to is going to
+  private toolZero: Pose | null = null; // the TCP when Tool was chosen: tool readings count from it
   private boundMouse = "";
   private loadError = "";
   private onVisibility = () => document.hidden && this.socket.releaseAll();
@@ -228,6 +230,7 @@ export class OpJogPanel extends LitElement {
     if (robot !== this.robot) {
       this.socket.releaseAll(); // nothing held on one robot carries over to another
       if (this.mouseOn) this.setMouse(false);
+      this.toolZero = null;
       this.robot = robot;
     }
   }
@@ -326,6 +329,7 @@ export class OpJogPanel extends LitElement {
   private release(): void {
     if (this.press) this.socket.release(this.press);
     this.press = "";
+    this.movingTo = "";
   }
 
   private holdWaypoint(name: string): void {
@@ -335,12 +339,16 @@ export class OpJogPanel extends LitElement {
       return;
     }
     this.selected = name;
+    this.movingTo = name;
     this.press = this.socket.press({ type: "move_to", ...this.base(), waypoint: name });
   }
 
   private onMessage(message: JogMessage): void {
     if (message.type === "status") {
       this.status = message;
+      if (message.press === this.press && !["moving", "held"].includes(message.state)) {
+        this.movingTo = "";
+      }
       if (message.state === "refused" && message.reason === "lease_held") control.forget(this.robot);
       if (message.press.startsWith("mouse:") && !["moving", "held"].includes(message.state)) {
         this.mouseOn = false;
@@ -351,6 +359,7 @@ export class OpJogPanel extends LitElement {
       void this.loadWaypoints();
     } else if (message.type === "mouse_frame") {
       this.mode = message.mode === "joint" ? "joint" : message.frame === "tool" ? "tool" : "base";
+      this.toolZero = null;
     } else if (message.type === "error") {
       this.message = message.error.message;
     }
@@ -498,10 +507,28 @@ export class OpJogPanel extends LitElement {
       }));
     }
     if (!state) return CARTESIAN.map((a) => ({ key: a, label: a.toUpperCase(), value: "–" }));
-    const [x, y, z] = state.tcp_pose.position;
+    let [x, y, z] = state.tcp_pose.position;
+    let rpy = quaternionToRpy(state.tcp_pose.orientation);
+    if (this.mode === "tool") {
+      // Along the tool's own axes, counted from where the TCP was when Tool was chosen.
+      this.toolZero ??= state.tcp_pose;
+      const back = conjugate(this.toolZero.orientation);
+      const p = this.toolZero.position;
+      [x, y, z] = rotate(back, [0, 1, 2].map((i) => state.tcp_pose.position[i] - p[i]));
+      rpy = quaternionToRpy(multiply(back, state.tcp_pose.orientation));
+    }
     const values = [`${mm(x)} mm`, `${mm(y)} mm`, `${mm(z)} mm`,
-      ...quaternionToRpy(state.tcp_pose.orientation).map((a) => `${a.toFixed(1)}°`)];
+      ...rpy.map((a) => `${a.toFixed(1)}°`)];
     return CARTESIAN.map((a, i) => ({ key: a, label: a.toUpperCase(), value: values[i] }));
+  }
+
+  /** How far the TCP still is from the waypoint a held Move to is going to. */
+  private moveProgress(state: RobotState | undefined): MoveProgress | null {
+    const target = this.waypoints.find((w) => w.name === this.movingTo);
+    if (!target || !state) return null;
+    const p = state.tcp_pose.position;
+    const left = Math.hypot(...[0, 1, 2].map((i) => target.tcp_position[i] - p[i]));
+    return { name: target.name, text: `Moving: ${(left * 1000).toFixed(0)} mm to go` };
   }
 
   private deadman() {
@@ -510,8 +537,9 @@ export class OpJogPanel extends LitElement {
       return html`<div class="deadman chip bad" data-testid="deadman">Jog link down — reconnecting</div>`;
     }
     if (!s) {
-      const ready = control.holds(this.robot) ? "Ready: hold a button to jog"
-        : "Take control to jog this robot";
+      const ready = !control.holds(this.robot) ? "Take control to jog this robot"
+        : !feed.states.get(this.robot)?.flags.ready ? "Enable the robot to jog it"
+        : "Ready: hold a button to jog";
       return html`<div class="deadman chip" data-testid="deadman">${ready}</div>`;
     }
     const cls = s.state === "moving" ? "ok" : s.state === "held" ? "warn"
@@ -522,7 +550,9 @@ export class OpJogPanel extends LitElement {
       return html`<div class="deadman chip ${atRest ? "" : "ok"}" data-testid="deadman">
         ${atRest ? "3D mouse on — at rest" : "Moving with the 3D mouse"}</div>`;
     }
-    const text = s.state === "moving" ? "Moving — hold to continue"
+    const text = s.state === "moving" && this.movingTo
+      ? `Moving to ${this.movingTo} — hold to continue`
+      : s.state === "moving" ? "Moving — hold to continue"
       : s.state === "held" ? `Not moving: ${s.message ?? "held back"}`
       : s.state === "halted" ? `Halted: ${s.reason ?? ""}`
       : s.state === "refused" ? `Refused: ${s.message ?? s.reason ?? ""}`
@@ -631,6 +661,7 @@ export class OpJogPanel extends LitElement {
                 @click=${() => this.quickTeach("pose", "world")}>Save pose (world)</button>
             </div>
             <op-waypoint-list .waypoints=${this.waypoints} ?disabled=${!canMove}
+              .progress=${this.moveProgress(state)}
               selected=${this.selected}
               @waypoint-hold=${(e: CustomEvent) => this.holdWaypoint(e.detail.name)}
               @waypoint-release=${() => this.release()}
@@ -648,7 +679,10 @@ export class OpJogPanel extends LitElement {
           <div class="segmented" role="group" aria-label="Jog frame">
             ${(["joint", "base", "tool"] as Mode[]).map((m) => html`<button
               data-testid="mode-${m}" aria-pressed=${this.mode === m ? "true" : "false"}
-              @click=${() => (this.mode = m)}>${m === "joint" ? "Joints" : m === "base" ? "Base" : "Tool"}</button>`)}
+              @click=${() => {
+                this.mode = m;
+                this.toolZero = null; // Tool tapped (again): its readings count from here
+              }}>${m === "joint" ? "Joints" : m === "base" ? "Base" : "Tool"}</button>`)}
           </div>
           <div class="segmented" role="group" aria-label="Jog steps">
             ${(["continuous", "fine", "coarse"] as Stepping[]).map((s) => html`<button
@@ -659,6 +693,8 @@ export class OpJogPanel extends LitElement {
           <op-jog-pad .axes=${this.axes(state)} ?disabled=${!canMove}
             @jog-hold=${(e: CustomEvent) => this.hold(e.detail.axis, e.detail.direction)}
             @jog-release=${() => this.release()}></op-jog-pad>
+          ${this.mode === "tool" ? html`<p class="muted" data-testid="tool-note">Tool frame:
+              travel along the tool's own axes since Tool was chosen (tap Tool to zero).</p>` : ""}
           ${!mine ? html`<p class="muted">Take control to jog this robot.</p>`
             : !state?.flags.ready ? html`<p class="muted">Enable the robot to jog it.</p>` : ""}
           <section class="card">

@@ -6,6 +6,43 @@ import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
 import URDFLoader, { type URDFRobot } from "urdf-loader";
 import { holding, onHeldChange } from "../activity";
 
+/** A name drawn beside a marker, always facing the camera and never hidden by the robot. */
+function label(text: string, color: number): THREE.Sprite {
+  const canvas = document.createElement("canvas");
+  const context = canvas.getContext("2d");
+  const font = "bold 40px system-ui, sans-serif";
+  canvas.height = 56;
+  if (context) {
+    context.font = font;
+    canvas.width = Math.min(1024, Math.ceil(context.measureText(text).width) + 24);
+    context.font = font; // resizing the canvas reset it
+    context.fillStyle = "rgba(11, 16, 21, 0.8)";
+    context.fillRect(0, 0, canvas.width, canvas.height);
+    context.fillStyle = `#${color.toString(16).padStart(6, "0")}`;
+    context.textBaseline = "middle";
+    context.fillText(text, 12, canvas.height / 2);
+  }
+  const texture = new THREE.CanvasTexture(canvas);
+  texture.colorSpace = THREE.SRGBColorSpace;
+  const sprite = new THREE.Sprite(new THREE.SpriteMaterial({ map: texture, depthTest: false }));
+  const height = 0.035; // m
+  sprite.scale.set((height * canvas.width) / canvas.height, height, 1);
+  sprite.renderOrder = 1;
+  return sprite;
+}
+
+function disposeTree(root: THREE.Object3D): void {
+  root.traverse((part) => {
+    if (part instanceof THREE.Mesh) {
+      part.geometry.dispose();
+      (part.material as THREE.Material).dispose();
+    } else if (part instanceof THREE.Sprite) {
+      part.material.map?.dispose();
+      part.material.dispose();
+    }
+  });
+}
+
 export interface Marker {
   name: string;
   position: [number, number, number]; // in the robot's base frame, metres
@@ -115,6 +152,7 @@ export class RobotScene {
     // One finger scrolls the page, as everywhere else on a pendant; two fingers turn and
     // zoom the view (and the mouse still orbits).
     this.controls.touches = { ONE: null, TWO: THREE.TOUCH.DOLLY_ROTATE };
+    this.controls.zoomSpeed = 0.4; // a pinch zooms by about what the fingers moved
     this.renderer.domElement.style.touchAction = "pan-y";
     this.controls.target.set(0, 0, 0.35);
     this.controls.addEventListener("change", () => this.requestRender());
@@ -169,6 +207,13 @@ export class RobotScene {
     this.controls.target.set(0, 0, reach * 0.35);
     this.camera.position.set(reach * 1.25, -reach * 1.45, reach * 1.0);
     this.controls.update();
+    this.controls.saveState();
+  }
+
+  /** Back to the view the robot was first shown in. */
+  resetView(): void {
+    this.controls.reset();
+    this.requestRender();
   }
 
   setJoints(names: string[], values: number[]): void {
@@ -178,16 +223,21 @@ export class RobotScene {
   }
 
   setMarkers(markers: Marker[]): void {
+    for (const child of [...this.markers.children]) disposeTree(child);
     this.markers.clear();
     if (!this.base) return;
     this.base.updateMatrixWorld(true);
     for (const m of markers) {
+      const color = m.selected ? 0x3fb950 : 0xf5a524;
       const sphere = new THREE.Mesh(
         new THREE.SphereGeometry(m.selected ? 0.022 : 0.014, 16, 12),
-        new THREE.MeshStandardMaterial({ color: m.selected ? 0x3fb950 : 0xf5a524 }),
+        new THREE.MeshStandardMaterial({ color }),
       );
       sphere.position.set(...m.position).applyMatrix4(this.base.matrixWorld);
       sphere.name = m.name;
+      const tag = label(m.name, color);
+      tag.position.set(0, 0, 0.045);
+      sphere.add(tag);
       this.markers.add(sphere);
     }
     this.requestRender();
