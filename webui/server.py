@@ -7,10 +7,10 @@ import contextlib
 import os
 from collections.abc import AsyncIterator
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import httpx
-from fastapi import FastAPI, Request, Response, WebSocket
+from fastapi import FastAPI, Query, Request, Response, WebSocket
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
@@ -19,6 +19,7 @@ from runtime.kit.errors import NotFound
 from runtime.kit.settings import RuntimeSettings
 from runtime.paths import package_roots
 from runtime.services import SERVICES
+from webui.logs import MAX_ENTRIES, recent_entries
 from webui.proxy import ServiceProxy
 
 DIST = Path(__file__).resolve().parent / "frontend" / "dist"
@@ -96,6 +97,14 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
         return FileResponse(
             robot_file_path(package, path), headers={"Cache-Control": "public, max-age=3600"}
         )
+
+    @app.get("/api/logs")
+    async def logs(
+        level: Literal["debug", "info", "warning", "error"] = "warning",
+        limit: int = Query(100, ge=1, le=MAX_ENTRIES),
+    ) -> list[dict[str, Any]]:
+        """The runtime's recent log entries at `level` or above, newest first."""
+        return await asyncio.to_thread(recent_entries, settings.logs, level, limit)
 
     @app.api_route("/api/{prefix}", methods=METHODS)
     async def api_root(request: Request, prefix: str) -> Response:

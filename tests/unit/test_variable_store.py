@@ -47,6 +47,10 @@ ROUND_TRIP: dict[str, Any] = {
         "keep_out": False,
         "color": "#8a94a6",
     },
+    "tool": {
+        "tcp": {"position": [0.0, 0.0, 0.15], "orientation": UNIT_Q},
+        "payload": {"mass": 1.5, "center_of_mass": [0.0, 0.0, 0.05]},
+    },
     "program": {
         "source": "blocks",
         "workspace_json": '{"blocks":{"blocks":[]}}',
@@ -86,6 +90,9 @@ REJECT: list[tuple[str, Any]] = [
     ("scene_object", {"shape": "box", "size": [0.1, 0.1, 0.1], "mesh": "package://x/y.stl"}),
     ("program", {"source": "cobol", "python": ""}),
     ("program", {"source": "python"}),
+    ("tool", {"tcp": {"position": [0.0, 0.0, 3.0]}}),
+    ("tool", {"payload": {"mass": -1.0}}),
+    ("tool", {"payload": {"mass": math.nan}}),
     ("no_such_type", 1),
 ]
 

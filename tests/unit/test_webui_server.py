@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 from fastapi.testclient import TestClient
 
 from runtime.kit.settings import RuntimeSettings
@@ -49,3 +52,32 @@ def test_robot_files_are_served_from_packages_and_nothing_else() -> None:
         ):
             response = client.get(f"/api/robot-files/{bad}")
             assert response.status_code == 404, bad
+
+
+def test_the_log_route_gives_recent_entries_by_level_newest_first(tmp_path: Path) -> None:
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    (logs / "jog.log").write_text(
+        "\n".join(
+            [
+                json.dumps({"ts": 1.0, "level": "info", "service": "jog", "msg": "started"}),
+                "Traceback (most recent call last): not a JSON line",
+                json.dumps({"ts": 3.0, "level": "error", "service": "jog", "msg": "it failed"}),
+            ]
+        )
+    )
+    # A big file: only its tail is read, and the first (cut) line of the tail is skipped.
+    filler = json.dumps({"ts": 0.5, "level": "warning", "service": "dm", "msg": "x" * 1000})
+    lines = [filler] * 400 + [json.dumps({"ts": 2.0, "level": "warning", "msg": "late"})]
+    (logs / "device_manager.log").write_text("\n".join(lines))
+    app = build_app(RuntimeSettings(sim=False, log_dir=logs), {})
+    with TestClient(app) as client:
+        warnings = client.get("/api/logs").json()
+        everything = client.get("/api/logs?level=info&limit=500").json()
+        assert client.get("/api/logs?level=loud").status_code == 422
+        assert client.get("/api/logs?limit=0").status_code == 422
+    assert [e["message"] for e in warnings[:2]] == ["it failed", "late"]
+    assert warnings[1]["service"] == "device_manager"  # named by its file when it says none
+    assert all(e["level"] != "info" for e in warnings)
+    assert "started" in [e["message"] for e in everything]
+    assert len(everything) < 401  # the tail, not the whole file

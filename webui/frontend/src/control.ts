@@ -12,17 +12,32 @@ interface Granted {
   expires: number;
 }
 
+const HOLDER_KEY = "op.holder";
+export const HOLDER_MAX = 40;
+
 function holderName(): string {
-  let name = localStorage.getItem("op.holder");
+  let name = localStorage.getItem(HOLDER_KEY);
   if (!name) {
     name = `Pendant ${Math.random().toString(16).slice(2, 6).toUpperCase()}`;
-    localStorage.setItem("op.holder", name);
+    localStorage.setItem(HOLDER_KEY, name);
   }
   return name;
 }
 
 export class Control extends EventTarget {
-  readonly holder = holderName();
+  /** The name others see while this tablet has control ("Controlled by …"). */
+  get holder(): string {
+    return holderName();
+  }
+
+  /** A name people chose for this tablet, e.g. "Cell 2 pendant"; leases held carry it on
+   * their next renewal. */
+  rename(name: string): void {
+    const clean = name.replace(/[\p{Cc}\p{Cf}]/gu, "").trim().slice(0, HOLDER_MAX);
+    if (!clean) throw new Error("The pendant needs a name.");
+    localStorage.setItem(HOLDER_KEY, clean);
+    this.dispatchEvent(new Event("change"));
+  }
   private timers = new Map<string, number>();
 
   token(robot: string): string | null {

@@ -1,1 +1,4 @@
+import { applyTheme } from "./theme";
 import "./app-shell";
+
+applyTheme();

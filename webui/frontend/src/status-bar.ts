@@ -26,7 +26,7 @@ export class OpStatusBar extends LitElement {
         flex-wrap: wrap;
         padding: 8px 12px;
         min-height: 72px;
-        background: #0b1015;
+        background: var(--bar-bg);
         border-bottom: 1px solid var(--line);
       }
       .brand {
@@ -105,14 +105,23 @@ export class OpStatusBar extends LitElement {
           gap: 6px;
           padding: 6px 8px;
         }
-        .brand {
+        /* Two rows on a phone: the robots and STOP, then the speed override. */
+        .brand,
+        .link-ok {
           display: none;
         }
-        .speed {
-          flex: 1 1 150px;
+        .robots {
+          flex: 1 1 0;
         }
         .stop {
+          order: 1;
           min-width: 96px;
+        }
+        .speed,
+        .offline,
+        .notice {
+          order: 2;
+          flex: 1 1 100%;
         }
       }
     `,
@@ -213,9 +222,9 @@ export class OpStatusBar extends LitElement {
           @input=${(e: Event) => this.setSpeed(Number((e.target as HTMLInputElement).value))} />
         <strong data-testid="speed-value">${focus.speed} %</strong>
       </label>
-      ${this.notice ? html`<span class="chip warn" role="alert">${this.notice}</span>` : ""}
+      ${this.notice ? html`<span class="chip warn notice" role="alert">${this.notice}</span>` : ""}
       ${feed.online
-        ? html`<span class="chip ok" data-testid="runtime-link">Runtime connected</span>`
+        ? html`<span class="chip ok link-ok" data-testid="runtime-link">Runtime connected</span>`
         : html`<span class="offline" data-testid="runtime-link" role="alert"
             >No connection to the runtime — retrying…</span
           >`}

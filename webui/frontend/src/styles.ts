@@ -3,16 +3,7 @@ import { css } from "lit";
 // Touch-first: every control is at least 48 px tall, text is large, contrast is high.
 export const shared = css`
   :host {
-    --bg: #10161d;
-    --panel: #18212b;
-    --raised: #222d3a;
-    --line: #2f3d4d;
-    --text: #e8eef5;
-    --muted: #9fb0c2;
-    --accent: #f5a524;
-    --ok: #3fb950;
-    --warn: #d29922;
-    --bad: #f85149;
+    /* The palette comes from the document (index.html, theme.ts). */
     --touch: 56px;
     color: var(--text);
     font-size: 18px;
@@ -45,11 +36,11 @@ export const shared = css`
   button.primary {
     background: var(--accent);
     border-color: var(--accent);
-    color: #1a1204;
+    color: var(--on-accent);
   }
   button.danger {
     border-color: var(--bad);
-    color: #ffd7d5;
+    color: var(--bad-fg);
   }
   input {
     min-height: var(--touch);
@@ -86,18 +77,19 @@ export const shared = css`
     white-space: nowrap;
   }
   .chip.ok {
-    background: #173d24;
-    color: #aff5b4;
+    background: var(--ok-bg);
+    color: var(--ok-fg);
   }
   .chip.warn {
-    background: #3d2e0a;
-    color: #f8e3a1;
+    background: var(--warn-bg);
+    color: var(--warn-fg);
   }
   .chip.bad {
-    background: #4a1513;
-    color: #ffd7d5;
+    background: var(--bad-bg);
+    color: var(--bad-fg);
   }
   .dot {
+    flex: none;
     width: 12px;
     height: 12px;
     border-radius: 50%;
@@ -114,7 +106,7 @@ export const shared = css`
     background: var(--bad);
   }
   .error {
-    color: #ffb4ae;
+    color: var(--error-fg);
   }
   h2 {
     font-size: 22px;

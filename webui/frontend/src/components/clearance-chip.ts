@@ -1,4 +1,4 @@
-import { LitElement, html } from "lit";
+import { LitElement, css, html } from "lit";
 import { api } from "../api";
 import { feed } from "../live";
 import { shared } from "../styles";
@@ -21,7 +21,15 @@ export class OpClearanceChip extends LitElement {
   private timer = 0;
   private busy = false;
 
-  static styles = [shared];
+  static styles = [
+    shared,
+    css`
+      .chip {
+        white-space: normal; /* a long pair of names wraps on a phone */
+        border-radius: 14px;
+      }
+    `,
+  ];
 
   constructor() {
     super();

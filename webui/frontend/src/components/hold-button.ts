@@ -32,7 +32,7 @@ export class OpHoldButton extends LitElement {
       button.active {
         background: var(--accent);
         border-color: var(--accent);
-        color: #1a1204;
+        color: var(--on-accent);
       }
     `,
   ];

@@ -12,7 +12,7 @@ export class OpModal extends LitElement {
       .backdrop {
         position: fixed;
         inset: 0;
-        background: rgba(0, 0, 0, 0.6);
+        background: var(--scrim);
         display: flex;
         align-items: center;
         justify-content: center;

@@ -168,7 +168,7 @@ export class OpProgramPanel extends LitElement {
       button.run {
         background: var(--ok);
         border-color: var(--ok);
-        color: #06210e;
+        color: var(--on-accent);
         min-height: 64px;
         font-size: 20px;
       }
@@ -181,7 +181,7 @@ export class OpProgramPanel extends LitElement {
       }
       button.on {
         border-color: var(--bad);
-        color: #ffd7d5;
+        color: var(--bad-fg);
       }
       .work {
         display: grid;
@@ -268,7 +268,7 @@ export class OpProgramPanel extends LitElement {
       }
       .line.stderr,
       .line.error {
-        color: #ffb4ae;
+        color: var(--error-fg);
       }
       .status {
         display: flex;
@@ -300,7 +300,7 @@ export class OpProgramPanel extends LitElement {
         padding: 10px 14px;
         border: 2px solid var(--accent);
         border-radius: 12px;
-        background: #2b2410;
+        background: var(--warn-bg);
       }
       .actions {
         display: flex;

@@ -2,27 +2,33 @@
 // breakpoints (block context menu or the panel's button), undo/redo. Touch-first options.
 
 import * as Blockly from "blockly";
+import { currentTheme, paletteColour } from "../theme";
 import { rememberNames, type BlockCatalog, defineBlocks } from "./catalog";
 
 const BREAKPOINT_CLASS = "opBreakpoint";
 
-const theme = Blockly.Theme.defineTheme("openpendant-dark", {
-  name: "openpendant-dark",
-  base: Blockly.Themes.Classic,
-  componentStyles: {
-    workspaceBackgroundColour: "#10161d",
-    toolboxBackgroundColour: "#18212b",
-    toolboxForegroundColour: "#e8eef5",
-    flyoutBackgroundColour: "#222d3a",
-    flyoutForegroundColour: "#e8eef5",
-    flyoutOpacity: 0.96,
-    scrollbarColour: "#5b6b7d",
-    insertionMarkerColour: "#ffffff",
-    insertionMarkerOpacity: 0.35,
-    cursorColour: "#f5a524",
-  },
-  fontStyle: { family: "system-ui, sans-serif", size: 13 },
-});
+/** Blockly's colours from the palette in use (Blockly draws on SVG, outside our CSS). */
+function blocklyTheme(): Blockly.Theme {
+  const light = currentTheme() === "light";
+  const name = light ? "openpendant-light" : "openpendant-dark";
+  return Blockly.Theme.defineTheme(name, {
+    name,
+    base: Blockly.Themes.Classic,
+    componentStyles: {
+      workspaceBackgroundColour: paletteColour("--bg"),
+      toolboxBackgroundColour: paletteColour("--panel"),
+      toolboxForegroundColour: paletteColour("--text"),
+      flyoutBackgroundColour: paletteColour("--raised"),
+      flyoutForegroundColour: paletteColour("--text"),
+      flyoutOpacity: 0.96,
+      scrollbarColour: light ? "#8a97a6" : "#5b6b7d",
+      insertionMarkerColour: light ? "#000000" : "#ffffff",
+      insertionMarkerOpacity: 0.35,
+      cursorColour: paletteColour("--accent"),
+    },
+    fontStyle: { family: "system-ui, sans-serif", size: 13 },
+  });
+}
 
 const editors = new Map<string, ProgramEditor>(); // workspace id -> editor
 
@@ -67,14 +73,14 @@ export class ProgramEditor extends EventTarget {
     registerBreakpointMenu();
     this.workspace = Blockly.inject(container, {
       toolbox: catalog.toolbox,
-      theme,
+      theme: blocklyTheme(),
       renderer: "zelos",
       media: "./blockly-media/",
       sounds: false,
       // Inline editing: the browser's prompt() is no good on a pendant.
       modalInputs: false,
       trashcan: true,
-      grid: { spacing: 32, length: 2, colour: "#2f3d4d", snap: true },
+      grid: { spacing: 32, length: 2, colour: paletteColour("--line"), snap: true },
       move: { scrollbars: true, drag: true, wheel: true },
       zoom: {
         controls: true,
@@ -89,6 +95,7 @@ export class ProgramEditor extends EventTarget {
     editors.set(this.workspace.id, this);
     this.workspace.addChangeListener((event) => this.onEvent(event));
     this.resizer = new ResizeObserver(() => Blockly.svgResize(this.workspace));
+    window.addEventListener("op-theme", this.retheme);
     this.resizer.observe(container);
   }
 
@@ -178,7 +185,10 @@ export class ProgramEditor extends EventTarget {
     return this.workspace.getRedoStack().length > 0;
   }
 
+  private readonly retheme = () => this.workspace.setTheme(blocklyTheme());
+
   dispose(): void {
+    window.removeEventListener("op-theme", this.retheme);
     this.resizer.disconnect();
     editors.delete(this.workspace.id);
     this.workspace.dispose();
