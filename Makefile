@@ -13,7 +13,7 @@ UI_SOURCES := $(shell find $(UI)/src $(UI)/public -type f 2>/dev/null) \
 	$(UI)/index.html $(UI)/vite.config.ts $(UI)/tsconfig.json $(UI)/tsconfig.node.json
 ARGS ?=
 
-.PHONY: setup run test lint bench ui clean
+.PHONY: setup run test lint bench ui clean screenshots
 
 setup: $(PY_STAMP) $(UI_BUILT)
 
@@ -41,6 +41,10 @@ lint: $(PY_STAMP)
 
 test: setup lint
 	$(BIN)/pytest $(ARGS)
+
+# Every panel on a tablet and a phone, dark and light, into docs/screenshots/.
+screenshots: setup
+	$(BIN)/python -m tests.screenshots $(ARGS)
 
 bench: setup
 	$(BIN)/openpendant bench --json bench-results/latest.json $(ARGS)
