@@ -288,3 +288,92 @@ def test_a_waypoint_taught_elsewhere_is_offered_at_once(
     runtime.api("DELETE", "/variables/spot_taught_now").raise_for_status()
     wait_for(lambda: not offered(), 10, what="the deleted waypoint gone from the list")
     assert errors.errors == []
+
+
+def statements(first: dict[str, Any]) -> list[str]:
+    """A stack's statement blocks in the order they run (values left out)."""
+    found: list[str] = []
+    block: dict[str, Any] | None = first
+    while block is not None:
+        found.append(block["id"])
+        for name, child in block.get("inputs", {}).items():
+            if name.startswith(("DO", "ELSE")):
+                found += statements(child["block"])
+        block = block.get("next", {}).get("block")
+    return found
+
+
+def test_the_program_reads_as_an_outline_beside_the_blocks_and_a_3d_view(
+    runtime: Runtime, cell: dict[str, Any], phone: BrowserContext
+) -> None:
+    page = phone.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/program")
+    expect(page.get_by_test_id("program-select")).to_have_value("cycle")
+    expect(block_of(page, cell["id"])).to_be_visible()
+
+    # The outline: one line per statement, in the order they run, nested as they are.
+    page.get_by_test_id("tab-outline").tap()
+    items = page.get_by_test_id("outline-item")
+    expect(items).to_have_count(len(statements(cell)))
+    shown = items.evaluate_all("els => els.map(e => e.dataset.block)")
+    assert shown == statements(cell)
+    first_move = items.filter(has_text="move joint").first
+    expect(first_move).to_contain_text("above_pick")
+    indent = first_move.evaluate("e => parseFloat(e.style.paddingLeft)")
+    assert indent > items.first.evaluate("e => parseFloat(e.style.paddingLeft)")
+    # A tap goes to the block: it is selected, so a breakpoint can be set on it.
+    revealed = first_move.get_attribute("data-block")
+    assert revealed is not None
+    first_move.tap()
+    expect(page.get_by_test_id("breakpoint")).to_be_enabled()
+    assert fits_the_screen(page)
+
+    # A dropdown's rows are big enough for a finger.
+    page.get_by_test_id("tab-output").tap()
+    dropdown = block_of(page, revealed).locator(".blocklyDropdownText").first
+    dropdown.tap()
+    row = page.locator(".blocklyMenuItem").first
+    expect(row).to_be_visible()
+    box = row.bounding_box()
+    assert box is not None and box["height"] >= 44, box
+    page.keyboard.press("Escape")
+
+    # The robot in focus, live, in the 3D tab.
+    page.get_by_test_id("tab-view").tap()
+    view = page.get_by_test_id("program-view").get_by_test_id("robot-view")
+    expect(view).to_have_attribute("data-status", "ready", timeout=60_000)
+    expect(view).to_have_attribute("data-robot", "robot")
+
+    # The Python reads line for line: no line wraps under the one before it.
+    page.get_by_test_id("tab-python").tap()
+    code = page.get_by_test_id("python").locator("pre")
+    expect(code).to_contain_text("move_joint(")
+    lines, height, line_height = code.evaluate(
+        "e => [e.textContent.split('\\n').length, e.scrollHeight,"
+        " parseFloat(getComputedStyle(e).lineHeight)]"
+    )
+    assert height <= lines * line_height + 2, (lines, height, line_height)
+    assert errors.errors == []
+
+
+def test_every_block_fits_the_toolbox_on_a_phone(
+    runtime: Runtime, cell: dict[str, Any], phone: BrowserContext
+) -> None:
+    page = phone.new_page()
+    page.goto(f"{runtime.url}/#/program")
+    expect(block_of(page, cell["id"])).to_be_visible()
+    screen = page.viewport_size
+    assert screen is not None
+    categories = page.locator(".blocklyToolboxCategory")
+    assert categories.count() >= 8
+    for index in range(categories.count()):
+        category = categories.nth(index)
+        category.tap()
+        blocks = page.locator(".blocklyFlyout .blocklyBlockCanvas > g.blocklyDraggable")
+        expect(blocks.first).to_be_visible()
+        for block in blocks.all():
+            box = block.bounding_box()
+            assert box is not None
+            wide = f"{category.inner_text()}: {block.text_content()}"
+            assert box["x"] + box["width"] <= screen["width"], wide

@@ -5,6 +5,8 @@ import { FocusController, focus } from "../focus";
 import { FeedController, feed } from "../live";
 import { shared } from "../styles";
 import type { DeviceDetails } from "../types";
+import { RobotLoader } from "../robot-loader";
+import type { RobotModel } from "../components/robot-view";
 import type { ProgramEditor } from "../program/editor";
 import type { BlockCatalog } from "../program/catalog";
 import { RunFeed } from "../program/run-feed";
@@ -20,6 +22,7 @@ import {
   type Saved,
 } from "../program/types";
 import "../components/modal";
+import "../components/robot-view";
 import "../components/name-dialog";
 
 const PROGRAM_NAME = /^[A-Za-z][A-Za-z0-9_-]{0,63}$/;
@@ -105,6 +108,7 @@ export class OpProgramPanel extends LitElement {
     tab: { state: true },
     history: { state: true },
     selected: { state: true },
+    model: { state: true },
   };
   declare programs: ProgramSummary[];
   declare name: string; // "" until a new program is first saved
@@ -118,7 +122,8 @@ export class OpProgramPanel extends LitElement {
   declare notice: string;
   declare dialog: Dialog;
   declare dialogError: string;
-  declare tab: "output" | "python";
+  declare tab: Tab;
+  declare model: RobotModel | null; // the robot in focus, for the 3D tab
   declare history: { undo: boolean; redo: boolean };
   declare selected: string | null;
 
@@ -251,6 +256,12 @@ export class OpProgramPanel extends LitElement {
         white-space: pre-wrap;
         overflow-wrap: anywhere;
       }
+      /* Code never wraps: a wrapped line would seem to leave its loop. */
+      pre.code {
+        white-space: pre;
+        overflow-wrap: normal;
+        overflow-x: auto;
+      }
       .line {
         display: block;
         width: 100%;
@@ -272,10 +283,53 @@ export class OpProgramPanel extends LitElement {
       }
       .status {
         display: flex;
-        flex-wrap: wrap;
+        flex-wrap: nowrap; /* one line whatever the block is called: nothing below jumps */
         gap: 8px;
         align-items: center;
+        min-height: 36px;
         font-size: 15px;
+      }
+      .status > * {
+        flex: none;
+      }
+      .status [data-testid="run-block"] {
+        flex: 0 1 auto;
+        min-width: 0;
+        overflow: hidden;
+        text-overflow: ellipsis;
+        white-space: nowrap;
+      }
+      .outline .item {
+        display: block;
+        width: 100%;
+        min-height: 44px;
+        text-align: left;
+        font-size: 15px;
+        font-weight: 500;
+        border: none;
+        border-bottom: 1px solid var(--line);
+        border-radius: 0;
+        background: transparent;
+        overflow-wrap: anywhere;
+      }
+      .outline .item.chosen {
+        background: var(--raised);
+      }
+      .outline .item.running {
+        box-shadow: inset 4px 0 0 var(--accent);
+        color: var(--accent);
+      }
+      .view op-robot-view {
+        height: 100%;
+        min-height: 280px;
+      }
+      /* Blockly's dropdown menus: rows a finger can hit. */
+      .blocklyDropDownDiv .blocklyMenuItem,
+      .blocklyWidgetDiv .blocklyMenuItem {
+        min-height: 48px;
+        display: flex;
+        align-items: center;
+        font-size: 17px;
       }
       .problems {
         display: flex;
@@ -353,12 +407,16 @@ export class OpProgramPanel extends LitElement {
           min-width: 0;
           flex: 1;
         }
+        /* A narrow toolbox leaves the flyout room for the widest block (the pose). */
         .blocklyToolbox {
           min-width: 0;
+          max-width: 112px;
         }
         .blocklyToolboxCategoryLabel {
-          font-size: 16px;
+          font-size: 15px;
           padding: 0 4px;
+          white-space: normal;
+          line-height: 1.15;
         }
       }
     `,
@@ -379,10 +437,12 @@ export class OpProgramPanel extends LitElement {
     this.dialog = null;
     this.dialogError = "";
     this.tab = "output";
+    this.model = null;
     this.history = { undo: false, redo: false };
     this.selected = null;
     new FeedController(this);
     new FocusController(this);
+    new RobotLoader(this, (robot) => this.loadModel(robot));
   }
 
   private onRuns = (event: Event) => {
@@ -594,8 +654,19 @@ export class OpProgramPanel extends LitElement {
 
   // --- editing ----------------------------------------------------------------------------
 
+  private async loadModel(robot: string): Promise<boolean> {
+    try {
+      const model = await api<RobotModel>("GET", `/api/jog/robots/${encodeURIComponent(robot)}`);
+      if (robot === focus.robot) this.model = model;
+      return true;
+    } catch {
+      return false;
+    }
+  }
+
   private blocksChanged(): void {
     if (!this.editor) return;
+    if (this.tab === "outline") this.requestUpdate();
     this.dirty = JSON.stringify(this.editor.state()) !== this.saved;
     window.clearTimeout(this.previewTimer);
     this.previewTimer = window.setTimeout(() => void this.preview(), PREVIEW_DELAY_MS);
@@ -825,12 +896,40 @@ export class OpProgramPanel extends LitElement {
     </div>`;
   }
 
+  /** The program as a tree, PolyScope-style: one line per statement; tap to go to it. */
+  private renderOutline() {
+    const items = this.editor?.outline() ?? [];
+    const running = this.status()?.block ?? null;
+    const flagged = new Set(this.problems.map((p) => p.block));
+    return html`<div class="pane outline" data-testid="outline">
+      ${items.length === 0 ? html`<p class="muted">No blocks yet.</p>` : nothing}
+      ${items.map((item) => html`<button class="item ${item.id === running ? "running" : ""}
+          ${item.id === this.selected ? "chosen" : ""}" data-testid="outline-item"
+          data-block=${item.id} style="padding-left:${10 + item.depth * 22}px"
+          @click=${() => this.editor?.reveal(item.id)}>
+          ${flagged.has(item.id) ? "⚠ " : ""}${item.text}</button>`)}
+    </div>`;
+  }
+
+  /** The robot in focus, live, beside the blocks that move it. */
+  private renderView() {
+    const robot = focus.robot;
+    const state = feed.states.get(robot);
+    return html`<div class="pane view" data-testid="program-view">
+      ${robot
+        ? html`<op-robot-view .model=${this.model}
+            .joints=${this.model?.name === robot ? state?.joint_position ?? null : null}
+          ></op-robot-view>`
+        : html`<p class="muted">Tap a robot in the bar above.</p>`}
+    </div>`;
+  }
+
   private renderPython() {
     return html`<div class="pane" data-testid="python">
       ${this.problem
         ? html`<p class="error" role="alert" data-testid="problem">${this.problem}</p>`
         : nothing}
-      <pre>${readable(this.python) || "# The Python of the blocks shows here."}</pre>
+      <pre class="code">${readable(this.python) || "# The Python of the blocks shows here."}</pre>
     </div>`;
   }
 
@@ -884,18 +983,28 @@ export class OpProgramPanel extends LitElement {
         <div class="side">
           ${this.renderRunControls()}
           <div class="tabs" role="tablist">
-            <button role="tab" data-testid="tab-output" aria-selected=${this.tab === "output"}
-              @click=${() => (this.tab = "output")}>Output</button>
-            <button role="tab" data-testid="tab-python" aria-selected=${this.tab === "python"}
-              @click=${() => (this.tab = "python")}>Python${this.problem ? " ⚠" : ""}</button>
+            ${TABS.map(([tab, label]) => html`<button role="tab" data-testid="tab-${tab}"
+              aria-selected=${this.tab === tab} @click=${() => (this.tab = tab)}>
+              ${label}${tab === "python" && this.problem ? " ⚠" : ""}</button>`)}
           </div>
-          ${this.tab === "output" ? this.renderOutput() : this.renderPython()}
+          ${this.tab === "output" ? this.renderOutput()
+            : this.tab === "outline" ? this.renderOutline()
+            : this.tab === "view" ? this.renderView()
+            : this.renderPython()}
         </div>
       </div>
       ${this.dialog ? this.renderDialog() : nothing}
     `;
   }
 }
+
+type Tab = "output" | "outline" | "python" | "view";
+const TABS: [Tab, string][] = [
+  ["output", "Output"],
+  ["outline", "Outline"],
+  ["python", "Python"],
+  ["view", "3D"],
+];
 
 function stateClass(state: string): string {
   if (state === "running" || state === "finished") return "ok";

@@ -3,6 +3,7 @@
 
 import * as Blockly from "blockly";
 import { currentTheme, paletteColour } from "../theme";
+import { useShorterBlocklyWords } from "./blockly-words";
 import { rememberNames, type BlockCatalog, defineBlocks } from "./catalog";
 
 const BREAKPOINT_CLASS = "opBreakpoint";
@@ -37,6 +38,29 @@ function canBreak(block: Blockly.BlockSvg): boolean {
   return block.previousConnection !== null || block.nextConnection !== null;
 }
 
+/** One line of the program outline: a statement block, indented under what contains it. */
+export interface OutlineItem {
+  id: string;
+  text: string;
+  depth: number;
+}
+
+/** A statement as one line: its own fields and values, not the statements inside it. */
+function headline(block: Blockly.Block): string {
+  const parts: string[] = [];
+  for (const input of block.inputList) {
+    for (const field of input.fieldRow) {
+      const text = field.getText();
+      if (text) parts.push(text);
+    }
+    if (input.type === Blockly.inputs.inputTypes.VALUE) {
+      parts.push(input.connection?.targetBlock()?.toString(30) ?? "?");
+    }
+  }
+  const text = parts.join(" ").replace(/\s+/g, " ").trim();
+  return text.length > 80 ? `${text.slice(0, 79)}…` : text;
+}
+
 let menuRegistered = false;
 
 function registerBreakpointMenu(): void {
@@ -69,6 +93,7 @@ export class ProgramEditor extends EventTarget {
 
   constructor(container: HTMLElement, catalog: BlockCatalog, compact: boolean) {
     super();
+    useShorterBlocklyWords();
     defineBlocks(catalog);
     registerBreakpointMenu();
     this.workspace = Blockly.inject(container, {
@@ -132,7 +157,8 @@ export class ProgramEditor extends EventTarget {
     const block = this.workspace.getBlockById(id);
     if (!block) return;
     this.workspace.centerOnBlock(id);
-    block.select();
+    // Through common.setSelected: block.select() alone only paints it, and fires no event.
+    if (block instanceof Blockly.BlockSvg) Blockly.common.setSelected(block);
   }
 
   /** Warnings on the blocks that keep the program from running; cleared on the rest. */
@@ -143,6 +169,22 @@ export class ProgramEditor extends EventTarget {
       const text = messages.get(block.id)?.join("\n") ?? null;
       block.setWarningText(text);
     }
+  }
+
+  /** The program as a tree of statements, top to bottom, the way it runs. */
+  outline(): OutlineItem[] {
+    const items: OutlineItem[] = [];
+    const walk = (first: Blockly.Block | null, depth: number) => {
+      for (let block = first; block; block = block.getNextBlock()) {
+        items.push({ id: block.id, text: headline(block), depth });
+        for (const input of block.inputList) {
+          if (input.type !== Blockly.inputs.inputTypes.STATEMENT) continue;
+          walk(input.connection?.targetBlock() ?? null, depth + 1);
+        }
+      }
+    };
+    for (const top of this.workspace.getTopBlocks(true)) walk(top, 0);
+    return items;
   }
 
   /** A block as text ("wait 0.2 s"), for the status line. */
