@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import BrowserContext, Page, expect
 
-from tests.browser.conftest import PageErrors, add_robot, fits_the_screen
+from tests.browser.conftest import PageErrors, add_robot, fits_the_screen, robot_state
 from tests.support.processes import Runtime, SimRobotProc, wait_for
 
 DARK_BG = "rgb(16, 22, 29)"
@@ -90,3 +90,118 @@ def test_the_system_panel_shows_the_runtimes_warnings(
         assert fits_the_screen(page)
     finally:
         runtime.api("DELETE", "/devices/ghost")
+
+
+# Every text node, label and hint a person sees on the page, shadow roots included; left out:
+# the blocks (their words come from the block definitions, not the UI's catalogue) and what
+# is marked translate="no" (names, the runtime's own messages, the brand).
+SHOWN_TEXT = """() => {
+  const found = [];
+  const walk = (root) => {
+    for (const el of root.querySelectorAll("*")) {
+      const skip = "head, style, script, [translate=no], .blocklySvg, .blocklyToolbox, "
+        + ".blocklyFlyout";
+      if (el.closest(skip)) continue;
+      for (const node of el.childNodes) {
+        if (node.nodeType === Node.TEXT_NODE && node.textContent.trim()) {
+          found.push(node.textContent.trim());
+        }
+      }
+      for (const name of ["aria-label", "title", "placeholder"]) {
+        if (el.getAttribute(name)) found.push(el.getAttribute(name));
+      }
+      if (el.shadowRoot) walk(el.shadowRoot);
+    }
+  };
+  walk(document);
+  return found;
+}"""
+
+PANELS = ("jog", "program", "scene", "devices", "system")
+# The same in German, or data: robot and program names, units.
+SAME_IN_BOTH = {"robot", "cycle", "STOP", "System", "Pause", "Details", "mm", "°", "kg", "3D"}
+SAME_IN_BOTH |= {"Python", "Name", "Status", "Version", "in", "rad"}
+SAME_IN_BOTH |= {f"TCP {axis} mm" for axis in "XYZ"}
+
+
+def shown_words(page: Page) -> dict[str, set[str]]:
+    """Per panel, the texts shown that have words in them."""
+    shown: dict[str, set[str]] = {}
+    for panel in PANELS:
+        page.get_by_test_id(f"nav-{panel}").tap()
+        expect(page.locator(f"op-{panel}-panel")).to_be_visible()
+        page.wait_for_timeout(300)  # let the panel's first fetches land and draw
+        texts = page.evaluate(SHOWN_TEXT)
+        words = {t for t in texts if any(c.isalpha() for c in t) and len(t) > 1}
+        shown[panel] = {t for t in words if not t.startswith("http")}  # addresses
+    return shown
+
+
+def test_the_whole_ui_speaks_the_language_chosen_on_the_system_panel(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/system")
+    english = shown_words(page)
+    page.get_by_test_id("nav-system").tap()
+    page.get_by_test_id("language-de").tap()
+    expect(page.get_by_test_id("language-de")).to_have_attribute("aria-pressed", "true")
+    assert page.evaluate("document.documentElement.lang") == "de"
+    german = shown_words(page)
+    for panel in PANELS:
+        untranslated = (english[panel] & german[panel]) - SAME_IN_BOTH
+        assert not untranslated, (panel, sorted(untranslated)[:80])
+        assert german[panel] - english[panel], panel  # something is shown in German
+    page.reload()  # kept on this tablet
+    expect(page.get_by_test_id("language-de")).to_have_attribute("aria-pressed", "true")
+    page.get_by_test_id("language-en").tap()
+    assert shown_words(page)["system"] == english["system"]
+    assert errors.errors == []
+
+
+def test_lengths_and_angles_read_and_are_typed_in_the_units_chosen(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/jog")
+    readout = page.get_by_test_id("tcp-readout")
+    expect(readout).to_contain_text("X mm")
+    x, _, z = robot_state(runtime)["tcp_pose"]["position"]
+
+    def shown() -> list[float]:
+        words = readout.inner_text().split()  # "X in <x> Y in <y> Z in <z> Roll rad …"
+        return [float(words[i]) for i in (2, 5, 8, 11)]
+
+    page.get_by_test_id("nav-system").tap()
+    page.get_by_test_id("units-length-in").tap()
+    page.get_by_test_id("units-angle-rad").tap()
+    page.get_by_test_id("nav-jog").tap()
+    expect(readout).to_contain_text("X in")
+    expect(readout).to_contain_text("Roll rad")
+    inches = shown()
+    assert abs(inches[0] - x / 0.0254) < 0.002 and abs(inches[2] - z / 0.0254) < 0.002
+    assert abs(inches[3]) <= 3.1425  # roll in radians (±π, to 3 places), not degrees
+    rows = " ".join(page.get_by_test_id("jog-row").all_inner_texts())
+    assert "rad" in rows and "°" not in rows
+
+    # A TCP typed in inches is stored in metres.
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("You have control")
+    page.get_by_test_id("nav-scene").tap()
+    field = page.get_by_test_id("tool-z")
+    field.fill("4")
+    field.dispatch_event("change")
+    page.get_by_test_id("save-tool").tap()
+    expect(page.get_by_test_id("tool-saved")).to_be_visible()
+    stored = runtime.api("GET", "/variables/tools.robot").json()["value"]
+    assert abs(stored["tcp"]["position"][2] - 4 * 0.0254) < 1e-9
+    page.reload()  # the units are kept, and the field reads back what was typed
+    expect(page.get_by_test_id("tool-z")).to_have_value("4")
+    field = page.get_by_test_id("tool-z")
+    field.fill("0")
+    field.dispatch_event("change")
+    page.get_by_test_id("save-tool").tap()
+    expect(page.get_by_test_id("tool-saved")).to_be_visible()
+    assert errors.errors == []

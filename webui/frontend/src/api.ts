@@ -1,5 +1,7 @@
 // JSON over HTTP to the runtime, with its error body turned into an ApiError.
 
+import { t } from "./i18n";
+
 export class ApiError extends Error {
   constructor(
     message: string,
@@ -24,14 +26,14 @@ export async function api<T>(
       body: body === undefined ? undefined : JSON.stringify(body),
     });
   } catch {
-    throw new ApiError("The runtime is not reachable.", "unreachable", 0);
+    throw new ApiError(t("app.unreachable"), "unreachable", 0);
   }
   const text = await response.text();
   const data: unknown = text ? safeParse(text) : null;
   if (!response.ok) {
     const error = (data as { error?: { code?: string; message?: string } } | null)?.error;
     throw new ApiError(
-      error?.message ?? `Request failed (HTTP ${response.status}).`,
+      error?.message ?? t("app.request_failed", { status: response.status }),
       error?.code ?? "http_error",
       response.status,
     );

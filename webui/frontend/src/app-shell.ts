@@ -1,4 +1,5 @@
 import { LitElement, css, html } from "lit";
+import { t } from "./i18n";
 import { feed } from "./live";
 import { panels } from "./panels/registry";
 import { shared } from "./styles";
@@ -114,14 +115,14 @@ export class OpApp extends LitElement {
     return html`
       <op-status-bar></op-status-bar>
       <div class="body">
-        <nav aria-label="Panels">
+        <nav aria-label=${t("app.panels")}>
           ${panels.map(
             (p) => html`<button
               data-testid="nav-${p.id}"
               aria-current=${p.id === active.id ? "page" : "false"}
               @click=${() => (location.hash = `#/${p.id}`)}
             >
-              ${p.icon}<span>${p.title}</span>
+              ${p.icon}<span>${p.title()}</span>
             </button>`,
           )}
         </nav>

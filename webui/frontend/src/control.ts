@@ -2,6 +2,7 @@
 // reloads), one token per robot (kept for this tab only), renewed while held.
 
 import { api, ApiError } from "./api";
+import { t } from "./i18n";
 
 const RENEW_EVERY_MS = 5000;
 
@@ -34,7 +35,7 @@ export class Control extends EventTarget {
    * their next renewal. */
   rename(name: string): void {
     const clean = name.replace(/[\p{Cc}\p{Cf}]/gu, "").trim().slice(0, HOLDER_MAX);
-    if (!clean) throw new Error("The pendant needs a name.");
+    if (!clean) throw new Error(t("jog.control.needs_name"));
     localStorage.setItem(HOLDER_KEY, clean);
     this.dispatchEvent(new Event("change"));
   }

@@ -2,7 +2,8 @@ import { LitElement, css, html } from "lit";
 import { ApiError, api, errorText } from "./api";
 import { control } from "./control";
 import { FocusController, focus } from "./focus";
-import { modeLabel } from "./format";
+import { linkLabel, modeLabel } from "./format";
+import { t } from "./i18n";
 import { FeedController, feed } from "./live";
 import { shared } from "./styles";
 import type { AddedDevice, RobotState } from "./types";
@@ -164,7 +165,7 @@ export class OpStatusBar extends LitElement {
       const ratio = feed.states.get(robot)?.speed_ratio;
       if (ratio !== undefined) focus.setSpeed(ratio * 100);
       this.notice = err instanceof ApiError && err.code.startsWith("lease")
-        ? "Take control to raise the speed" : errorText(err);
+        ? t("app.raise_needs_control") : errorText(err);
     }
   }
 
@@ -182,19 +183,22 @@ export class OpStatusBar extends LitElement {
     const link = device.status === "connected" ? "ok" : device.status === "connecting" ? "warn" : "bad";
     const live = feed.online && device.status === "connected";
     let badge = html``;
-    if (live && state?.flags.estop) badge = html`<span class="chip bad">E-STOP</span>`;
+    if (live && state?.flags.estop) badge = html`<span class="chip bad">${t("app.estop")}</span>`;
     else if (live && state?.flags.error)
-      badge = html`<span class="chip bad" title=${state.error_message}>ERROR</span>`;
-    else if (live && state && !state.flags.enabled) badge = html`<span class="chip">Disabled</span>`;
+      badge = html`<span class="chip bad" title=${state.error_message}>${t("app.error")}</span>`;
+    else if (live && state && !state.flags.enabled)
+      badge = html`<span class="chip">${t("app.disabled")}</span>`;
     return html`<button class="robot" data-testid="status-robot" data-name=${device.local_name}
       aria-pressed=${inFocus ? "true" : "false"}
-      title=${inFocus ? "The robot in focus" : `Focus ${device.local_name}`}
+      title=${inFocus ? t("app.in_focus") : t("app.focus_robot", { name: device.local_name })}
       @click=${() => focus.choose(device.local_name)}>
-      <span class="dot ${feed.online ? link : "bad"}" title=${device.status}></span>
+      <span class="dot ${feed.online ? link : "bad"}" title=${linkLabel(device.status)}></span>
       <strong>${device.local_name}</strong>
       ${live && state
         ? html`<span class="muted">${modeLabel(state.operational_mode)}</span>`
-        : html`<span class="muted">${feed.online ? device.status : "unknown"}</span>`}
+        : html`<span class="muted"
+            >${feed.online ? linkLabel(device.status) : t("app.link.unknown")}</span
+          >`}
       ${badge}
     </button>`;
   }
@@ -203,34 +207,36 @@ export class OpStatusBar extends LitElement {
     const robots = feed.robots();
     const inFocus = focus.robot;
     return html`
-      <div class="brand">Open<span>Pendant</span></div>
-      <div class="robots" role="group" aria-label="Robot in focus">
+      <div class="brand" translate="no">Open<span>Pendant</span></div>
+      <div class="robots" role="group" aria-label=${t("app.robot_in_focus")}>
         ${robots.length === 0 && feed.online
-          ? html`<span class="muted">No robot added</span>`
+          ? html`<span class="muted">${t("app.no_robot")}</span>`
           : robots.map((d) =>
               this.robotChip(d, feed.states.get(d.local_name), d.local_name === inFocus),
             )}
         ${robots.length > 1 && !inFocus
           ? html`<span class="choose" data-testid="focus-missing" role="alert">
-              Tap the robot to work with</span>`
+              ${t("app.choose_robot")}</span>`
           : ""}
       </div>
-      <label class="speed" title="Speed override: jogging and running programs">
-        <span>Speed</span>
+      <label class="speed" title=${t("app.speed_title")}>
+        <span>${t("app.speed")}</span>
         <input type="range" min="1" max="100" .value=${String(focus.speed)}
-          data-testid="speed" aria-label="Speed override"
+          data-testid="speed" aria-label=${t("app.speed_override")}
           @input=${(e: Event) => this.setSpeed(Number((e.target as HTMLInputElement).value))} />
         <strong data-testid="speed-value">${focus.speed} %</strong>
       </label>
       ${this.notice ? html`<span class="chip warn notice" role="alert">${this.notice}</span>` : ""}
       ${feed.online
-        ? html`<span class="chip ok link-ok" data-testid="runtime-link">Runtime connected</span>`
+        ? html`<span class="chip ok link-ok" data-testid="runtime-link"
+            >${t("app.runtime_connected")}</span
+          >`
         : html`<span class="offline" data-testid="runtime-link" role="alert"
-            >No connection to the runtime — retrying…</span
+            >${t("app.runtime_offline")}</span
           >`}
       <button class="stop" data-testid="safety-stop"
-        title="Halts every robot and stops every program (a software stop, not an E-stop)"
-        @click=${() => this.stop()}>STOP</button>
+        title=${t("app.stop_title")}
+        @click=${() => this.stop()}>${t("app.stop")}</button>
     `;
   }
 }

@@ -1,6 +1,7 @@
 import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
-import { LOCAL_NAME } from "../format";
+import { LOCAL_NAME, withBold } from "../format";
+import { t } from "../i18n";
 import { shared } from "../styles";
 import type { AddedDevice, DetectedDevice } from "../types";
 import "./modal";
@@ -86,10 +87,10 @@ export class OpAddDeviceDialog extends LitElement {
   render() {
     const valid = LOCAL_NAME.test(this.localName);
     const what = this.device ? `${this.device.name} (${this.device.model})` : this.url;
-    return html`<op-modal heading="Add device" data-testid="add-dialog">
-      <p>Add <strong>${what}</strong> to this cell.</p>
+    return html`<op-modal heading=${t("devices.add_heading")} data-testid="add-dialog">
+      <p>${withBold(t("devices.add_text"), "device", what)}</p>
       <form @submit=${this.add}>
-        <label for="local-name">Local name (used in programs)</label>
+        <label for="local-name">${t("devices.local_name")}</label>
         <input
           id="local-name"
           data-testid="local-name"
@@ -100,13 +101,13 @@ export class OpAddDeviceDialog extends LitElement {
           @input=${(e: InputEvent) => (this.localName = (e.target as HTMLInputElement).value.trim())}
         />
         <div class="hint ${valid ? "muted" : "error"}">
-          Lowercase letters, digits and _; starts with a letter; up to 32 characters.
+          ${t("devices.local_name_hint")}
         </div>
         ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
         <div class="actions">
-          <button type="button" @click=${this.close}>Cancel</button>
+          <button type="button" @click=${this.close}>${t("devices.cancel")}</button>
           <button class="primary" type="submit" data-testid="confirm-add" ?disabled=${!valid || this.busy}>
-            ${this.busy ? "Adding…" : "Add"}
+            ${this.busy ? t("devices.adding") : t("devices.add")}
           </button>
         </div>
       </form>

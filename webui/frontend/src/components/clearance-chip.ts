@@ -1,7 +1,9 @@
 import { LitElement, css, html } from "lit";
 import { api } from "../api";
+import { t } from "../i18n";
 import { feed } from "../live";
 import { shared } from "../styles";
+import { length, lengthUnit, units } from "../units";
 
 interface Clearance {
   distance: number | null;
@@ -67,13 +69,18 @@ export class OpClearanceChip extends LitElement {
 
   render() {
     const c = this.clearance;
-    if (!c) return html`<span class="chip" data-testid="clearance">Clearance unknown</span>`;
+    if (!c) {
+      return html`<span class="chip" data-testid="clearance">${t("jog.clearance.unknown")}</span>`;
+    }
+    // Whole millimetres are close enough to see how near the arm is; inches to 0.01.
+    const distance = (metres: number): string =>
+      `${length(metres, units.length === "mm" ? 0 : 2)} ${lengthUnit()}`;
+    const names = { part: c.robot_part ?? "", other: c.other ?? "" };
     const text = c.distance == null
-      ? "Nothing near"
+      ? t("jog.clearance.nothing_near")
       : c.distance < 0
-        ? `Inside ${c.other} by ${(-c.distance * 1000).toFixed(0)} mm (${c.robot_part}): ` +
-          "set where the robot is mounted (Scene)"
-        : `Closest: ${(c.distance * 1000).toFixed(0)} mm (${c.robot_part} – ${c.other})`;
+        ? t("jog.clearance.inside", { ...names, distance: distance(-c.distance) })
+        : t("jog.clearance.closest", { ...names, distance: distance(c.distance) });
     const near = c.distance != null && c.distance < NEAR;
     return html`<span class="chip ${near ? "bad" : ""}" data-testid="clearance">${text}</span>`;
   }

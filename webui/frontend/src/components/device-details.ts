@@ -1,8 +1,10 @@
 import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
-import { deg } from "../format";
+import { linkLabel } from "../format";
+import { t } from "../i18n";
 import { shared } from "../styles";
 import type { DeviceDetails } from "../types";
+import { angle, angleUnit } from "../units";
 import "./modal";
 
 // What the runtime knows about one added device: identity, address, limits.
@@ -79,39 +81,51 @@ export class OpDeviceDetails extends LitElement {
   render() {
     const d = this.details;
     const info = d?.info?.info;
-    return html`<op-modal heading="Device ${this.name}">
+    return html`<op-modal heading=${t("devices.details_heading", { name: this.name })}>
       ${this.error ? html`<p class="error">${this.error}</p>` : ""}
       ${d
         ? html`<dl>
-            <dt>Name</dt><dd>${d.name}</dd>
-            <dt>Kind</dt><dd>${d.kind}</dd>
-            <dt>Model</dt><dd>${info ? `${info.manufacturer} ${info.model}` : d.model}</dd>
-            <dt>Address</dt><dd>${d.url}</dd>
-            <dt>UUID</dt><dd>${d.uuid}</dd>
-            <dt>Status</dt><dd>${d.status}${d.last_error ? ` — ${d.last_error}` : ""}</dd>
-            ${info?.description ? html`<dt>About</dt><dd>${info.description}</dd>` : ""}
+            <dt>${t("devices.info.name")}</dt><dd>${d.name}</dd>
+            <dt>${t("devices.info.kind")}</dt><dd>${d.kind}</dd>
+            <dt>${t("devices.info.model")}</dt>
+            <dd>${info ? `${info.manufacturer} ${info.model}` : d.model}</dd>
+            <dt>${t("devices.info.address")}</dt><dd>${d.url}</dd>
+            <dt>${t("devices.info.uuid")}</dt><dd>${d.uuid}</dd>
+            <dt>${t("devices.info.status")}</dt>
+            <dd>${linkLabel(d.status)}${d.last_error ? ` — ${d.last_error}` : ""}</dd>
+            ${info?.description
+              ? html`<dt>${t("devices.info.about")}</dt><dd>${info.description}</dd>`
+              : ""}
           </dl>`
         : this.error
           ? ""
-          : html`<p class="muted">Loading…</p>`}
+          : html`<p class="muted">${t("devices.loading")}</p>`}
       ${info
         ? html`<table data-testid="joint-limits">
             <thead>
-              <tr><th>Joint</th><th>Min °</th><th>Max °</th><th>Max °/s</th></tr>
+              <tr>
+                <th>${t("devices.limits.joint")}</th>
+                <th>${t("devices.limits.min", { unit: angleUnit() })}</th>
+                <th>${t("devices.limits.max", { unit: angleUnit() })}</th>
+                <th>${t("devices.limits.max_speed", { unit: angleUnit() })}</th>
+              </tr>
             </thead>
             <tbody>
               ${info.joints.map(
                 (j, i) => html`<tr>
-                  <td>J${i + 1} <span class="muted">${j.name}</span></td>
-                  <td>${deg(j.lower)}</td>
-                  <td>${deg(j.upper)}</td>
-                  <td>${deg(j.max_velocity)}</td>
+                  <td>
+                    ${t("devices.limits.joint_number", { number: i + 1 })}
+                    <span class="muted">${j.name}</span>
+                  </td>
+                  <td>${angle(j.lower)}</td>
+                  <td>${angle(j.upper)}</td>
+                  <td>${angle(j.max_velocity)}</td>
                 </tr>`,
               )}
             </tbody>
           </table>`
         : ""}
-      <div class="actions"><button @click=${this.close}>Close</button></div>
+      <div class="actions"><button @click=${this.close}>${t("devices.close")}</button></div>
     </op-modal>`;
   }
 }

@@ -1,4 +1,5 @@
 import { LitElement, css, html } from "lit";
+import { t } from "../i18n";
 import { shared } from "../styles";
 import "./hold-button";
 
@@ -57,7 +58,7 @@ export class OpJogPad extends LitElement {
         <op-hold-button
           data-testid="jog-minus"
           label="−"
-          aria-label="${a.label} minus"
+          aria-label=${t("jog.axis_minus", { axis: a.label })}
           ?disabled=${this.disabled}
           @hold-start=${() => this.emit("jog-hold", a.key, -1)}
           @hold-end=${() => this.emit("jog-release", a.key, -1)}
@@ -66,7 +67,7 @@ export class OpJogPad extends LitElement {
         <op-hold-button
           data-testid="jog-plus"
           label="+"
-          aria-label="${a.label} plus"
+          aria-label=${t("jog.axis_plus", { axis: a.label })}
           ?disabled=${this.disabled}
           @hold-start=${() => this.emit("jog-hold", a.key, 1)}
           @hold-end=${() => this.emit("jog-release", a.key, 1)}

@@ -1,4 +1,5 @@
 import { LitElement, css, html } from "lit";
+import { t } from "../i18n";
 import { shared } from "../styles";
 import type { AddedDevice, InputState } from "../types";
 
@@ -6,7 +7,14 @@ import type { AddedDevice, InputState } from "../types";
 // of each of its axes with what that axis drives right now (a joint in Joints mode, a
 // direction of the base or tool frame otherwise), so "lift" never surprises.
 
-const MOTIONS = ["Slide right", "Slide forward", "Lift", "Tilt forward", "Tilt right", "Twist left"];
+const MOTIONS = [
+  "jog.mouse.slide_right",
+  "jog.mouse.slide_forward",
+  "jog.mouse.lift",
+  "jog.mouse.tilt_forward",
+  "jog.mouse.tilt_right",
+  "jog.mouse.twist_left",
+] as const;
 const CARTESIAN = ["X", "Y", "Z", "Rx", "Ry", "Rz"];
 
 export class OpMouseCard extends LitElement {
@@ -101,8 +109,9 @@ export class OpMouseCard extends LitElement {
   }
 
   private drives(axis: number): string {
-    if (this.mode === "joint") return `J${axis + 1}`;
-    return `${this.mode === "tool" ? "Tool" : "Base"} ${CARTESIAN[axis]}`;
+    if (this.mode === "joint") return t("jog.joint_short", { number: axis + 1 });
+    const key = this.mode === "tool" ? "jog.mouse.drives_tool" : "jog.mouse.drives_base";
+    return t(key, { axis: CARTESIAN[axis] });
   }
 
   private readout() {
@@ -112,7 +121,7 @@ export class OpMouseCard extends LitElement {
         const value = axes ? axes[i] : 0;
         const left = value < 0 ? 50 + value * 50 : 50;
         return html`<tr data-axis=${i}>
-          <td>${motion}</td>
+          <td>${t(motion)}</td>
           <td data-testid="mouse-drives"><strong>${this.drives(i)}</strong></td>
           <td class="bar"><div class="track"><div class="fill"
             style="left:${left}%;width:${Math.abs(value) * 50}%"></div></div></td>
@@ -123,28 +132,27 @@ export class OpMouseCard extends LitElement {
   }
 
   render() {
-    if (!this.mice.length) return html`<p class="muted">No 3D mouse added (Devices panel).</p>`;
+    if (!this.mice.length) return html`<p class="muted">${t("jog.mouse.none")}</p>`;
     const device = this.device || this.mice[0].local_name;
     return html`<div class="row">
-        <select aria-label="3D mouse" .value=${device}
+        <select aria-label=${t("jog.mouse.title")} .value=${device}
           @change=${(e: Event) => this.emit("mouse-device", (e.target as HTMLSelectElement).value)}>
           ${this.mice.map((m) => html`<option value=${m.local_name}>${m.local_name}</option>`)}
         </select>
         <button data-testid="mouse-toggle" class=${this.on ? "primary" : ""}
           ?disabled=${this.disabled && !this.on} @click=${() => this.emit("mouse-toggle", !this.on)}>
-          ${this.on ? "3D mouse on — tap to turn off" : "Use 3D mouse"}</button>
+          ${this.on ? t("jog.mouse.turn_off") : t("jog.mouse.use")}</button>
         <label class="sensitivity">
-          <span>Sensitivity</span>
+          <span>${t("jog.mouse.sensitivity")}</span>
           <input type="range" min="10" max="100" step="5" .value=${String(this.sensitivity)}
-            data-testid="mouse-sensitivity" aria-label="3D mouse sensitivity"
+            data-testid="mouse-sensitivity" aria-label=${t("jog.mouse.sensitivity_label")}
             @change=${(e: Event) =>
               this.emit("mouse-sensitivity", Number((e.target as HTMLInputElement).value))} />
           <strong>${this.sensitivity} %</strong>
         </label>
       </div>
       ${this.readout()}
-      <p class="muted">Button 1 saves a waypoint, button 2 switches base/tool. The Joints, Base
-        and Tool buttons above set what the mouse drives.</p>`;
+      <p class="muted">${t("jog.mouse.buttons_hint")}</p>`;
   }
 }
 

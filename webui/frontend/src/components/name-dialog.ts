@@ -1,4 +1,5 @@
 import { LitElement, css, html } from "lit";
+import { t } from "../i18n";
 import { shared } from "../styles";
 import "./modal";
 
@@ -19,7 +20,7 @@ export class OpNameDialog extends LitElement {
   // Comma-separated; null: no tags field. A string, not an array: Lit re-applies array
   // bindings on every render of the parent, which would undo the typing.
   declare tags: string | null;
-  declare confirmLabel: string;
+  declare confirmLabel: string; // "": the catalogue's "Save"
   declare error: string;
   declare busy: boolean;
 
@@ -44,7 +45,7 @@ export class OpNameDialog extends LitElement {
     this.heading = "";
     this.value = "";
     this.tags = null;
-    this.confirmLabel = "Save";
+    this.confirmLabel = "";
     this.error = "";
     this.busy = false;
   }
@@ -58,31 +59,32 @@ export class OpNameDialog extends LitElement {
   private submit(e: Event) {
     e.preventDefault();
     if (!NAME.test(this.value) || this.busy) return;
-    const tags = (this.tags ?? "").split(",").map((t) => t.trim()).filter(Boolean);
+    const tags = (this.tags ?? "").split(",").map((tag) => tag.trim()).filter(Boolean);
     this.dispatchEvent(new CustomEvent("confirm", { detail: { name: this.value, tags } }));
   }
 
   render() {
     const valid = NAME.test(this.value);
+    const confirm = this.confirmLabel || t("program.name_dialog.save");
     return html`<op-modal heading=${this.heading}>
       <form @submit=${this.submit}>
         <input
           data-testid="name-input"
-          aria-label="Name"
+          aria-label=${t("program.name_dialog.name")}
           autocapitalize="none"
           spellcheck="false"
           .value=${this.value}
           @input=${(e: InputEvent) => (this.value = (e.target as HTMLInputElement).value.trim())}
         />
         <div class="hint ${valid ? "muted" : "error"}">
-          Starts with a letter; letters, digits, _ . - only.
+          ${t("program.name_dialog.rule")}
         </div>
         ${this.tags === null
           ? ""
           : html`<input
               data-testid="tags-input"
-              aria-label="Tags"
-              placeholder="Tags, separated by commas"
+              aria-label=${t("program.name_dialog.tags")}
+              placeholder=${t("program.name_dialog.tags_placeholder")}
               autocapitalize="none"
               style="margin-top:12px"
               .value=${this.tags}
@@ -91,10 +93,10 @@ export class OpNameDialog extends LitElement {
         ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
         <div class="actions">
           <button type="button" @click=${() => this.dispatchEvent(new CustomEvent("close"))}>
-            Cancel
+            ${t("program.name_dialog.cancel")}
           </button>
           <button class="primary" type="submit" data-testid="name-confirm"
-            ?disabled=${!valid || this.busy}>${this.confirmLabel}</button>
+            ?disabled=${!valid || this.busy}>${confirm}</button>
         </div>
       </form>
     </op-modal>`;

@@ -1,9 +1,10 @@
 import { LitElement, css, html } from "lit";
-import { deg, mm } from "../format";
+import { t } from "../i18n";
 import { shared } from "../styles";
 import type { RobotState } from "../types";
+import { angleWithUnit, length, lengthUnit } from "../units";
 
-// Live joint values (degrees) and TCP position (mm) of one robot.
+// Live joint values and TCP position of one robot, in the chosen units.
 export class OpRobotLive extends LitElement {
   static properties = { state: { attribute: false } };
   declare state: RobotState | undefined;
@@ -38,19 +39,19 @@ export class OpRobotLive extends LitElement {
 
   render() {
     const s = this.state;
-    if (!s) return html`<p class="muted">Waiting for state…</p>`;
+    if (!s) return html`<p class="muted">${t("jog.waiting_for_state")}</p>`;
     const [x, y, z] = s.tcp_pose.position;
     return html`
       <div class="joints" data-testid="joint-values">
         ${s.joint_position.map(
           (q, i) =>
             html`<div class="value" data-testid="joint-value">
-              <small>J${i + 1}</small>${deg(q)}°
+              <small>${t("jog.joint_short", { number: i + 1 })}</small>${angleWithUnit(q)}
             </div>`,
         )}
       </div>
-      <div class="tcp muted" data-testid="tcp-position">
-        TCP X ${mm(x)} · Y ${mm(y)} · Z ${mm(z)} mm
+      <div class="tcp muted" data-testid="tcp-position" translate="no">
+        ${t("jog.tcp_position", { x: length(x), y: length(y), z: length(z), unit: lengthUnit() })}
       </div>
     `;
   }

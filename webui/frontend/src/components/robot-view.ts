@@ -1,4 +1,5 @@
 import { LitElement, css, html } from "lit";
+import { t } from "../i18n";
 import { shared } from "../styles";
 import type { Marker, RobotScene, WorldContents } from "../three/scene";
 
@@ -122,7 +123,7 @@ export class OpRobotView extends LitElement {
       this.scene = new RobotScene(host);
       this.observer.observe(host);
       await this.scene.load(model.urdf, model.packages, model.info.base_link, (done, total) => {
-        this.progress = `Loading 3D model… ${done} of ${total} files`;
+        this.progress = t("scene.view.loading", { done, total });
       });
       this.status = "ready";
       this.progress = "";
@@ -135,7 +136,8 @@ export class OpRobotView extends LitElement {
     } catch (err) {
       this.loadedUrdf = ""; // the same model given again is tried again
       this.status = "error";
-      this.progress = `3D view unavailable: ${err instanceof Error ? err.message : String(err)}`;
+      const error = err instanceof Error ? err.message : String(err);
+      this.progress = t("scene.view.unavailable", { error });
     }
   }
 
@@ -143,8 +145,8 @@ export class OpRobotView extends LitElement {
     return html`<div class="canvas" data-testid="robot-view" data-status=${this.status}
         data-robot=${this.model?.name ?? ""}></div>
       ${this.status === "ready"
-        ? html`<button class="reset" data-testid="reset-view" title="Back to the first view"
-            @click=${() => this.scene?.resetView()}>Reset view</button>`
+        ? html`<button class="reset" data-testid="reset-view" title=${t("scene.view.reset_title")}
+            @click=${() => this.scene?.resetView()}>${t("scene.view.reset")}</button>`
         : ""}
       ${this.progress ? html`<div class="overlay muted">${this.progress}</div>` : ""}`;
   }

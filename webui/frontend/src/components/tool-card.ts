@@ -1,9 +1,21 @@
 import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
 import { control } from "../control";
+import { type StringKey, t } from "../i18n";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
 import { shared } from "../styles";
 import type { Pose } from "../types";
+import {
+  angleFieldStep,
+  angleFromField,
+  angleToField,
+  angleUnit,
+  lengthFieldStep,
+  lengthFromField,
+  lengthToField,
+  lengthUnit,
+  radians,
+} from "../units";
 
 // The tool a robot carries: where its tool centre point is on the flange and what the
 // payload weighs. Jogging, moves and waypoints use this TCP; the robot gets it again
@@ -20,6 +32,7 @@ interface ToolInfo {
   max_payload: number | null;
 }
 
+/** The tool as edited: metres, radians and kilograms. */
 interface Draft {
   x: number;
   y: number;
@@ -33,29 +46,63 @@ interface Draft {
   cz: number;
 }
 
-const FIELDS: [keyof Draft, string, number][] = [
-  ["x", "TCP X mm", 1],
-  ["y", "TCP Y mm", 1],
-  ["z", "TCP Z mm", 1],
-  ["roll", "TCP roll °", 1],
-  ["pitch", "TCP pitch °", 1],
-  ["yaw", "TCP yaw °", 1],
-  ["mass", "Payload kg", 0.1],
-  ["cx", "Centre of mass X mm", 1],
-  ["cy", "Centre of mass Y mm", 1],
-  ["cz", "Centre of mass Z mm", 1],
+type Measure = "length" | "angle" | "mass";
+
+const FIELDS: [keyof Draft, StringKey, Measure][] = [
+  ["x", "scene.tool.tcp_x", "length"],
+  ["y", "scene.tool.tcp_y", "length"],
+  ["z", "scene.tool.tcp_z", "length"],
+  ["roll", "scene.tool.tcp_roll", "angle"],
+  ["pitch", "scene.tool.tcp_pitch", "angle"],
+  ["yaw", "scene.tool.tcp_yaw", "angle"],
+  ["mass", "scene.tool.payload", "mass"],
+  ["cx", "scene.tool.com_x", "length"],
+  ["cy", "scene.tool.com_y", "length"],
+  ["cz", "scene.tool.com_z", "length"],
 ];
 
 const round = (v: number) => Math.round(v * 10) / 10;
+const same = (v: number) => v;
+
+/** How a measure reads and is typed: its unit, its step, and a field's number each way. */
+interface Scale {
+  unit: () => string;
+  step: () => number;
+  toField: (value: number) => number;
+  fromField: (value: number) => number;
+}
+
+const MEASURES: Record<Measure, Scale> = {
+  length: {
+    unit: lengthUnit,
+    step: lengthFieldStep,
+    toField: lengthToField,
+    fromField: lengthFromField,
+  },
+  angle: {
+    unit: angleUnit,
+    step: angleFieldStep,
+    toField: angleToField,
+    fromField: angleFromField,
+  },
+  mass: { unit: () => "kg", step: () => 0.1, toField: same, fromField: same },
+};
+
+/** A value rounded as its field shows it: saving stores what was shown, changed or not. */
+const asShown = (measure: Measure, value: number): number =>
+  MEASURES[measure].fromField(MEASURES[measure].toField(value));
 
 function draftOf(info: ToolInfo): Draft {
-  const [roll, pitch, yaw] = quaternionToRpy(info.tcp.orientation);
+  const [roll, pitch, yaw] = quaternionToRpy(info.tcp.orientation).map(radians);
   const [x, y, z] = info.tcp.position;
   const [cx, cy, cz] = info.payload.center_of_mass;
-  return { x: round(x * 1000), y: round(y * 1000), z: round(z * 1000), roll: round(roll),
-    pitch: round(pitch), yaw: round(yaw), mass: round(info.payload.mass),
-    cx: round(cx * 1000), cy: round(cy * 1000), cz: round(cz * 1000) };
+  const l = (v: number) => asShown("length", v);
+  const a = (v: number) => asShown("angle", v);
+  return { x: l(x), y: l(y), z: l(z), roll: a(roll), pitch: a(pitch), yaw: a(yaw),
+    mass: round(info.payload.mass), cx: l(cx), cy: l(cy), cz: l(cz) };
 }
+
+const degrees = (rad: number): number => (rad * 180) / Math.PI;
 
 export class OpToolCard extends LitElement {
   static properties = {
@@ -134,7 +181,7 @@ export class OpToolCard extends LitElement {
         "GET", `/api/devices/${encodeURIComponent(robot)}`);
       if (robot !== this.robot) return;
       if (!details.info) {
-        this.message = `${robot} is not connected: its tool shows once it is.`;
+        this.message = t("scene.tool.not_connected", { robot });
         this.loaded = ""; // try again on the next update
         return;
       }
@@ -151,20 +198,20 @@ export class OpToolCard extends LitElement {
     const d = this.draft;
     if (!d) return;
     if (!Object.values(d).every(Number.isFinite)) {
-      this.message = "Every tool value must be a number.";
+      this.message = t("scene.tool.not_a_number");
       return;
     }
     const setup = {
-      tcp: { position: [d.x / 1000, d.y / 1000, d.z / 1000],
-        orientation: rpyToQuaternion(d.roll, d.pitch, d.yaw) },
-      payload: { mass: d.mass, center_of_mass: [d.cx / 1000, d.cy / 1000, d.cz / 1000] },
+      tcp: { position: [d.x, d.y, d.z],
+        orientation: rpyToQuaternion(degrees(d.roll), degrees(d.pitch), degrees(d.yaw)) },
+      payload: { mass: d.mass, center_of_mass: [d.cx, d.cy, d.cz] },
     };
     try {
       const info = await api<ToolInfo>("PUT", `/api/devices/${encodeURIComponent(this.robot)}/tool`,
         setup, { "X-Lease-Token": control.token(this.robot) ?? "" });
       this.draft = draftOf(info);
       this.message = "";
-      this.saved = "Saved: jogging, moves and pose waypoints use this TCP now.";
+      this.saved = t("scene.tool.saved");
     } catch (err) {
       this.saved = "";
       this.message = errorText(err);
@@ -174,27 +221,29 @@ export class OpToolCard extends LitElement {
   render() {
     const d = this.draft;
     const mine = control.holds(this.robot);
+    let hint = t("scene.tool.take_control");
+    if (mine && this.rated) hint = t("scene.tool.hint_rated", { mass: this.rated });
+    else if (mine) hint = t("scene.tool.hint");
     return html`
       ${this.message ? html`<p class="error" role="alert" data-testid="tool-message">${this.message}</p>` : ""}
       ${d ? html`<div class="fields" data-testid="tool-editor">
-          ${FIELDS.map(([key, label, step]) => html`<label>
-            <span>${label}</span>
-            <input type="number" inputmode="decimal" step=${step} data-testid="tool-${key}"
-              .value=${String(d[key])}
+          ${FIELDS.map(([key, label, measure]) => html`<label>
+            <span>${t(label, { unit: MEASURES[measure].unit() })}</span>
+            <input type="number" inputmode="decimal" step=${MEASURES[measure].step()}
+              data-testid="tool-${key}" .value=${String(MEASURES[measure].toField(d[key]))}
               @change=${(e: Event) => {
+                const value = Number((e.target as HTMLInputElement).value);
                 this.saved = "";
-                this.draft = { ...d, [key]: Number((e.target as HTMLInputElement).value) };
+                this.draft = { ...d, [key]: MEASURES[measure].fromField(value) };
               }} /></label>`)}
         </div>
         <div class="row">
           <button class="primary" data-testid="save-tool" ?disabled=${!mine}
-            @click=${() => this.save()}>Save tool</button>
-          <span class="muted">${mine
-            ? `The TCP is on the flange (its Z points out of it).${this.rated ? ` Rated payload ${this.rated} kg.` : ""} The robot halts when the tool changes.`
-            : "Take control of the robot (Jog panel) to change its tool."}</span>
+            @click=${() => this.save()}>${t("scene.tool.save")}</button>
+          <span class="muted">${hint}</span>
         </div>
         ${this.saved ? html`<p class="chip ok" data-testid="tool-saved">${this.saved}</p>` : ""}`
-        : this.message ? "" : html`<p class="muted">Loading…</p>`}`;
+        : this.message ? "" : html`<p class="muted">${t("scene.loading")}</p>`}`;
   }
 }
 

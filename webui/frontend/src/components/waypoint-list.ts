@@ -1,6 +1,7 @@
 import { LitElement, css, html } from "lit";
-import { mm } from "../format";
+import { t } from "../i18n";
 import { shared } from "../styles";
+import { length, lengthUnit } from "../units";
 import "./hold-button";
 
 export interface Waypoint {
@@ -106,16 +107,18 @@ export class OpWaypointList extends LitElement {
 
   render() {
     if (!this.waypoints.length) {
-      return html`<div class="empty muted">No waypoints yet: jog the robot and save one.</div>`;
+      return html`<div class="empty muted">${t("scene.waypoints.none")}</div>`;
     }
     const shown = this.shown();
+    const count = t("scene.waypoints.count", { shown: shown.length, total: this.waypoints.length });
     return html`<input class="filter" type="search" data-testid="waypoint-filter"
-        placeholder="Filter by name or tag" aria-label="Filter waypoints by name or tag"
+        placeholder=${t("scene.waypoints.filter")}
+        aria-label=${t("scene.waypoints.filter_label")}
         .value=${this.filter}
         @input=${(e: Event) => (this.filter = (e.target as HTMLInputElement).value)} />
       ${shown.length < this.waypoints.length
         ? html`<div class="muted" data-testid="waypoint-count">
-            ${shown.length} of ${this.waypoints.length} waypoints</div>` : ""}
+            ${count}</div>` : ""}
       ${shown.map(
       (w) => html`<div
         class="item ${w.name === this.selected ? "selected" : ""}"
@@ -125,13 +128,15 @@ export class OpWaypointList extends LitElement {
         <div class="about">
           <div class="name">${w.name}
             ${w.name === this.selected
-              ? html`<span class="chip ok" title="Saved or moved to last">last used</span>` : ""}
+              ? html`<span class="chip ok" title=${t("scene.waypoints.last_used_title")}
+                  >${t("scene.waypoints.last_used")}</span>` : ""}
           </div>
           <div class="muted coords" data-testid="waypoint-coords"
-            title="Where the TCP goes, in the robot's base frame">
-            X ${mm(w.tcp_position[0])} · Y ${mm(w.tcp_position[1])} ·
-            Z ${mm(w.tcp_position[2])} mm</div>
-          <div class="muted">${w.type === "joint_waypoint" ? "joints" : "pose"}${w.tags.length
+            title=${t("scene.waypoints.coords_title")}>
+            X ${length(w.tcp_position[0])} · Y ${length(w.tcp_position[1])} ·
+            Z ${length(w.tcp_position[2])} ${lengthUnit()}</div>
+          <div class="muted">${w.type === "joint_waypoint"
+            ? t("scene.waypoints.joints") : t("scene.waypoints.pose")}${w.tags.length
             ? html` · ${w.tags.join(", ")}` : ""}</div>
           ${this.progress?.name === w.name
             ? html`<div class="chip ok" data-testid="move-progress">${this.progress.text}</div>`
@@ -143,14 +148,15 @@ export class OpWaypointList extends LitElement {
             ?disabled=${this.disabled}
             @hold-start=${() => this.emit("waypoint-hold", w.name)}
             @hold-end=${() => this.emit("waypoint-release", w.name)}
-            >Hold: move to</op-hold-button
+            >${t("scene.waypoints.move_to")}</op-hold-button
           >
           <button data-testid="reteach" ?disabled=${this.disabled}
-            @click=${() => this.emit("waypoint-reteach", w.name)}>Re-teach</button>
+            @click=${() => this.emit("waypoint-reteach", w.name)}
+            >${t("scene.waypoints.reteach")}</button>
           <button data-testid="rename" @click=${() => this.emit("waypoint-rename", w.name)}>
-            Name &amp; tags</button>
+            ${t("scene.waypoints.rename")}</button>
           <button class="danger" data-testid="delete"
-            @click=${() => this.emit("waypoint-delete", w.name)}>Delete</button>
+            @click=${() => this.emit("waypoint-delete", w.name)}>${t("scene.delete")}</button>
         </div>
       </div>`,
     )}`;

@@ -1,9 +1,10 @@
 import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
-import { suggestLocalName } from "../format";
+import { suggestLocalName, withBold } from "../format";
+import { type StringKey, t } from "../i18n";
 import { FeedController, feed } from "../live";
 import { shared } from "../styles";
-import type { AddedDevice, DetectedDevice } from "../types";
+import type { AddedDevice, ConnectionStatus, DetectedDevice } from "../types";
 import "../components/add-device-dialog";
 import "../components/device-details";
 import "../components/modal";
@@ -15,6 +16,13 @@ type Dialog =
   | { kind: "repoint"; device: AddedDevice; url: string }
   | { kind: "details"; name: string }
   | null;
+
+const STATUS: Record<ConnectionStatus, StringKey> = {
+  connected: "devices.status.connected",
+  connecting: "devices.status.connecting",
+  stale: "devices.status.stale",
+  disconnected: "devices.status.disconnected",
+};
 
 // Devices found on the network, devices added to this cell, and adding and removing them.
 export class OpDevicesPanel extends LitElement {
@@ -114,12 +122,7 @@ export class OpDevicesPanel extends LitElement {
 
   private statusChip(device: AddedDevice) {
     const cls = device.status === "connected" ? "ok" : device.status === "connecting" ? "warn" : "bad";
-    const label = {
-      connected: "Connected",
-      connecting: "Connecting…",
-      stale: "Stale",
-      disconnected: "Disconnected",
-    }[device.status];
+    const label = t(STATUS[device.status]);
     return html`<span class="chip ${cls}" data-testid="device-status" title=${device.last_error}
       >${label}</span
     >`;
@@ -128,19 +131,20 @@ export class OpDevicesPanel extends LitElement {
   private detectedCard(d: DetectedDevice) {
     return html`<div class="card" data-testid="detected-device" data-uuid=${d.uuid}>
       <div class="head">
-        <span class="title">${d.name || "(unnamed)"}</span>
+        <span class="title" translate=${d.name ? "no" : "yes"}
+          >${d.name || t("devices.unnamed")}</span>
         <span class="chip">${d.kind}</span>
       </div>
-      <div class="sub muted">${d.model} · ${d.address}</div>
+      <div class="sub muted" translate="no">${d.model} · ${d.address}</div>
       <div class="row">
         ${d.added_as
-          ? html`<span class="chip ok">Added as ${d.added_as}</span>`
+          ? html`<span class="chip ok">${t("devices.added_as", { name: d.added_as })}</span>`
           : html`<button
               class="primary"
               data-testid="add-device"
               @click=${() => (this.dialog = { kind: "add", device: d, url: "" })}
             >
-              Add
+              ${t("devices.add")}
             </button>`}
       </div>
     </div>`;
@@ -150,10 +154,10 @@ export class OpDevicesPanel extends LitElement {
     const state = feed.states.get(d.local_name);
     return html`<div class="card" data-testid="device-card" data-name=${d.local_name}>
       <div class="head">
-        <span class="title">${d.local_name}</span>
+        <span class="title" translate="no">${d.local_name}</span>
         ${this.statusChip(d)}
       </div>
-      <div class="sub muted">${d.name} · ${d.model} · ${d.url}</div>
+      <div class="sub muted" translate="no">${d.name} · ${d.model} · ${d.url}</div>
       ${d.status !== "connected" && d.last_error
         ? html`<div class="sub error">${d.last_error}</div>`
         : ""}
@@ -163,7 +167,7 @@ export class OpDevicesPanel extends LitElement {
         : ""}
       <div class="row">
         <button @click=${() => (this.dialog = { kind: "details", name: d.local_name })}>
-          Details
+          ${t("devices.details")}
         </button>
         <span class="spacer"></span>
         <button
@@ -171,7 +175,7 @@ export class OpDevicesPanel extends LitElement {
           data-testid="remove-device"
           @click=${() => (this.dialog = { kind: "remove", device: d })}
         >
-          Remove
+          ${t("devices.remove")}
         </button>
       </div>
     </div>`;
@@ -184,19 +188,24 @@ export class OpDevicesPanel extends LitElement {
     const when = new Date(claim.seen * 1000).toLocaleTimeString();
     if (claim.followed) {
       return html`<div class="sub muted" data-testid="device-moved">
-        Moved from ${claim.url} at ${when}.
+        ${t("devices.moved_from", { url: claim.url, time: when })}
       </div>`;
     }
     return html`<div class="sub warn-text" data-testid="device-claim" role="alert">
-        At ${when} a device announced itself as ${d.local_name}${claim.name ? ` ("${claim.name}")` : ""}
-        from ${claim.url}. It was not followed: ${d.local_name} still answers at ${d.url}.
+        ${t(claim.name ? "devices.claim_named" : "devices.claim", {
+          time: when,
+          name: d.local_name,
+          claimed: claim.name,
+          url: claim.url,
+          address: d.url,
+        })}
       </div>
       <div class="row">
         <button
           data-testid="repoint-device"
           @click=${() => (this.dialog = { kind: "repoint", device: d, url: claim.url })}
         >
-          Use ${claim.url}…
+          ${t("devices.use_address", { url: claim.url })}
         </button>
       </div>`;
   }
@@ -217,31 +226,39 @@ export class OpDevicesPanel extends LitElement {
       case "details":
         return html`<op-device-details name=${dialog.name} @close=${close}></op-device-details>`;
       case "repoint":
-        return html`<op-modal heading="Move ${dialog.device.local_name} to ${dialog.url}?" @close=${close}>
+        return html`<op-modal
+          heading=${t("devices.repoint_heading", {
+            name: dialog.device.local_name,
+            url: dialog.url,
+          })}
+          @close=${close}
+        >
           <p>
-            <strong>${dialog.device.local_name}</strong> is halted first. Every program, jog and move
-            then talks to the device at ${dialog.url} only. Do this only if you know that device is
-            the real ${dialog.device.local_name}.
+            ${withBold(
+              t("devices.repoint_text", { url: dialog.url }),
+              "name",
+              dialog.device.local_name,
+            )}
           </p>
           <div class="row">
             <span class="spacer"></span>
-            <button @click=${close}>Cancel</button>
+            <button @click=${close}>${t("devices.cancel")}</button>
             <button class="danger" data-testid="confirm-repoint" @click=${() => this.repoint(dialog.device, dialog.url)}>
-              Halt and move
+              ${t("devices.halt_and_move")}
             </button>
           </div>
         </op-modal>`;
       case "remove":
-        return html`<op-modal heading="Remove ${dialog.device.local_name}?" @close=${close}>
-          <p>
-            Programs that use <strong>${dialog.device.local_name}</strong> will not find it any more.
-            The device itself is not changed, and it can be added again.
-          </p>
+        return html`<op-modal
+          heading=${t("devices.remove_heading", { name: dialog.device.local_name })}
+          @close=${close}
+        >
+          <p>${withBold(t("devices.remove_text"), "name", dialog.device.local_name)}</p>
           <div class="row">
             <span class="spacer"></span>
-            <button @click=${close}>Cancel</button>
+            <button @click=${close}>${t("devices.cancel")}</button>
             <button class="danger" data-testid="confirm-remove" @click=${() => this.removeDevice(dialog.device)}>
-              Remove
+              ${t("devices.remove")}
             </button>
           </div>
         </op-modal>`;
@@ -252,7 +269,7 @@ export class OpDevicesPanel extends LitElement {
     e.preventDefault();
     const url = this.url.trim();
     if (!/^https?:\/\/\S+$/.test(url)) {
-      this.error = "Enter an address like http://192.168.1.20:8000";
+      this.error = t("devices.address_invalid");
       return;
     }
     this.error = "";
@@ -264,36 +281,39 @@ export class OpDevicesPanel extends LitElement {
     return html`
       ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
       <section>
-        <h2>Added devices</h2>
+        <h2>${t("devices.added")}</h2>
         <div class="grid" data-testid="added-devices">
           ${feed.devices.length
             ? feed.devices.map((d) => this.addedCard(d))
             : html`<div class="card empty muted">
-                No devices added yet. Add one from the devices detected on the network below.
+                ${t("devices.none_added")}
               </div>`}
         </div>
       </section>
       <section>
-        <h2>Detected on the network <span class="muted">(${notAdded} not added)</span></h2>
+        <h2>
+          ${t("devices.detected")}
+          <span class="muted">${t("devices.not_added", { count: notAdded })}</span>
+        </h2>
         <div class="grid" data-testid="detected-devices">
           ${feed.detected.length
             ? feed.detected.map((d) => this.detectedCard(d))
             : html`<div class="card empty muted">
-                ${feed.online ? "Searching the network…" : "Not connected to the runtime."}
+                ${feed.online ? t("devices.searching") : t("devices.offline")}
               </div>`}
         </div>
       </section>
       <section>
-        <h2>Add by address</h2>
+        <h2>${t("devices.add_by_address")}</h2>
         <form class="by-url" @submit=${this.addByUrl}>
           <input
-            placeholder="http://192.168.1.20:8000"
-            aria-label="Device address"
+            placeholder=${t("devices.address_example")}
+            aria-label=${t("devices.address_label")}
             inputmode="url"
             .value=${this.url}
             @input=${(e: InputEvent) => (this.url = (e.target as HTMLInputElement).value)}
           />
-          <button type="submit">Add…</button>
+          <button type="submit">${t("devices.add_ellipsis")}</button>
         </form>
       </section>
       ${this.renderDialog()}

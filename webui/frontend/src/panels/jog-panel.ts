@@ -2,7 +2,7 @@ import { LitElement, css, html } from "lit";
 import { api, ApiError, errorText } from "../api";
 import { control } from "../control";
 import { FocusController, focus } from "../focus";
-import { deg, mm } from "../format";
+import { t } from "../i18n";
 import { JogSocket, type JogMessage, type JogStatus } from "../jog-socket";
 import { FeedController, feed } from "../live";
 import { conjugate, multiply, quaternionToRpy, rotate } from "../math";
@@ -10,6 +10,16 @@ import { RobotLoader } from "../robot-loader";
 import { shared } from "../styles";
 import type { Marker } from "../three/scene";
 import type { Pose, RobotState } from "../types";
+import {
+  angle,
+  angleUnit,
+  angleWithUnit,
+  length,
+  lengthUnit,
+  lengthWithUnit,
+  radians,
+  units,
+} from "../units";
 import "../components/clearance-chip";
 import "../components/jog-pad";
 import "../components/mouse-card";
@@ -26,6 +36,22 @@ const CARTESIAN = ["x", "y", "z", "rx", "ry", "rz"];
 const RAD = Math.PI / 180;
 // Incremental steps: fine = 0.1 mm / 0.1°, coarse = 1 mm / 1°.
 const STEP = { fine: { linear: 0.0001, angular: 0.1 * RAD }, coarse: { linear: 0.001, angular: RAD } };
+const MODE_LABEL = { joint: "jog.joints", base: "jog.base", tool: "jog.tool" } as const;
+
+/** A step size in the chosen units to two significant digits: "1 mm", "0.1°", "0.039 in". */
+function stepLabel(size: { linear: number; angular: number }): string {
+  const short = (text: string): string => String(Number(Number(text).toPrecision(2)));
+  const turn = short(angle(size.angular, 6));
+  return t("jog.step", {
+    length: `${short(length(size.linear, 6))} ${lengthUnit()}`,
+    angle: units.angle === "deg" ? `${turn}°` : `${turn} ${angleUnit()}`,
+  });
+}
+
+/** A distance to go, in whole millimetres (inches to 0.01). */
+function roundLength(metres: number): string {
+  return `${length(metres, units.length === "mm" ? 0 : 2)} ${lengthUnit()}`;
+}
 
 type Dialog =
   | { kind: "teach"; type: "joint" | "pose"; frame: "base" | "world"; name: string;
@@ -302,7 +328,7 @@ export class OpJogPanel extends LitElement {
   private hold(axis: string, direction: number): void {
     this.message = "";
     if (!control.holds(this.robot)) {
-      this.message = "Take control of the robot first.";
+      this.message = t("jog.control.take_first");
       return;
     }
     const joint = this.mode === "joint";
@@ -335,7 +361,7 @@ export class OpJogPanel extends LitElement {
   private holdWaypoint(name: string): void {
     this.message = "";
     if (!control.holds(this.robot)) {
-      this.message = "Take control of the robot first.";
+      this.message = t("jog.control.take_first");
       return;
     }
     this.selected = name;
@@ -355,7 +381,7 @@ export class OpJogPanel extends LitElement {
         this.boundMouse = "";
       }
     } else if (message.type === "taught") {
-      this.message = `Saved waypoint ${message.name} (3D mouse button).`;
+      this.message = t("jog.saved_by_mouse", { name: message.name });
       void this.loadWaypoints();
     } else if (message.type === "mouse_frame") {
       this.mode = message.mode === "joint" ? "joint" : message.frame === "tool" ? "tool" : "base";
@@ -389,7 +415,7 @@ export class OpJogPanel extends LitElement {
     if (!device) return;
     this.mouse = device;
     if (on && !control.holds(this.robot)) {
-      this.message = "Take control of the robot first.";
+      this.message = t("jog.control.take_first");
       return;
     }
     this.mouseOn = on;
@@ -427,7 +453,7 @@ export class OpJogPanel extends LitElement {
       await api("POST", `/api/jog/robots/${encodeURIComponent(this.robot)}/teach`, {
         name, kind: type, frame });
       this.selected = name;
-      this.message = `Saved ${name}.`;
+      this.message = t("jog.saved", { name });
       await this.loadWaypoints();
     } catch (err) {
       this.message = errorText(err);
@@ -446,12 +472,12 @@ export class OpJogPanel extends LitElement {
       });
       this.dialog = null;
       this.selected = d.name;
-      this.message = `Saved ${d.name}.`;
+      this.message = t("jog.saved", { name: d.name });
       await this.loadWaypoints();
     } catch (err) {
       const exists = err instanceof ApiError && err.code === "exists";
       this.dialog = { ...d, overwrite: exists, error: exists
-        ? `${d.name} exists. Save again to overwrite it.` : errorText(err) };
+        ? t("jog.exists_overwrite", { name: d.name }) : errorText(err) };
     }
   }
 
@@ -491,7 +517,7 @@ export class OpJogPanel extends LitElement {
     const waypoint = this.waypoints.find((w) => w.name === name);
     if (!waypoint) return;
     this.dialog = { kind: "teach", type: waypoint.type === "joint_waypoint" ? "joint" : "pose",
-      frame: "base", name, error: `Overwrite ${name} with the robot's position now?`,
+      frame: "base", name, error: t("jog.overwrite_confirm", { name }),
       overwrite: true };
   }
 
@@ -502,8 +528,8 @@ export class OpJogPanel extends LitElement {
       const joints = this.model?.info.joints ?? [];
       return joints.map((_, i) => ({
         key: String(i),
-        label: `J${i + 1}`,
-        value: state ? `${deg(state.joint_position[i])}°` : "–",
+        label: t("jog.joint_short", { number: i + 1 }),
+        value: state ? angleWithUnit(state.joint_position[i]) : "–",
       }));
     }
     if (!state) return CARTESIAN.map((a) => ({ key: a, label: a.toUpperCase(), value: "–" }));
@@ -517,8 +543,10 @@ export class OpJogPanel extends LitElement {
       [x, y, z] = rotate(back, [0, 1, 2].map((i) => state.tcp_pose.position[i] - p[i]));
       rpy = quaternionToRpy(multiply(back, state.tcp_pose.orientation));
     }
-    const values = [`${mm(x)} mm`, `${mm(y)} mm`, `${mm(z)} mm`,
-      ...rpy.map((a) => `${a.toFixed(1)}°`)];
+    const values = [
+      ...[x, y, z].map((v) => lengthWithUnit(v)),
+      ...rpy.map((a) => angleWithUnit(radians(a))),
+    ];
     return CARTESIAN.map((a, i) => ({ key: a, label: a.toUpperCase(), value: values[i] }));
   }
 
@@ -528,18 +556,18 @@ export class OpJogPanel extends LitElement {
     if (!target || !state) return null;
     const p = state.tcp_pose.position;
     const left = Math.hypot(...[0, 1, 2].map((i) => target.tcp_position[i] - p[i]));
-    return { name: target.name, text: `Moving: ${(left * 1000).toFixed(0)} mm to go` };
+    return { name: target.name, text: t("jog.moving_to_go", { distance: roundLength(left) }) };
   }
 
   private deadman() {
     const s = this.status;
     if (!this.socket.online) {
-      return html`<div class="deadman chip bad" data-testid="deadman">Jog link down — reconnecting</div>`;
+      return html`<div class="deadman chip bad" data-testid="deadman">${t("jog.link_down")}</div>`;
     }
     if (!s) {
-      const ready = !control.holds(this.robot) ? "Take control to jog this robot"
-        : !feed.states.get(this.robot)?.flags.ready ? "Enable the robot to jog it"
-        : "Ready: hold a button to jog";
+      const ready = !control.holds(this.robot) ? t("jog.control.take_to_jog")
+        : !feed.states.get(this.robot)?.flags.ready ? t("jog.enable_to_jog")
+        : t("jog.ready");
       return html`<div class="deadman chip" data-testid="deadman">${ready}</div>`;
     }
     const cls = s.state === "moving" ? "ok" : s.state === "held" ? "warn"
@@ -548,15 +576,15 @@ export class OpJogPanel extends LitElement {
     if (mouse && s.state === "moving") {
       const atRest = !mouse.axes.some((a) => a !== 0);
       return html`<div class="deadman chip ${atRest ? "" : "ok"}" data-testid="deadman">
-        ${atRest ? "3D mouse on — at rest" : "Moving with the 3D mouse"}</div>`;
+        ${atRest ? t("jog.mouse.at_rest") : t("jog.mouse.moving")}</div>`;
     }
     const text = s.state === "moving" && this.movingTo
-      ? `Moving to ${this.movingTo} — hold to continue`
-      : s.state === "moving" ? "Moving — hold to continue"
-      : s.state === "held" ? `Not moving: ${s.message ?? "held back"}`
-      : s.state === "halted" ? `Halted: ${s.reason ?? ""}`
-      : s.state === "refused" ? `Refused: ${s.message ?? s.reason ?? ""}`
-      : s.state === "done" ? "Arrived" : "Stopped";
+      ? t("jog.moving_to", { name: this.movingTo })
+      : s.state === "moving" ? t("jog.moving")
+      : s.state === "held" ? t("jog.not_moving", { reason: s.message ?? t("jog.held_back") })
+      : s.state === "halted" ? t("jog.halted", { reason: s.reason ?? "" })
+      : s.state === "refused" ? t("jog.refused", { reason: s.message ?? s.reason ?? "" })
+      : s.state === "done" ? t("jog.arrived") : t("jog.stopped");
     return html`<div class="deadman chip ${cls}" data-testid="deadman">${text}</div>`;
   }
 
@@ -565,8 +593,11 @@ export class OpJogPanel extends LitElement {
     if (!d) return "";
     const close = () => (this.dialog = null);
     if (d.kind === "teach") {
-      return html`<op-name-dialog heading=${`Save ${d.type} waypoint${d.type === "pose" ? ` (${d.frame})` : ""}`}
-        .value=${d.name} .error=${d.error} confirmLabel=${d.overwrite ? "Overwrite" : "Save"}
+      const heading = d.type === "joint" ? t("jog.dialog.save_joint")
+        : d.frame === "base" ? t("jog.dialog.save_pose_base") : t("jog.dialog.save_pose_world");
+      return html`<op-name-dialog heading=${heading}
+        .value=${d.name} .error=${d.error}
+        confirmLabel=${d.overwrite ? t("jog.dialog.overwrite") : t("jog.dialog.save")}
         @close=${close}
         @confirm=${(e: CustomEvent<{ name: string }>) => {
           this.dialog = { ...d, name: e.detail.name, overwrite: d.overwrite && e.detail.name === d.name };
@@ -574,19 +605,20 @@ export class OpJogPanel extends LitElement {
         }}></op-name-dialog>`;
     }
     if (d.kind === "rename") {
-      return html`<op-name-dialog heading=${`Waypoint ${d.from}`} .value=${d.name}
-        tags=${d.tags.join(", ")} .error=${d.error} confirmLabel="Save" @close=${close}
+      return html`<op-name-dialog heading=${t("jog.dialog.waypoint", { name: d.from })}
+        .value=${d.name} tags=${d.tags.join(", ")} .error=${d.error}
+        confirmLabel=${t("jog.dialog.save")} @close=${close}
         @confirm=${(e: CustomEvent<{ name: string; tags: string[] }>) => {
           this.dialog = { ...d, name: e.detail.name, tags: e.detail.tags };
           void this.rename();
         }}></op-name-dialog>`;
     }
-    return html`<op-modal heading=${`Delete ${d.name}?`} @close=${close}>
-      <p>The waypoint's history is kept in the variable storage.</p>
+    return html`<op-modal heading=${t("jog.dialog.delete", { name: d.name })} @close=${close}>
+      <p>${t("jog.dialog.history_kept")}</p>
       <div class="row" style="justify-content:flex-end">
-        <button @click=${close}>Cancel</button>
+        <button @click=${close}>${t("jog.dialog.cancel")}</button>
         <button class="danger" data-testid="confirm-delete" @click=${() => this.deleteWaypoint(d.name)}>
-          Delete</button>
+          ${t("jog.dialog.confirm_delete")}</button>
       </div>
     </op-modal>`;
   }
@@ -595,15 +627,16 @@ export class OpJogPanel extends LitElement {
     const robots = feed.robots();
     if (!robots.length) {
       return html`<div class="card">
-        <h2>No robot yet</h2>
-        <p>Add a robot in the Devices panel, then come back here to jog and teach.</p>
-        <button class="primary" @click=${() => (location.hash = "#/devices")}>Go to Devices</button>
+        <h2>${t("jog.no_robot")}</h2>
+        <p>${t("jog.no_robot_hint")}</p>
+        <button class="primary" @click=${() => (location.hash = "#/devices")}>
+          ${t("jog.go_to_devices")}</button>
       </div>`;
     }
     if (!this.robot) {
       return html`<div class="card" data-testid="choose-robot">
-        <h2>Which robot?</h2>
-        <p>Tap the robot to work with in the bar at the top.</p>
+        <h2>${t("jog.which_robot")}</h2>
+        <p>${t("jog.which_robot_hint")}</p>
       </div>`;
     }
     const state = feed.states.get(this.robot);
@@ -612,7 +645,9 @@ export class OpJogPanel extends LitElement {
     const controlledBy = device?.controlled_by;
     const canMove = mine && !!state?.flags.ready;
     const canPower = mine && !!state; // no state: the runtime or the robot's link is down
-    const rpy = state ? quaternionToRpy(state.tcp_pose.orientation).map((a) => a.toFixed(1))
+    const tcp = state ? state.tcp_pose.position.map((v) => length(v)) : ["–", "–", "–"];
+    const rpy = state
+      ? quaternionToRpy(state.tcp_pose.orientation).map((a) => angle(radians(a)))
       : ["–", "–", "–"];
     const markers: Marker[] = this.waypoints.map((w) => ({
       name: w.name, position: w.tcp_position, selected: w.name === this.selected }));
@@ -621,17 +656,19 @@ export class OpJogPanel extends LitElement {
       <div class="top">
         <h2 style="margin:0" data-testid="jog-robot">${this.robot}</h2>
         <button data-testid="control" class=${mine ? "" : "primary"} @click=${this.toggleControl}>
-          ${mine ? "Release control" : "Take control"}</button>
+          ${mine ? t("jog.control.release") : t("jog.control.take")}</button>
         <span class="chip ${mine ? "ok" : controlledBy ? "warn" : ""}" data-testid="lease">
-          ${mine ? `You have control (${control.holder})`
-            : controlledBy ? `Controlled by ${controlledBy}` : "Nobody has control"}</span>
+          ${mine ? t("jog.control.yours", { holder: control.holder })
+            : controlledBy ? t("jog.control.controlled_by", { holder: controlledBy })
+            : t("jog.control.nobody")}</span>
         ${state?.flags.enabled
           ? html`<button data-testid="disable" ?disabled=${!canPower} @click=${() => this.power("disable")}>
-              Disable</button>`
+              ${t("jog.disable")}</button>`
           : html`<button data-testid="enable" ?disabled=${!canPower} @click=${() => this.power("enable")}>
-              Enable</button>`}
+              ${t("jog.enable")}</button>`}
         ${state?.flags.error
-          ? html`<button ?disabled=${!canPower} @click=${() => this.power("reset_errors")}>Reset error</button>`
+          ? html`<button ?disabled=${!canPower} @click=${() => this.power("reset_errors")}>
+              ${t("jog.reset_error")}</button>`
           : ""}
       </div>
       ${this.message ? html`<p class="error" role="alert" data-testid="jog-message">${this.message}</p>` : ""}
@@ -642,23 +679,24 @@ export class OpJogPanel extends LitElement {
             .markers=${markers}></op-robot-view>
           <op-clearance-chip .robot=${this.robot}></op-clearance-chip>
           <div class="readout" data-testid="tcp-readout">
-            <div><small>X mm</small>${state ? mm(state.tcp_pose.position[0]) : "–"}</div>
-            <div><small>Y mm</small>${state ? mm(state.tcp_pose.position[1]) : "–"}</div>
-            <div><small>Z mm</small>${state ? mm(state.tcp_pose.position[2]) : "–"}</div>
-            <div><small>Roll °</small>${rpy[0]}</div>
-            <div><small>Pitch °</small>${rpy[1]}</div>
-            <div><small>Yaw °</small>${rpy[2]}</div>
+            <div><small>X ${lengthUnit()}</small>${tcp[0]}</div>
+            <div><small>Y ${lengthUnit()}</small>${tcp[1]}</div>
+            <div><small>Z ${lengthUnit()}</small>${tcp[2]}</div>
+            <div><small>${t("jog.roll", { unit: angleUnit() })}</small>${rpy[0]}</div>
+            <div><small>${t("jog.pitch", { unit: angleUnit() })}</small>${rpy[1]}</div>
+            <div><small>${t("jog.yaw", { unit: angleUnit() })}</small>${rpy[2]}</div>
           </div>
         </div>
         <section class="card waypoints">
-            <h2>Waypoints</h2>
+            <h2>${t("jog.waypoints")}</h2>
             <div class="row" style="margin-bottom:8px">
               <button data-testid="teach-joint" ?disabled=${!state}
-                @click=${() => this.quickTeach("joint", "base")}>Save joints</button>
+                @click=${() => this.quickTeach("joint", "base")}>${t("jog.save_joints")}</button>
               <button data-testid="teach-pose" ?disabled=${!state}
-                @click=${() => this.quickTeach("pose", "base")}>Save pose (base)</button>
+                @click=${() => this.quickTeach("pose", "base")}>${t("jog.save_pose_base")}</button>
               <button ?disabled=${!state}
-                @click=${() => this.quickTeach("pose", "world")}>Save pose (world)</button>
+                @click=${() => this.quickTeach("pose", "world")}>
+                ${t("jog.save_pose_world")}</button>
             </div>
             <op-waypoint-list .waypoints=${this.waypoints} ?disabled=${!canMove}
               .progress=${this.moveProgress(state)}
@@ -676,29 +714,29 @@ export class OpJogPanel extends LitElement {
         </section>
         <div class="controls">
           ${this.deadman()}
-          <div class="segmented" role="group" aria-label="Jog frame">
+          <div class="segmented" role="group" aria-label=${t("jog.frame")}>
             ${(["joint", "base", "tool"] as Mode[]).map((m) => html`<button
               data-testid="mode-${m}" aria-pressed=${this.mode === m ? "true" : "false"}
               @click=${() => {
                 this.mode = m;
                 this.toolZero = null; // Tool tapped (again): its readings count from here
-              }}>${m === "joint" ? "Joints" : m === "base" ? "Base" : "Tool"}</button>`)}
+              }}>${t(MODE_LABEL[m])}</button>`)}
           </div>
-          <div class="segmented" role="group" aria-label="Jog steps">
+          <div class="segmented" role="group" aria-label=${t("jog.steps")}>
             ${(["continuous", "fine", "coarse"] as Stepping[]).map((s) => html`<button
               data-testid="step-${s}" aria-pressed=${this.stepping === s ? "true" : "false"}
-              @click=${() => (this.stepping = s)}>${s === "continuous" ? "Continuous"
-                : s === "fine" ? "Step 0.1 mm / 0.1°" : "Step 1 mm / 1°"}</button>`)}
+              @click=${() => (this.stepping = s)}>${s === "continuous" ? t("jog.continuous")
+                : stepLabel(STEP[s])}</button>`)}
           </div>
           <op-jog-pad .axes=${this.axes(state)} ?disabled=${!canMove}
             @jog-hold=${(e: CustomEvent) => this.hold(e.detail.axis, e.detail.direction)}
             @jog-release=${() => this.release()}></op-jog-pad>
-          ${this.mode === "tool" ? html`<p class="muted" data-testid="tool-note">Tool frame:
-              travel along the tool's own axes since Tool was chosen (tap Tool to zero).</p>` : ""}
-          ${!mine ? html`<p class="muted">Take control to jog this robot.</p>`
-            : !state?.flags.ready ? html`<p class="muted">Enable the robot to jog it.</p>` : ""}
+          ${this.mode === "tool" ? html`<p class="muted" data-testid="tool-note">
+              ${t("jog.tool_note")}</p>` : ""}
+          ${!mine ? html`<p class="muted">${t("jog.control.take_to_jog_hint")}</p>`
+            : !state?.flags.ready ? html`<p class="muted">${t("jog.enable_to_jog_hint")}</p>` : ""}
           <section class="card">
-            <h2>3D mouse</h2>
+            <h2>${t("jog.mouse.title")}</h2>
             <op-mouse-card .mice=${mice} device=${this.mouse} ?on=${this.mouseOn}
               ?disabled=${!canMove} mode=${this.mode} sensitivity=${this.sensitivity}
               .input=${feed.inputState(this.mouse || mice[0]?.local_name || "")}

@@ -2,6 +2,7 @@ import { LitElement, css, html, nothing } from "lit";
 import { api, ApiError, errorText } from "../api";
 import { control } from "../control";
 import { FocusController, focus } from "../focus";
+import { type StringKey, t } from "../i18n";
 import { FeedController, feed } from "../live";
 import { shared } from "../styles";
 import type { DeviceDetails } from "../types";
@@ -18,6 +19,7 @@ import {
   type Problem,
   type Program,
   type ProgramSummary,
+  type RunState,
   type RunStatus,
   type Saved,
 } from "../program/types";
@@ -512,7 +514,7 @@ export class OpProgramPanel extends LitElement {
         this.startNew();
       }
     } catch (err) {
-      this.notice = `The program editor could not start: ${errorText(err)}`;
+      this.notice = t("program.editor_failed", { error: errorText(err) });
     } finally {
       this.loading = false;
     }
@@ -564,7 +566,7 @@ export class OpProgramPanel extends LitElement {
   }
 
   private async confirmDiscard(): Promise<boolean> {
-    return !this.dirty || window.confirm("Discard the unsaved changes to this program?");
+    return !this.dirty || window.confirm(t("program.discard_confirm"));
   }
 
   /** Saves the blocks; a new program asks for its name first. True when saved. */
@@ -595,7 +597,7 @@ export class OpProgramPanel extends LitElement {
       await this.listPrograms();
       return true;
     } catch (err) {
-      this.notice = `Not saved: ${errorText(err)}`;
+      this.notice = t("program.not_saved", { error: errorText(err) });
       this.tab = "python";
       return false;
     } finally {
@@ -605,7 +607,7 @@ export class OpProgramPanel extends LitElement {
 
   private async nameChosen(name: string): Promise<void> {
     if (!PROGRAM_NAME.test(name)) {
-      this.dialogError = "Program names start with a letter; letters, digits, _ and - only.";
+      this.dialogError = t("program.name_rule");
       return;
     }
     const dialog = this.dialog;
@@ -613,7 +615,7 @@ export class OpProgramPanel extends LitElement {
     this.busy = true;
     try {
       if (dialog === "new") {
-        if (exists) throw new ApiError(`There is already a program ${name}.`, "exists", 409);
+        if (exists) throw new ApiError(t("program.exists", { name }), "exists", 409);
         if (!(await this.saveAs(name))) throw new Error(this.notice);
       } else if (dialog === "rename") {
         await api("POST", `/api/programs/${encodeURIComponent(this.name)}/rename`, { to: name });
@@ -745,7 +747,7 @@ export class OpProgramPanel extends LitElement {
       this.tab = "output";
       runs.answer(status);
     } catch (err) {
-      this.notice = `Not started: ${errorText(err)}`;
+      this.notice = t("program.not_started", { error: errorText(err) });
     } finally {
       this.busy = false;
     }
@@ -781,7 +783,7 @@ export class OpProgramPanel extends LitElement {
     return html`<div class="bar">
       <select
         data-testid="program-select"
-        aria-label="Program"
+        aria-label=${t("program.program")}
         @change=${(e: Event) => {
           const select = e.target as HTMLSelectElement;
           const wanted = select.value;
@@ -789,28 +791,32 @@ export class OpProgramPanel extends LitElement {
           void this.open(wanted);
         }}
       >
-        ${this.name ? nothing : html`<option value="">(new program)</option>`}
+        ${this.name ? nothing : html`<option value="">${t("program.new_program")}</option>`}
         ${this.programs.map(
           (p) => html`<option value=${p.name} ?selected=${p.name === this.name}>${p.name}</option>`,
         )}
       </select>
-      ${this.dirty ? html`<span class="dirty" data-testid="unsaved">unsaved</span>` : nothing}
+      ${this.dirty
+        ? html`<span class="dirty" data-testid="unsaved">${t("program.unsaved")}</span>`
+        : nothing}
       <button data-testid="new" @click=${async () => (await this.confirmDiscard()) && this.startNew()}>
-        New
+        ${t("program.new")}
       </button>
       <button data-testid="save" class=${this.dirty || !this.name ? "primary" : ""}
-        ?disabled=${!blocks || this.busy} @click=${() => this.save()}>Save</button>
+        ?disabled=${!blocks || this.busy} @click=${() => this.save()}>${t("program.save")}</button>
       <button data-testid="rename" ?disabled=${!this.name || live}
-        @click=${() => this.openDialog("rename")}>Rename</button>
+        @click=${() => this.openDialog("rename")}>${t("program.rename")}</button>
       <button data-testid="duplicate" ?disabled=${!this.name}
-        @click=${() => this.openDialog("duplicate")}>Duplicate</button>
+        @click=${() => this.openDialog("duplicate")}>${t("program.duplicate")}</button>
       <button data-testid="delete" class="danger" ?disabled=${!this.name || live}
-        @click=${() => this.openDialog("delete")}>Delete</button>
+        @click=${() => this.openDialog("delete")}>${t("program.delete")}</button>
       <span class="spacer"></span>
-      <button data-testid="undo" aria-label="Undo" ?disabled=${!this.history.undo}
-        @click=${() => this.editor?.undo(false)}>↶<span class="label"> Undo</span></button>
-      <button data-testid="redo" aria-label="Redo" ?disabled=${!this.history.redo}
-        @click=${() => this.editor?.undo(true)}>↷<span class="label"> Redo</span></button>
+      <button data-testid="undo" aria-label=${t("program.undo")} ?disabled=${!this.history.undo}
+        @click=${() => this.editor?.undo(false)}>↶<span class="label"> ${t("program.undo")}</span>
+      </button>
+      <button data-testid="redo" aria-label=${t("program.redo")} ?disabled=${!this.history.redo}
+        @click=${() => this.editor?.undo(true)}>↷<span class="label"> ${t("program.redo")}</span>
+      </button>
     </div>`;
   }
 
@@ -823,39 +829,43 @@ export class OpProgramPanel extends LitElement {
     return html`<div class="runpad">
         ${live
           ? html`<button class="stop wide" data-testid="stop" @click=${() => this.command("stop")}>
-              ■ Stop
+              ${t("program.stop")}
             </button>`
           : html`<button class="run wide" data-testid="run"
               ?disabled=${this.busy || this.loading || (this.source === "blocks"
                 && (this.problem !== "" || this.problems.length > 0))}
-              @click=${() => this.run()}>▶ Run</button>`}
+              @click=${() => this.run()}>${t("program.run")}</button>`}
         ${state === "paused"
-          ? html`<button data-testid="resume" @click=${() => this.command("resume")}>Resume</button>`
+          ? html`<button data-testid="resume" @click=${() => this.command("resume")}>
+              ${t("program.resume")}</button>`
           : html`<button data-testid="pause" ?disabled=${state !== "running"}
-              @click=${() => this.command("pause")}>Pause</button>`}
+              @click=${() => this.command("pause")}>${t("program.pause")}</button>`}
         <button data-testid="step" ?disabled=${state !== "paused"}
-          @click=${() => this.command("step")}>Step</button>
+          @click=${() => this.command("step")}>${t("program.step")}</button>
         <button data-testid="breakpoint" class="wide ${onBreakpoint ? "on" : ""}"
           ?disabled=${this.selected === null}
           @click=${() => this.selected && this.editor?.toggleBreakpoint(this.selected)}>
-          ${onBreakpoint ? "Clear breakpoint" : "Breakpoint on block"}
+          ${onBreakpoint ? t("program.clear_breakpoint") : t("program.breakpoint_on_block")}
         </button>
       </div>
       <div class="status">
-        <span class="chip ${stateClass(state)}" data-testid="run-state">${state}</span>
+        <span class="chip ${stateClass(state)}" data-testid="run-state">${stateLabel(state)}</span>
         ${status?.block && live
           ? html`<span class="muted" data-testid="run-block" data-block=${status.block}>
-              at “${this.editor?.describe(status.block) || status.block}”</span>`
+              ${t("program.run_at", {
+                block: this.editor?.describe(status.block) || status.block,
+              })}</span>`
           : nothing}
         <span class="spacer"></span>
         <span class="muted" data-testid="run-robot">${robot
-          ? `runs on ${robot}` : feed.robots().length ? "tap a robot in the bar above"
-          : "no robot added"}</span>
+          ? t("program.runs_on", { robot }) : feed.robots().length ? t("program.tap_robot")
+          : t("program.no_robot")}</span>
       </div>
       ${state === "paused" && status?.pause_reason === "confirm"
         ? html`<div class="confirm" role="alert" data-testid="confirm">
-            <strong>${status.message || "The program waits for you."}</strong>
-            <button class="primary" @click=${() => this.command("resume")}>Continue</button>
+            <strong>${status.message || t("program.waits")}</strong>
+            <button class="primary" @click=${() => this.command("resume")}>
+              ${t("program.continue")}</button>
           </div>`
         : nothing}
       ${this.notice
@@ -863,8 +873,8 @@ export class OpProgramPanel extends LitElement {
         : nothing}
       ${this.source === "blocks" && this.problems.length
         ? html`<div class="problems" data-testid="problems" role="alert">
-            <strong>Fix ${this.problems.length === 1 ? "this" : `these ${this.problems.length}`}
-              before running:</strong>
+            <strong>${this.problems.length === 1 ? t("program.fix_one")
+              : t("program.fix_many", { count: this.problems.length })}</strong>
             ${this.problems.map((p) => html`<button class="problem" data-testid="problem-item"
               data-block=${p.block} @click=${() => this.editor?.reveal(p.block)}>
               ⚠ ${p.message}</button>`)}
@@ -878,7 +888,7 @@ export class OpProgramPanel extends LitElement {
     const lines: (OutputEntry | null)[] = view?.output ?? [];
     return html`<div class="pane" data-testid="output" role="log" aria-live="polite">
       ${lines.length === 0 && !status?.error
-        ? html`<p class="muted">The program's output shows here when it runs.</p>`
+        ? html`<p class="muted">${t("program.output_empty")}</p>`
         : nothing}
       ${lines.map(
         (line) => line && html`<button class="line ${line.stream}" data-block=${line.block ?? ""}
@@ -888,7 +898,12 @@ export class OpProgramPanel extends LitElement {
       ${status?.error && !lines.some((line) => line?.stream === "error")
         ? html`<button class="line error" data-testid="run-error"
             @click=${() => status.error?.block && this.editor?.reveal(status.error.block)}
-            >${status.error.message}${status.error.line ? ` (line ${status.error.line})` : ""}</button>`
+            >${status.error.line
+              ? t("program.error_at_line", {
+                  message: status.error.message,
+                  line: status.error.line,
+                })
+              : status.error.message}</button>`
         : nothing}
       ${status && !status.error && status.message && !LIVE_STATES.includes(status.state)
         ? html`<p class="muted">${status.message}</p>`
@@ -902,7 +917,7 @@ export class OpProgramPanel extends LitElement {
     const running = this.status()?.block ?? null;
     const flagged = new Set(this.problems.map((p) => p.block));
     return html`<div class="pane outline" data-testid="outline">
-      ${items.length === 0 ? html`<p class="muted">No blocks yet.</p>` : nothing}
+      ${items.length === 0 ? html`<p class="muted">${t("program.outline_empty")}</p>` : nothing}
       ${items.map((item) => html`<button class="item ${item.id === running ? "running" : ""}
           ${item.id === this.selected ? "chosen" : ""}" data-testid="outline-item"
           data-block=${item.id} style="padding-left:${10 + item.depth * 22}px"
@@ -920,7 +935,7 @@ export class OpProgramPanel extends LitElement {
         ? html`<op-robot-view .model=${this.model}
             .joints=${this.model?.name === robot ? state?.joint_position ?? null : null}
           ></op-robot-view>`
-        : html`<p class="muted">Tap a robot in the bar above.</p>`}
+        : html`<p class="muted">${t("program.view_no_robot")}</p>`}
     </div>`;
   }
 
@@ -929,30 +944,33 @@ export class OpProgramPanel extends LitElement {
       ${this.problem
         ? html`<p class="error" role="alert" data-testid="problem">${this.problem}</p>`
         : nothing}
-      <pre class="code">${readable(this.python) || "# The Python of the blocks shows here."}</pre>
+      <pre class="code">${readable(this.python) || t("program.python_empty")}</pre>
     </div>`;
   }
 
   private renderDialog() {
     const close = () => (this.dialog = null);
     if (this.dialog === "delete") {
-      return html`<op-modal heading="Delete ${this.name}?" @close=${close}>
-        <p>The program is removed from the list. Its saved versions stay in the variable
-          history.</p>
+      return html`<op-modal heading=${t("program.delete_heading", { name: this.name })}
+        @close=${close}>
+        <p>${t("program.delete_text")}</p>
         ${this.dialogError ? html`<p class="error" role="alert">${this.dialogError}</p>` : nothing}
         <div class="actions">
-          <button @click=${close}>Cancel</button>
+          <button @click=${close}>${t("program.cancel")}</button>
           <button class="danger" data-testid="delete-confirm" ?disabled=${this.busy}
-            @click=${() => this.deleteProgram()}>Delete</button>
+            @click=${() => this.deleteProgram()}>${t("program.delete")}</button>
         </div>
       </op-modal>`;
     }
-    const heading = { new: "Save the new program as", rename: `Rename ${this.name}`,
-      duplicate: `Duplicate ${this.name} as` }[this.dialog ?? "new"];
+    const heading = {
+      new: t("program.save_new_heading"),
+      rename: t("program.rename_heading", { name: this.name }),
+      duplicate: t("program.duplicate_heading", { name: this.name }),
+    }[this.dialog ?? "new"];
     return html`<op-name-dialog
       heading=${heading}
       value=${this.dialog === "duplicate" ? `${this.name}_copy` : this.name}
-      confirmLabel=${this.dialog === "duplicate" ? "Duplicate" : "Save"}
+      confirmLabel=${this.dialog === "duplicate" ? t("program.duplicate") : t("program.save")}
       error=${this.dialogError}
       ?busy=${this.busy}
       @confirm=${(e: CustomEvent<{ name: string }>) => this.nameChosen(e.detail.name)}
@@ -972,12 +990,13 @@ export class OpProgramPanel extends LitElement {
         <div class="blockly">
           <div class="host" data-testid="workspace"></div>
           ${this.loading
-            ? html`<div class="cover" role="progressbar" aria-label="Loading the editor">
-                Loading the block editor…</div>`
+            ? html`<div class="cover" role="progressbar" aria-label=${t("program.loading_editor")}>
+                ${t("program.loading_block_editor")}</div>`
             : nothing}
           ${!this.loading && this.source === "python"
-            ? html`<div class="cover"><p>${this.name} is written in Python: it runs as it is and
-                is not edited as blocks. Its code is under “Python”.</p></div>`
+            ? html`<div class="cover">
+                <p>${t("program.python_only", { name: this.name })}</p>
+              </div>`
             : nothing}
         </div>
         <div class="side">
@@ -985,7 +1004,7 @@ export class OpProgramPanel extends LitElement {
           <div class="tabs" role="tablist">
             ${TABS.map(([tab, label]) => html`<button role="tab" data-testid="tab-${tab}"
               aria-selected=${this.tab === tab} @click=${() => (this.tab = tab)}>
-              ${label}${tab === "python" && this.problem ? " ⚠" : ""}</button>`)}
+              ${t(label)}${tab === "python" && this.problem ? " ⚠" : ""}</button>`)}
           </div>
           ${this.tab === "output" ? this.renderOutput()
             : this.tab === "outline" ? this.renderOutline()
@@ -999,12 +1018,27 @@ export class OpProgramPanel extends LitElement {
 }
 
 type Tab = "output" | "outline" | "python" | "view";
-const TABS: [Tab, string][] = [
-  ["output", "Output"],
-  ["outline", "Outline"],
-  ["python", "Python"],
-  ["view", "3D"],
+const TABS: [Tab, StringKey][] = [
+  ["output", "program.tab.output"],
+  ["outline", "program.tab.outline"],
+  ["python", "program.tab.python"],
+  ["view", "program.tab.view"],
 ];
+
+const STATE_LABEL: Record<RunState, StringKey> = {
+  idle: "program.state.idle",
+  starting: "program.state.starting",
+  running: "program.state.running",
+  paused: "program.state.paused",
+  stopped: "program.state.stopped",
+  error: "program.state.error",
+  finished: "program.state.finished",
+};
+
+/** A run state as people read it; a state this UI does not know shows as the server says. */
+function stateLabel(state: string): string {
+  return Object.hasOwn(STATE_LABEL, state) ? t(STATE_LABEL[state as RunState]) : state;
+}
 
 function stateClass(state: string): string {
   if (state === "running" || state === "finished") return "ok";

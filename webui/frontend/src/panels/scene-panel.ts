@@ -1,10 +1,22 @@
-import { LitElement, css, html } from "lit";
+import { LitElement, type TemplateResult, css, html } from "lit";
 import { api, errorText } from "../api";
 import { FocusController, focus } from "../focus";
+import { type StringKey, t } from "../i18n";
 import { FeedController, feed } from "../live";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
 import { RobotLoader } from "../robot-loader";
 import { shared } from "../styles";
+import {
+  angleFieldStep,
+  angleFromField,
+  angleToField,
+  angleUnit,
+  lengthFromField,
+  lengthToField,
+  lengthUnit,
+  radians,
+  units,
+} from "../units";
 import type { Obstacle, PathPreview, PoseJson, WorldContents } from "../three/scene";
 import "../components/clearance-chip";
 import "../components/robot-view";
@@ -14,7 +26,7 @@ import type { Waypoint } from "../components/waypoint-list";
 
 type SceneObject = Omit<Obstacle, "name" | "selected">;
 
-/** Where a robot's base stands in the world: mm and degrees, as people set it. */
+/** Where a robot's base stands in the world, as edited: metres and radians. */
 interface Mount {
   x: number;
   y: number;
@@ -24,21 +36,31 @@ interface Mount {
   yaw: number;
 }
 
-const MOUNT_FIELDS: [keyof Mount, string][] = [
-  ["x", "X mm"],
-  ["y", "Y mm"],
-  ["z", "Z mm"],
-  ["roll", "Roll °"],
-  ["pitch", "Pitch °"],
-  ["yaw", "Yaw °"],
+type Measure = "length" | "angle";
+
+// X, Y and Z read the same in every language; only their unit follows the choice.
+const MOUNT_FIELDS: [keyof Mount, Measure, () => TemplateResult | string][] = [
+  ["x", "length", () => html`X ${lengthUnit()}`],
+  ["y", "length", () => html`Y ${lengthUnit()}`],
+  ["z", "length", () => html`Z ${lengthUnit()}`],
+  ["roll", "angle", () => t("scene.mount.roll", { unit: angleUnit() })],
+  ["pitch", "angle", () => t("scene.mount.pitch", { unit: angleUnit() })],
+  ["yaw", "angle", () => t("scene.mount.yaw", { unit: angleUnit() })],
 ];
 
+const toField = (measure: Measure, value: number): number =>
+  measure === "length" ? lengthToField(value) : angleToField(value);
+const fromField = (measure: Measure, value: number): number =>
+  measure === "length" ? lengthFromField(value) : angleFromField(value);
+const degrees = (rad: number): number => (rad * 180) / Math.PI;
+
 function mountOf(base: PoseJson | null): Mount {
-  const p = base?.position ?? [0, 0, 0];
-  const [roll, pitch, yaw] = quaternionToRpy(base?.orientation ?? [0, 0, 0, 1]);
-  const r = (v: number) => Math.round(v * 10) / 10;
-  return { x: r(p[0] * 1000), y: r(p[1] * 1000), z: r(p[2] * 1000),
-    roll: r(roll), pitch: r(pitch), yaw: r(yaw) };
+  const [x, y, z] = base?.position ?? [0, 0, 0];
+  const [roll, pitch, yaw] = quaternionToRpy(base?.orientation ?? [0, 0, 0, 1]).map(radians);
+  // Rounded as the fields show them: saving stores what was shown, changed or not.
+  const l = (v: number) => fromField("length", toField("length", v));
+  const a = (v: number) => fromField("angle", toField("angle", v));
+  return { x: l(x), y: l(y), z: l(z), roll: a(roll), pitch: a(pitch), yaw: a(yaw) };
 }
 
 interface SceneResponse {
@@ -54,13 +76,35 @@ interface PlanReport {
   tcp_path: [number, number, number][];
 }
 
-const NUDGE = 0.01; // m per tap
+/** A tap's nudge, and the step of the length fields: 10 mm, or a round 0.5 in. */
+const nudgeStep = (): number => (units.length === "mm" ? 10 : 0.5);
+/** Positions and sizes show whole millimetres; inches as finely as units.ts rounds them. */
+const sizeField = (metres: number): number =>
+  units.length === "mm" ? Math.round(metres * 1000) : lengthToField(metres);
 const AXES = ["x", "y", "z"] as const;
-const SIZE_LABELS: Record<string, string[]> = {
-  box: ["Length X", "Width Y", "Height Z"],
-  cylinder: ["Radius", "Height"],
-  sphere: ["Radius"],
-  mesh: ["Scale X", "Scale Y", "Scale Z"],
+// Per shape, each size's short name and its field's full label.
+const SIZE_LABELS: Record<string, [StringKey, StringKey][]> = {
+  box: [
+    ["scene.size.length", "scene.size.length_x"],
+    ["scene.size.width", "scene.size.width_y"],
+    ["scene.size.height", "scene.size.height_z"],
+  ],
+  cylinder: [
+    ["scene.size.radius", "scene.size.radius_label"],
+    ["scene.size.height", "scene.size.height_label"],
+  ],
+  sphere: [["scene.size.radius", "scene.size.radius_label"]],
+  mesh: [
+    ["scene.size.scale", "scene.size.scale_x"],
+    ["scene.size.scale", "scene.size.scale_y"],
+    ["scene.size.scale", "scene.size.scale_z"],
+  ],
+};
+const SHAPES: Record<string, StringKey> = {
+  box: "scene.shape.box",
+  cylinder: "scene.shape.cylinder",
+  sphere: "scene.shape.sphere",
+  mesh: "scene.shape.mesh",
 };
 
 // The collision scene: obstacles and keep-out zones in the 3D view, added, moved and deleted
@@ -328,7 +372,7 @@ export class OpScenePanel extends LitElement {
   }
 
   private edit(update: (draft: SceneObject, value: number) => void, e: Event): void {
-    const value = Number((e.target as HTMLInputElement).value) / 1000;
+    const value = lengthFromField(Number((e.target as HTMLInputElement).value));
     if (!this.draft || !Number.isFinite(value)) return;
     const draft = structuredClone(this.draft);
     update(draft, value);
@@ -342,12 +386,12 @@ export class OpScenePanel extends LitElement {
     const m = this.mount;
     if (!m || !this.robot) return;
     if (!Object.values(m).every(Number.isFinite)) {
-      this.message = "Every mounting value must be a number.";
+      this.message = t("scene.mount.not_a_number");
       return;
     }
     const pose = {
-      position: [m.x / 1000, m.y / 1000, m.z / 1000],
-      orientation: rpyToQuaternion(m.roll, m.pitch, m.yaw),
+      position: [m.x, m.y, m.z],
+      orientation: rpyToQuaternion(degrees(m.roll), degrees(m.pitch), degrees(m.yaw)),
     };
     try {
       await api("PUT", `/api/variables/frames.${encodeURIComponent(this.robot)}`, {
@@ -364,19 +408,22 @@ export class OpScenePanel extends LitElement {
 
   private mounting() {
     const m = this.mount;
-    if (!m) return html`<p class="muted">Loading…</p>`;
+    if (!m) return html`<p class="muted">${t("scene.loading")}</p>`;
+    const steps = { length: nudgeStep(), angle: 10 * angleFieldStep() };
     return html`<div class="mount" data-testid="mount-editor">
-        ${MOUNT_FIELDS.map(([key, label]) => html`<label>
-          <span>${label}</span>
-          <input type="number" inputmode="decimal" step="10" data-testid="mount-${key}"
-            .value=${String(m[key])}
-            @change=${(e: Event) => (this.mount = { ...m,
-              [key]: Number((e.target as HTMLInputElement).value) })} /></label>`)}
+        ${MOUNT_FIELDS.map(([key, measure, label]) => html`<label>
+          <span>${label()}</span>
+          <input type="number" inputmode="decimal" step=${steps[measure]}
+            data-testid="mount-${key}" .value=${String(toField(measure, m[key]))}
+            @change=${(e: Event) => {
+              const value = Number((e.target as HTMLInputElement).value);
+              this.mount = { ...m, [key]: fromField(measure, value) };
+            }} /></label>`)}
       </div>
       <div class="row">
         <button class="primary" data-testid="save-mount" @click=${() => this.saveMount()}>
-          Save mounting</button>
-        <span class="muted">Where ${this.robot}'s base stands in the cell (the world frame).</span>
+          ${t("scene.mount.save")}</button>
+        <span class="muted">${t("scene.mount.hint", { robot: this.robot })}</span>
       </div>`;
   }
 
@@ -426,50 +473,64 @@ export class OpScenePanel extends LitElement {
   // Rendering -------------------------------------------------------------------------------
 
   private previewChip() {
-    if (this.previewing) return html`<span class="chip" data-testid="preview" data-state="busy">Planning…</span>`;
+    const chip = (state: string, text: string, tone = "") =>
+      html`<span class="chip ${tone}" data-testid="preview" data-state=${state}>${text}</span>`;
+    if (this.previewing) return chip("busy", t("scene.preview.planning"));
     const p = this.preview;
-    if (!p) return html`<span class="chip" data-testid="preview" data-state="none">No preview</span>`;
-    if (p.ok) return html`<span class="chip ok" data-testid="preview" data-state="ok">Path is clear</span>`;
-    const state = p.code === "collision" ? "collision" : "error";
-    return html`<span class="chip bad" data-testid="preview" data-state=${state}>${p.message}</span>`;
+    if (!p) return chip("none", t("scene.preview.none"));
+    if (p.ok) return chip("ok", t("scene.preview.clear"), "ok");
+    return chip(p.code === "collision" ? "collision" : "error", p.message, "bad");
+  }
+
+  /** "box", or "box, keep-out". */
+  private shapeText(o: SceneObject): string {
+    const shape = o.shape in SHAPES ? t(SHAPES[o.shape]) : o.shape;
+    return o.keep_out ? t("scene.objects.keep_out", { shape }) : shape;
   }
 
   private editor() {
     const d = this.draft;
-    if (!d) return html`<p class="muted">Tap an object to move, resize or delete it.</p>`;
+    if (!d) return html`<p class="muted">${t("scene.editor.hint")}</p>`;
     const labels = SIZE_LABELS[d.shape] ?? [];
+    const unit = lengthUnit();
+    const step = nudgeStep();
+    const nudge = lengthFromField(step);
     return html`
       <div class="grid" data-testid="object-editor">
         ${AXES.map((axis, i) => html`
-          <span>${axis.toUpperCase()} mm</span>
-          <input type="number" inputmode="decimal" step="10" data-testid="pos-${axis}"
-            .value=${String(Math.round(d.pose.position[i] * 1000))}
+          <span>${axis.toUpperCase()} ${unit}</span>
+          <input type="number" inputmode="decimal" step=${step} data-testid="pos-${axis}"
+            .value=${String(sizeField(d.pose.position[i]))}
             @change=${(e: Event) => this.edit((o, v) => (o.pose.position[i] = v), e)} />
-          <button data-testid="nudge-${axis}-minus" aria-label="${axis} −10 mm"
-            @click=${() => this.nudge(i, -NUDGE)}>−</button>
-          <button data-testid="nudge-${axis}-plus" aria-label="${axis} +10 mm"
-            @click=${() => this.nudge(i, NUDGE)}>+</button>`)}
-        ${labels.map((label, i) => html`
-          <span>${label.split(" ")[0]}</span>
-          <input type="number" inputmode="decimal" step="10" min="1" data-testid="size-${i}"
-            aria-label="${label} mm" .value=${String(Math.round(d.size[i] * 1000))}
+          <button data-testid="nudge-${axis}-minus"
+            aria-label=${t("scene.editor.nudge_minus", { axis, step, unit })}
+            @click=${() => this.nudge(i, -nudge)}>−</button>
+          <button data-testid="nudge-${axis}-plus"
+            aria-label=${t("scene.editor.nudge_plus", { axis, step, unit })}
+            @click=${() => this.nudge(i, nudge)}>+</button>`)}
+        ${labels.map(([name, label], i) => html`
+          <span>${t(name)}</span>
+          <input type="number" inputmode="decimal" step=${step} min=${lengthToField(0.001)}
+            data-testid="size-${i}" aria-label=${t(label, { unit })}
+            .value=${String(sizeField(d.size[i]))}
             @change=${(e: Event) => this.edit((o, v) => (o.size[i] = v), e)} />
-          <span class="muted">mm</span><span></span>`)}
+          <span class="muted">${unit}</span><span></span>`)}
       </div>
       <label class="check"><input type="checkbox" data-testid="keep-out" .checked=${d.keep_out}
         @change=${(e: Event) => (this.draft = { ...d, keep_out: (e.target as HTMLInputElement).checked })} />
-        Keep-out zone</label>
+        ${t("scene.editor.keep_out")}</label>
       <div class="row">
-        <button class="primary" data-testid="apply" @click=${() => this.save(this.selected, d)}>Apply</button>
+        <button class="primary" data-testid="apply" @click=${() => this.save(this.selected, d)}
+          >${t("scene.editor.apply")}</button>
         <button class="danger" data-testid="delete" @click=${this.deleteSelected}>
-          ${this.confirmDelete ? "Tap again to delete" : "Delete"}</button>
+          ${this.confirmDelete ? t("scene.editor.confirm_delete") : t("scene.delete")}</button>
       </div>`;
   }
 
   render() {
     if (!feed.robots().length) {
-      return html`<div class="card"><h2>No robot yet</h2>
-        <p>Add a robot in the Devices panel; its scene shows here.</p></div>`;
+      return html`<div class="card"><h2>${t("scene.no_robot")}</h2>
+        <p>${t("scene.no_robot_hint")}</p></div>`;
     }
     const names = Object.keys(this.objects).sort();
     return html`
@@ -485,44 +546,48 @@ export class OpScenePanel extends LitElement {
         </div>
         <div class="side">
           <section class="card">
-            <h2>Mounting of ${this.robot}</h2>
+            <h2>${t("scene.mount.heading", { robot: this.robot })}</h2>
             ${this.mounting()}
           </section>
           <section class="card">
-            <h2>Tool of ${this.robot}</h2>
+            <h2>${t("scene.tool.heading", { robot: this.robot })}</h2>
             <op-tool-card robot=${this.robot}></op-tool-card>
           </section>
           <section class="card">
-            <h2>Path preview</h2>
+            <h2>${t("scene.preview.heading")}</h2>
             <div class="row">
-              <select aria-label="Target waypoint" data-testid="preview-target" .value=${this.target}
+              <select aria-label=${t("scene.preview.target")} data-testid="preview-target"
+                .value=${this.target}
                 @change=${(e: Event) => { this.target = (e.target as HTMLSelectElement).value; void this.runPreview(); }}>
-                <option value="">Choose a waypoint…</option>
+                <option value="">${t("scene.preview.choose")}</option>
                 ${this.waypoints.map((w) => html`<option value=${w.name}>${w.name}</option>`)}
               </select>
-              <select aria-label="Move kind" data-testid="preview-kind" .value=${this.kind}
+              <select aria-label=${t("scene.preview.kind")} data-testid="preview-kind"
+                .value=${this.kind}
                 @change=${(e: Event) => { this.kind = (e.target as HTMLSelectElement).value as "joint" | "linear"; void this.runPreview(); }}>
-                <option value="joint">Joint move</option>
-                <option value="linear">Linear move</option>
+                <option value="joint">${t("scene.preview.joint")}</option>
+                <option value="linear">${t("scene.preview.linear")}</option>
               </select>
             </div>
             <label class="check"><input type="checkbox" data-testid="preview-around" .checked=${this.around}
               ?disabled=${this.kind !== "joint"}
               @change=${(e: Event) => { this.around = (e.target as HTMLInputElement).checked; void this.runPreview(); }} />
-              Plan around obstacles</label>
+              ${t("scene.preview.around")}</label>
             <div class="row">${this.previewChip()}</div>
           </section>
           <section class="card objects">
-            <h2>Objects</h2>
+            <h2>${t("scene.objects.heading")}</h2>
             <div class="row" style="margin-bottom:8px">
-              <button data-testid="add-box" @click=${() => this.add("box")}>Add box</button>
-              <button data-testid="add-cylinder" @click=${() => this.add("cylinder")}>Add cylinder</button>
+              <button data-testid="add-box" @click=${() => this.add("box")}
+                >${t("scene.objects.add_box")}</button>
+              <button data-testid="add-cylinder" @click=${() => this.add("cylinder")}
+                >${t("scene.objects.add_cylinder")}</button>
             </div>
-            ${names.length ? "" : html`<p class="muted">No obstacles yet.</p>`}
+            ${names.length ? "" : html`<p class="muted">${t("scene.objects.none")}</p>`}
             ${names.map((name) => html`
               <button data-testid="scene-object" data-name=${name} aria-pressed=${name === this.selected}
                 @click=${() => this.select(name === this.selected ? "" : name)}>
-                ${name} <span class="muted">${this.objects[name].shape}${this.objects[name].keep_out ? ", keep-out" : ""}</span>
+                ${name} <span class="muted">${this.shapeText(this.objects[name])}</span>
               </button>`)}
           </section>
           <section class="card">${this.editor()}</section>

@@ -1,9 +1,11 @@
 import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
 import { HOLDER_MAX, control } from "../control";
+import { LANGUAGES, type Language, type StringKey, language, setLanguage, t } from "../i18n";
 import { type Theme, currentTheme, setTheme } from "../theme";
 import { shared } from "../styles";
 import type { Health } from "../types";
+import { type AngleUnit, type LengthUnit, setUnits, units } from "../units";
 
 interface LogEntry {
   time: string;
@@ -12,8 +14,27 @@ interface LogEntry {
   message: string;
 }
 
-// This pendant (its name, light or dark), and the runtime's services and whether each is
-// healthy, refreshed every two seconds.
+// Service states and log levels the runtime is known to send; any other is shown as it comes.
+const SERVICE_STATUS: Record<string, StringKey> = {
+  ok: "system.service.ok",
+  starting: "system.service.starting",
+  down: "system.service.down",
+};
+const LOG_LEVEL: Record<string, StringKey> = {
+  debug: "system.level.debug",
+  info: "system.level.info",
+  warning: "system.level.warning",
+  error: "system.level.error",
+  critical: "system.level.critical",
+};
+const LENGTH_UNITS: LengthUnit[] = ["mm", "in"];
+const ANGLE_UNITS: [AngleUnit, string][] = [
+  ["deg", "°"],
+  ["rad", "rad"],
+];
+
+// This pendant (its name, light or dark, its language and units), and the runtime's services
+// and whether each is healthy, refreshed every two seconds.
 export class OpSystemPanel extends LitElement {
   static properties = {
     health: { state: true },
@@ -101,11 +122,16 @@ export class OpSystemPanel extends LitElement {
     this.theme = theme;
   }
 
+  private chooseUnits(length: LengthUnit, angle: AngleUnit): void {
+    setUnits(length, angle);
+    this.requestUpdate(); // pressed at once, not only when the page-wide redraw comes
+  }
+
   private rename(): void {
     const input = this.renderRoot.querySelector<HTMLInputElement>("[data-testid=pendant-name]");
     try {
       control.rename(input?.value ?? "");
-      this.nameNote = `Others now see "${control.holder}" while this pendant has control.`;
+      this.nameNote = t("system.name_note", { name: control.holder });
     } catch (err) {
       this.nameNote = errorText(err);
     }
@@ -113,20 +139,43 @@ export class OpSystemPanel extends LitElement {
 
   private pendant() {
     return html`<section class="card">
-      <h2>This pendant</h2>
+      <h2>${t("system.pendant")}</h2>
       <div class="row">
-        <label for="pendant-name">Name</label>
+        <label for="pendant-name">${t("system.name")}</label>
         <input id="pendant-name" data-testid="pendant-name" maxlength=${HOLDER_MAX}
           .value=${control.holder} autocomplete="off" />
-        <button data-testid="save-pendant-name" @click=${() => this.rename()}>Save name</button>
+        <button data-testid="save-pendant-name" @click=${() => this.rename()}>
+          ${t("system.save_name")}
+        </button>
       </div>
       ${this.nameNote ? html`<p class="muted" data-testid="pendant-name-note">${this.nameNote}</p>` : ""}
-      <div class="row" role="group" aria-label="Display">
-        <span>Display</span>
-        ${(["dark", "light"] as Theme[]).map((t) => html`<button data-testid="theme-${t}"
-          aria-pressed=${this.theme === t ? "true" : "false"}
-          @click=${() => this.chooseTheme(t)}>${t === "dark" ? "Dark" : "Light (bright rooms)"}</button>`)}
+      <div class="row" role="group" aria-label=${t("system.display")}>
+        <span>${t("system.display")}</span>
+        ${(["dark", "light"] as Theme[]).map((theme) => html`<button data-testid="theme-${theme}"
+          aria-pressed=${this.theme === theme ? "true" : "false"}
+          @click=${() => this.chooseTheme(theme)}
+          >${theme === "dark" ? t("system.theme.dark") : t("system.theme.light")}</button>`)}
       </div>
+      <div class="row" role="group" aria-label=${t("system.language")}>
+        <span>${t("system.language")}</span>
+        ${Object.entries(LANGUAGES).map(([code, { name }]) => html`<button
+          data-testid="language-${code}" lang=${code} translate="no"
+          aria-pressed=${language() === code ? "true" : "false"}
+          @click=${() => setLanguage(code as Language)}>${name}</button>`)}
+      </div>
+      <div class="row" role="group" aria-label=${t("system.units.length")}>
+        <span>${t("system.units.length")}</span>
+        ${LENGTH_UNITS.map((unit) => html`<button data-testid="units-length-${unit}"
+          aria-pressed=${units.length === unit ? "true" : "false"}
+          @click=${() => this.chooseUnits(unit, units.angle)}>${unit}</button>`)}
+      </div>
+      <div class="row" role="group" aria-label=${t("system.units.angle")}>
+        <span>${t("system.units.angle")}</span>
+        ${ANGLE_UNITS.map(([unit, label]) => html`<button data-testid="units-angle-${unit}"
+          aria-pressed=${units.angle === unit ? "true" : "false"}
+          @click=${() => this.chooseUnits(units.length, unit)}>${label}</button>`)}
+      </div>
+      <p class="muted">${t("system.settings_hint")}</p>
     </section>`;
   }
 
@@ -162,26 +211,27 @@ export class OpSystemPanel extends LitElement {
   }
 
   private log() {
-    const levels: ["warning" | "info", string][] = [
-      ["warning", "Warnings and errors"],
-      ["info", "Everything"],
+    const levels: ["warning" | "info", StringKey][] = [
+      ["warning", "system.log.warnings"],
+      ["info", "system.log.everything"],
     ];
     return html`<section class="card">
-      <h2>Recent log</h2>
-      <div class="row" role="group" aria-label="Which entries">
+      <h2>${t("system.log.heading")}</h2>
+      <div class="row" role="group" aria-label=${t("system.log.which")}>
         ${levels.map(([level, label]) => html`<button data-testid="log-${level}"
           aria-pressed=${this.logLevel === level ? "true" : "false"}
-          @click=${() => this.showLevel(level)}>${label}</button>`)}
+          @click=${() => this.showLevel(level)}>${t(label)}</button>`)}
       </div>
-      ${this.logs === null ? html`<p class="muted">Loading…</p>`
-        : this.logs.length === 0 ? html`<p class="muted" data-testid="log-empty">Nothing to show.</p>`
+      ${this.logs === null ? html`<p class="muted">${t("system.loading")}</p>`
+        : this.logs.length === 0
+        ? html`<p class="muted" data-testid="log-empty">${t("system.log.empty")}</p>`
         : html`<div class="log" data-testid="log">
             ${this.logs.map((e) => html`<div class="entry" data-testid="log-entry">
               <span class="muted">${e.time.replace("T", " ")}</span>
               <span class="chip ${e.level === "error" || e.level === "critical" ? "bad"
-                : e.level === "warning" ? "warn" : ""}">${e.level}</span>
-              <strong>${e.service}</strong>
-              <div class="message">${e.message}</div>
+                : e.level === "warning" ? "warn" : ""}">${shownAs(LOG_LEVEL, e.level)}</span>
+              <strong translate="no">${e.service}</strong>
+              <div class="message" translate="no">${e.message}</div>
             </div>`)}
           </div>`}
     </section>`;
@@ -191,23 +241,34 @@ export class OpSystemPanel extends LitElement {
     const services = Object.entries(this.health?.services ?? {});
     return html`
       ${this.pendant()}
-      <h2>Runtime services</h2>
+      <h2>${t("system.services")}</h2>
       ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
       <div class="card">
         <table data-testid="services">
           <thead>
-            <tr><th>Service</th><th>Status</th><th>Version</th><th>Up for</th></tr>
+            <tr>
+              <th>${t("system.service")}</th>
+              <th>${t("system.status")}</th>
+              <th>${t("system.version")}</th>
+              <th>${t("system.uptime")}</th>
+            </tr>
           </thead>
           <tbody>
             ${services.map(
               ([name, s]) => html`<tr data-testid="service" data-name=${name}>
-                <td>${name}</td>
+                <td translate="no">${name}</td>
                 <td>
-                  <span class="chip ${s.status === "ok" ? "ok" : "bad"}">${s.status}</span>
-                  ${s.message ? html`<span class="muted">${s.message}</span>` : ""}
+                  <span class="chip ${s.status === "ok" ? "ok" : "bad"}"
+                    >${shownAs(SERVICE_STATUS, s.status)}</span
+                  >
+                  ${s.message ? html`<span class="muted" translate="no">${s.message}</span>` : ""}
                 </td>
-                <td>${s.version ?? ""}</td>
-                <td>${s.uptime_s !== undefined ? `${Math.round(s.uptime_s)} s` : ""}</td>
+                <td translate="no">${s.version ?? ""}</td>
+                <td translate="no">
+                  ${s.uptime_s !== undefined
+                    ? t("system.seconds", { seconds: Math.round(s.uptime_s) })
+                    : ""}
+                </td>
               </tr>`,
             )}
           </tbody>
@@ -215,11 +276,14 @@ export class OpSystemPanel extends LitElement {
       </div>
       ${this.log()}
       <p class="note muted">
-        The on-screen STOP is a software stop, not an emergency stop. Keep the robot's own
-        E-stop within reach.
+        ${t("system.stop_note")}
       </p>
     `;
   }
+}
+
+function shownAs(known: Record<string, StringKey>, value: string): string {
+  return value in known ? t(known[value]) : value;
 }
 
 customElements.define("op-system-panel", OpSystemPanel);

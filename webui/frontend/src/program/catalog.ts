@@ -2,6 +2,7 @@
 // the dropdowns that list what the system has (robots, waypoints, I/O names).
 
 import * as Blockly from "blockly";
+import { type StringKey, t } from "../i18n";
 
 type BlockJson = { type: string } & Record<string, unknown>;
 type FieldJson = { type?: string; options?: unknown; op_options?: ChoiceKind } & Record<
@@ -16,11 +17,11 @@ export interface BlockCatalog {
 
 export type ChoiceKind = "robots" | "waypoints" | "inputs" | "outputs";
 
-const EMPTY_LABEL: Record<ChoiceKind, string> = {
-  robots: "(no robot added)",
-  waypoints: "(no waypoint taught)",
-  inputs: "(no inputs)",
-  outputs: "(no outputs)",
+const EMPTY_LABEL: Record<ChoiceKind, StringKey> = {
+  robots: "program.choices.no_robots",
+  waypoints: "program.choices.no_waypoints",
+  inputs: "program.choices.no_inputs",
+  outputs: "program.choices.no_outputs",
 };
 
 /** What the runtime has now; the panel keeps these current. */
@@ -47,7 +48,7 @@ function menu(kind: ChoiceKind): Blockly.MenuGeneratorFunction {
     const names = new Set([...choices[kind], ...used[kind]]);
     const current = this.getValue();
     if (current) names.add(current);
-    if (names.size === 0) return [[EMPTY_LABEL[kind], ""]];
+    if (names.size === 0) return [[t(EMPTY_LABEL[kind]), ""]];
     return [...names].sort().map((name) => [name, name]);
   };
 }

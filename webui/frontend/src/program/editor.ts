@@ -2,6 +2,7 @@
 // breakpoints (block context menu or the panel's button), undo/redo. Touch-first options.
 
 import * as Blockly from "blockly";
+import { t } from "../i18n";
 import { currentTheme, paletteColour } from "../theme";
 import { useShorterBlocklyWords } from "./blockly-words";
 import { rememberNames, type BlockCatalog, defineBlocks } from "./catalog";
@@ -73,7 +74,7 @@ function registerBreakpointMenu(): void {
     displayText: (scope) => {
       const block = scope.block;
       const on = block !== undefined && editors.get(block.workspace.id)?.breakpoints.has(block.id);
-      return on ? "Remove breakpoint" : "Add breakpoint";
+      return on ? t("program.breakpoint.remove") : t("program.breakpoint.add");
     },
     preconditionFn: (scope) =>
       scope.block && canBreak(scope.block) && editors.has(scope.block.workspace.id)
