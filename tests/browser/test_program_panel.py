@@ -303,14 +303,20 @@ def statements(first: dict[str, Any]) -> list[str]:
     return found
 
 
+@pytest.mark.parametrize("device", ["tablet", "phone"])
 def test_the_program_reads_as_an_outline_beside_the_blocks_and_a_3d_view(
-    runtime: Runtime, cell: dict[str, Any], phone: BrowserContext
+    runtime: Runtime, cell: dict[str, Any], device: str, request: pytest.FixtureRequest
 ) -> None:
-    page = phone.new_page()
+    context: BrowserContext = request.getfixturevalue(device)
+    page = context.new_page()
     errors = PageErrors(page)
     page.goto(f"{runtime.url}/#/program")
     expect(page.get_by_test_id("program-select")).to_have_value("cycle")
     expect(block_of(page, cell["id"])).to_be_visible()
+    tabs = page.get_by_role("tab")
+    expect(tabs).to_have_count(4)
+    clipped = tabs.evaluate_all("els => els.filter(e => e.scrollWidth > e.clientWidth)")
+    assert clipped == [], "a tab's name does not fit it"
 
     # The outline: one line per statement, in the order they run, nested as they are.
     page.get_by_test_id("tab-outline").tap()

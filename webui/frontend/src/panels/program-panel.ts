@@ -236,7 +236,12 @@ export class OpProgramPanel extends LitElement {
         gap: 6px;
       }
       .tabs button {
-        flex: 1;
+        flex: 1 1 auto;
+        padding: 0 8px; /* four tabs side by side, in German too */
+        min-width: 0;
+        white-space: nowrap;
+        overflow: hidden;
+        text-overflow: ellipsis;
       }
       .tabs button[aria-selected="true"] {
         border-color: var(--accent);
