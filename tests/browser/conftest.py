@@ -39,6 +39,7 @@ CHROMIUM_ARGS = [
 ]
 TABLET: ViewportSize = {"width": 1280, "height": 800}
 BROWSER_DEADMAN = 0.5  # seconds
+BROWSER_LINK_TIMEOUT = 1.0  # seconds
 PHONE: ViewportSize = {"width": 390, "height": 844}
 
 
@@ -88,7 +89,15 @@ def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
     # The deadman window is widened here, not in the product: on this 2-core VM a software-
     # rendered Chromium and the whole runtime share the cores, and a heartbeat can sit in a
     # run queue for over 100 ms. The 100 ms default is proven by tests/integration/test_jog.py.
-    proc = Runtime(home, env=child_env(home, OPENPENDANT_DEADMAN_SECONDS=str(BROWSER_DEADMAN)))
+    # For the same reason a robot's state stream can stall past the 200 ms after which its
+    # link is stale (seen: a Blockly drag on a phone); the link tests prove the defaults.
+    env = child_env(
+        home,
+        OPENPENDANT_DEADMAN_SECONDS=str(BROWSER_DEADMAN),
+        OPENPENDANT_LINK__STALE_AFTER=str(BROWSER_LINK_TIMEOUT),
+        OPENPENDANT_LINK__DRIVER_TIMEOUT=str(BROWSER_LINK_TIMEOUT),
+    )
+    proc = Runtime(home, env=env)
     proc.wait_ready()
     yield proc
     proc.stop()

@@ -137,6 +137,54 @@ def shown_words(page: Page) -> dict[str, set[str]]:
     return shown
 
 
+def toolbox_words(page: Page) -> dict[str, list[str]]:
+    """Per toolbox category (as named), the text of each block and button in its flyout."""
+    page.get_by_test_id("nav-program").tap()
+    categories = page.locator(".blocklyToolboxCategory")
+    expect(categories.first).to_be_visible(timeout=30_000)
+    found: dict[str, list[str]] = {}
+    for index in range(categories.count()):
+        categories.nth(index).tap()
+        items = page.locator(
+            ".blocklyFlyout .blocklyBlockCanvas > g.blocklyDraggable, "
+            ".blocklyFlyout .blocklyFlyoutButton"
+        )
+        expect(items.first).to_be_visible()
+        texts = [(b.text_content() or "").replace("\xa0", " ") for b in items.all()]
+        found[categories.nth(index).inner_text()] = texts
+    return found
+
+
+# The same in German (Blockly's words: "Text", "null", "sin" of 45), or no words at all.
+SAME_BLOCKS = {"Text", "null", "π", "45sin"}
+
+
+def test_the_blocks_speak_the_language_chosen_on_the_system_panel(
+    runtime: Runtime, robot: str, phone: BrowserContext
+) -> None:
+    page = phone.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/program")
+    english = toolbox_words(page)
+    page.get_by_test_id("nav-system").tap()
+    page.get_by_test_id("language-de").tap()
+    german = toolbox_words(page)
+    assert len(german) == len(english)
+    for (en_name, en_blocks), (de_name, de_blocks) in zip(
+        english.items(), german.items(), strict=True
+    ):
+        assert en_name != de_name or en_name in SAME_BLOCKS, en_name
+        assert len(en_blocks) == len(de_blocks), en_name
+        same = [
+            text
+            for text, translated in zip(en_blocks, de_blocks, strict=True)
+            if text == translated and any(c.isalpha() for c in text)
+        ]
+        assert set(same) <= SAME_BLOCKS, (en_name, same)
+    assert "PTP zu" in " ".join(german["Roboter"])
+    assert errors.errors == []
+
+
 def test_the_whole_ui_speaks_the_language_chosen_on_the_system_panel(
     runtime: Runtime, robot: str, tablet: BrowserContext
 ) -> None:

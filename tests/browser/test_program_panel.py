@@ -363,10 +363,12 @@ def test_the_program_reads_as_an_outline_beside_the_blocks_and_a_3d_view(
     assert errors.errors == []
 
 
+@pytest.mark.parametrize("language", ["en", "de"])
 def test_every_block_fits_the_toolbox_on_a_phone(
-    runtime: Runtime, cell: dict[str, Any], phone: BrowserContext
+    runtime: Runtime, cell: dict[str, Any], phone: BrowserContext, language: str
 ) -> None:
     page = phone.new_page()
+    page.add_init_script(f"localStorage.setItem('op.language', '{language}')")
     page.goto(f"{runtime.url}/#/program")
     expect(block_of(page, cell["id"])).to_be_visible()
     screen = page.viewport_size

@@ -16,10 +16,14 @@ export class RobotLoader implements ReactiveController {
   private loading = false;
   private retry = 0;
 
-  /** `load` answers whether it loaded everything; a false answer is retried. */
+  /**
+   * `load` answers whether it loaded everything; a false answer is retried. Nothing is
+   * loaded while `wanted` says it is not shown (the host asks for an update when it is).
+   */
   constructor(
     private readonly host: ReactiveControllerHost,
     private readonly load: (robot: string) => Promise<boolean>,
+    private readonly wanted: () => boolean = () => true,
   ) {
     host.addController(this);
   }
@@ -32,6 +36,7 @@ export class RobotLoader implements ReactiveController {
     this.robot = robot;
     this.live = live;
     if (!robot || !feed.online || this.loading || this.retry || this.loaded === robot) return;
+    if (!this.wanted()) return;
     this.loading = true;
     void this.load(robot).then((ok) => {
       this.loading = false;

@@ -1,5 +1,5 @@
 // Deutsch. Every key of en.ts; {name} placeholders kept as they are.
-import type { Catalogue } from "./index";
+import type { BlockWords, Catalogue } from "./index";
 
 export const de: Catalogue = {
   // --- The shell, status bar, Devices and System panels ---
@@ -403,4 +403,128 @@ export const de: Catalogue = {
   "scene.view.unavailable": "3D-Ansicht nicht verfügbar: {error}",
   "scene.view.reset_title": "Zurück zur Anfangsansicht",
   "scene.view.reset": "Ansicht zurücksetzen",
+};
+
+// The blocks (their English is in blockly_blocks/definitions/*.json).
+export const deBlocks: BlockWords = {
+  categories: {
+    Logic: "Logik",
+    Loops: "Schleifen",
+    Math: "Mathematik",
+    Text: "Text",
+    Lists: "Listen",
+    Robot: "Roboter",
+    "Waypoints & poses": "Wegpunkte & Posen",
+    Time: "Zeit",
+    "I/O": "E/A",
+    "Stored variables": "Gespeichert",
+    Program: "Programm",
+    Variables: "Variablen",
+    Functions: "Funktionen",
+  },
+  blocks: {
+    io_set_output: {
+      message0: "Ausgang %1 = %2",
+      tooltip: "Schaltet einen digitalen Ausgang ein (wahr) oder aus (falsch).",
+    },
+    io_get_input: { message0: "Eingang %1", tooltip: "Ein digitaler Eingang: wahr, wenn ein." },
+    io_get_output: { message0: "Ausgang %1", tooltip: "Ein digitaler Ausgang, wie zuletzt gesetzt." },
+    io_wait_input: {
+      message0: "warte auf Eingang %1 = %2 %3 max. %4 s",
+      tooltip: "Wartet auf einen digitalen Eingang; nach der Zeit schlägt das Programm fehl.",
+      options: { STATE: { TRUE: "an", FALSE: "aus" } },
+    },
+    waypoint_get: { message0: "Wegpunkt %1", tooltip: "Ein geteachter Wegpunkt." },
+    pose_create: {
+      message0: "Pose x %1 y %2 z %3 mm %4 Roll %5 Nick %6 Gier %7 °",
+      tooltip: "Eine Pose in der Basis des Roboters.",
+    },
+    pose_compose: {
+      message0: "%1 dann %2",
+      tooltip: "Die zweite Pose, ausgedrückt im Koordinatensystem der ersten.",
+    },
+    pose_inverse: { message0: "Inverse von %1", tooltip: "Die inverse Transformation." },
+    pose_offset: {
+      message0: "%1 %2 versetzt um x %3 y %4 z %5 mm",
+      tooltip: "Die Pose, verschoben entlang der Achsen ihres Koordinatensystems.",
+    },
+    pose_get_component: {
+      message0: "%1 von %2",
+      tooltip: "Eine Komponente einer Pose.",
+      options: {
+        COMPONENT: { roll: "Rollen (°)", pitch: "Nicken (°)", yaw: "Gieren (°)" },
+      },
+    },
+    pose_set_component: {
+      message0: "%1 mit %2 gleich %3",
+      tooltip: "Eine Kopie der Pose mit einer ersetzten Komponente.",
+      options: {
+        COMPONENT: { roll: "Rollen (°)", pitch: "Nicken (°)", yaw: "Gieren (°)" },
+      },
+    },
+    program_log: {
+      message0: "protokolliere %1 %2",
+      tooltip: "Eine Zeile in der Ausgabe des Programms.",
+      options: { LEVEL: { info: "Info", warning: "Warnung", error: "Fehler" } },
+    },
+    program_confirm: {
+      message0: "Bedienerpause %1",
+      tooltip: "Hält an und zeigt die Meldung, bis der Bediener Fortsetzen drückt.",
+    },
+    program_stop: { message0: "Programm beenden", tooltip: "Beendet den Lauf hier." },
+    robot_use: {
+      message0: "Roboter %1 verwenden",
+      tooltip: "Die folgenden Roboterblöcke steuern diesen Roboter.",
+    },
+    robot_move_joint: {
+      message0: "PTP zu %1",
+      tooltip: "Achsinterpolierte Bewegung (PTP) zu einem Wegpunkt, einer Pose oder Achswerten (Grad).",
+    },
+    robot_move_linear: {
+      message0: "LIN zu %1",
+      tooltip: "Bewegt den Werkzeugmittelpunkt auf einer Geraden (LIN).",
+    },
+    robot_move_relative: {
+      message0: "verfahre um x %1 y %2 z %3 mm %4 entlang %5 Achsen",
+      tooltip: "Bewegt den Werkzeugmittelpunkt um einen Versatz, auf einer Geraden.",
+      options: { FRAME: { base: "Basis", tool: "Werkzeug" } },
+    },
+    robot_set_speed: {
+      message0: "Geschwindigkeit %1 %%",
+      tooltip: "Geschwindigkeit der folgenden Bewegungen, in Prozent der Grenzen des Roboters.",
+    },
+    robot_joint_positions: {
+      message0: "Achswerte (Grad)",
+      tooltip: "Die Achswerte des aktiven Roboters.",
+    },
+    robot_tcp_pose: {
+      message0: "Werkzeugpose",
+      tooltip: "Die Werkzeugpose des aktiven Roboters in seiner Basis.",
+    },
+    robot_tool: {
+      message0: "Werkzeug %1",
+      tooltip: "Öffnet oder schließt das Werkzeug (den Greifer) des Roboters.",
+      options: { ACTION: { OPEN: "öffnen", CLOSE: "schließen" } },
+    },
+    robot_home: {
+      message0: "Grundstellung anfahren",
+      tooltip: "Achsbewegung in die Grundstellung des Roboters.",
+    },
+    store_get: {
+      message0: "gespeichert %1",
+      tooltip: "Eine Variable aus dem Variablenspeicher.",
+    },
+    store_set: {
+      message0: "speichere %1 als %2",
+      tooltip: "Legt einen Wert im Variablenspeicher ab, wo er den Lauf überdauert.",
+    },
+    time_wait: {
+      message0: "warte %1 s",
+      tooltip: "Wartet; eine Pause des Programms pausiert auch das Warten.",
+    },
+    time_wait_until: {
+      message0: "warte bis %1 höchstens %2 s",
+      tooltip: "Wartet, bis die Bedingung wahr ist; nach der Zeit schlägt das Programm fehl.",
+    },
+  },
 };

@@ -3,17 +3,33 @@
 // in it at once, on this tablet only.
 
 import { en } from "./en";
-import { de } from "./de";
+import { de, deBlocks } from "./de";
 
 export type StringKey = keyof typeof en;
 /** A translation: every key of the English catalogue, nothing else. */
 export type Catalogue = { readonly [K in StringKey]: string };
 
+/**
+ * The words of the blocks in a language other than the block definitions' English: per block
+ * type its message (the same %1, %2… as the English, in any order), tooltip and dropdown
+ * labels (by field, then value); the toolbox's categories by their English names. Blockly's
+ * own blocks come with Blockly's translation of the same language.
+ */
+export interface BlockWords {
+  readonly blocks: Readonly<
+    Record<string, { message0: string; tooltip: string; options?: Record<string, Record<string, string>> }>
+  >;
+  readonly categories: Readonly<Record<string, string>>;
+}
+
 export type Language = "en" | "de";
 /** The languages offered, each named in itself. */
-export const LANGUAGES: Record<Language, { name: string; strings: Catalogue }> = {
-  en: { name: "English", strings: en },
-  de: { name: "Deutsch", strings: de },
+export const LANGUAGES: Record<
+  Language,
+  { name: string; strings: Catalogue; blocks: BlockWords | null }
+> = {
+  en: { name: "English", strings: en, blocks: null },
+  de: { name: "Deutsch", strings: de, blocks: deBlocks },
 };
 
 const KEY = "op.language";

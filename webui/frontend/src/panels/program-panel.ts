@@ -449,7 +449,7 @@ export class OpProgramPanel extends LitElement {
     this.selected = null;
     new FeedController(this);
     new FocusController(this);
-    new RobotLoader(this, (robot) => this.loadModel(robot));
+    new RobotLoader(this, (robot) => this.loadModel(robot), () => this.tab === "view");
   }
 
   private onRuns = (event: Event) => {

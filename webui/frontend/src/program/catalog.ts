@@ -3,6 +3,7 @@
 
 import * as Blockly from "blockly";
 import { type StringKey, t } from "../i18n";
+import { localizedBlock } from "./blockly-words";
 
 type BlockJson = { type: string } & Record<string, unknown>;
 type FieldJson = { type?: string; options?: unknown; op_options?: ChoiceKind } & Record<
@@ -71,7 +72,7 @@ export function defineBlocks(catalog: BlockCatalog): void {
     }
     Blockly.Blocks[json.type] = {
       init(this: Blockly.Block) {
-        this.jsonInit(json);
+        this.jsonInit(localizedBlock(json)); // in the language chosen when it is made
       },
     };
   }

@@ -4,7 +4,7 @@
 import * as Blockly from "blockly";
 import { t } from "../i18n";
 import { currentTheme, paletteColour } from "../theme";
-import { useShorterBlocklyWords } from "./blockly-words";
+import { applyBlocklyLanguage, localizedToolbox } from "./blockly-words";
 import { rememberNames, type BlockCatalog, defineBlocks } from "./catalog";
 
 const BREAKPOINT_CLASS = "opBreakpoint";
@@ -94,11 +94,11 @@ export class ProgramEditor extends EventTarget {
 
   constructor(container: HTMLElement, catalog: BlockCatalog, compact: boolean) {
     super();
-    useShorterBlocklyWords();
+    applyBlocklyLanguage();
     defineBlocks(catalog);
     registerBreakpointMenu();
     this.workspace = Blockly.inject(container, {
-      toolbox: catalog.toolbox,
+      toolbox: localizedToolbox(catalog.toolbox),
       theme: blocklyTheme(),
       renderer: "zelos",
       media: "./blockly-media/",
