@@ -117,7 +117,14 @@ SHOWN_TEXT = """() => {
   return found;
 }"""
 
-PANELS = ("jog", "program", "scene", "devices", "system")
+# Each panel, and what shows once its first fetches have landed.
+PANELS: dict[str, tuple[str, ...]] = {
+    "jog": ("[data-testid=jog-row]",),
+    "program": (".blocklyToolboxCategory",),
+    "scene": ("[data-testid=tool-editor]",),
+    "devices": ("[data-testid=device-card]",),
+    "system": ("[data-testid=service]", "[data-testid=log], [data-testid=log-empty]"),
+}
 # The same in German, or data: robot and program names, units.
 SAME_IN_BOTH = {"robot", "cycle", "STOP", "System", "Pause", "Details", "mm", "°", "kg", "3D"}
 SAME_IN_BOTH |= {"Python", "Name", "Status", "Version", "in", "rad"}
@@ -127,10 +134,10 @@ SAME_IN_BOTH |= {f"TCP {axis} mm" for axis in "XYZ"}
 def shown_words(page: Page) -> dict[str, set[str]]:
     """Per panel, the texts shown that have words in them."""
     shown: dict[str, set[str]] = {}
-    for panel in PANELS:
+    for panel, loaded in PANELS.items():
         page.get_by_test_id(f"nav-{panel}").tap()
-        expect(page.locator(f"op-{panel}-panel")).to_be_visible()
-        page.wait_for_timeout(300)  # let the panel's first fetches land and draw
+        for shown_once_loaded in loaded:
+            expect(page.locator(shown_once_loaded).first).to_be_visible(timeout=30_000)
         texts = page.evaluate(SHOWN_TEXT)
         words = {t for t in texts if any(c.isalpha() for c in t) and len(t) > 1}
         shown[panel] = {t for t in words if not t.startswith("http")}  # addresses
@@ -218,9 +225,12 @@ def test_lengths_and_angles_read_and_are_typed_in_the_units_chosen(
     expect(readout).to_contain_text("X mm")
     x, _, z = robot_state(runtime)["tcp_pose"]["position"]
 
-    def shown() -> list[float]:
+    def shown() -> list[float] | None:
         words = readout.inner_text().split()  # "X in <x> Y in <y> Z in <z> Roll rad …"
-        return [float(words[i]) for i in (2, 5, 8, 11)]
+        try:
+            return [float(words[i]) for i in (2, 5, 8, 11)]
+        except (IndexError, ValueError):
+            return None  # "–" until the robot's state has come
 
     page.get_by_test_id("nav-system").tap()
     page.get_by_test_id("units-length-in").tap()
@@ -228,11 +238,12 @@ def test_lengths_and_angles_read_and_are_typed_in_the_units_chosen(
     page.get_by_test_id("nav-jog").tap()
     expect(readout).to_contain_text("X in")
     expect(readout).to_contain_text("Roll rad")
-    inches = shown()
+    inches: list[float] = wait_for(shown, 10, what="the TCP readout")
     assert abs(inches[0] - x / 0.0254) < 0.002 and abs(inches[2] - z / 0.0254) < 0.002
     assert abs(inches[3]) <= 3.1425  # roll in radians (±π, to 3 places), not degrees
-    rows = " ".join(page.get_by_test_id("jog-row").all_inner_texts())
-    assert "rad" in rows and "°" not in rows
+    rows = page.get_by_test_id("jog-row")
+    expect(rows.first).to_contain_text("rad")  # drawn once the robot's model has loaded
+    assert "°" not in " ".join(rows.all_inner_texts())
 
     # A TCP typed in inches is stored in metres.
     page.get_by_test_id("control").tap()

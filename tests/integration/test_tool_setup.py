@@ -115,7 +115,13 @@ def test_a_robot_that_reconnects_gets_its_stored_tool_again(cell: Cell, tmp_path
     port = free_port()
     sim = SimRobotProc(tmp_path, name="tool-arm", port=port)
     sim.wait_ready()
+
+    def discovered() -> bool:
+        return any(d["uuid"] == sim.uuid for d in runtime.api("GET", "/devices/detected").json())
+
     try:
+        # Ready is not yet seen: the runtime adds by uuid only what its discovery has found.
+        wait_for(discovered, 10, what="the robot discovered")
         added = runtime.api("POST", "/devices", json={"uuid": sim.uuid, "local_name": "arm2"})
         assert added.status_code == 201, added.text
         wait_for(lambda: runtime.api("GET", "/devices/arm2").json()["status"] == "connected", 10)
