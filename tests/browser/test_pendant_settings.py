@@ -145,10 +145,13 @@ def shown_words(page: Page) -> dict[str, set[str]]:
 
 
 def toolbox_words(page: Page) -> dict[str, list[str]]:
-    """Per toolbox category (as named), the text of each block and button in its flyout."""
+    """Per toolbox category (as named), the text of each block and button in its flyout;
+    each of them fits the screen."""
     page.get_by_test_id("nav-program").tap()
     categories = page.locator(".blocklyToolboxCategory")
     expect(categories.first).to_be_visible(timeout=30_000)
+    screen = page.viewport_size
+    assert screen is not None
     found: dict[str, list[str]] = {}
     for index in range(categories.count()):
         categories.nth(index).tap()
@@ -158,6 +161,9 @@ def toolbox_words(page: Page) -> dict[str, list[str]]:
         )
         expect(items.first).to_be_visible()
         texts = [(b.text_content() or "").replace("\xa0", " ") for b in items.all()]
+        for item, text in zip(items.all(), texts, strict=True):
+            box = item.bounding_box()
+            assert box is not None and box["x"] + box["width"] <= screen["width"], text
         found[categories.nth(index).inner_text()] = texts
     return found
 
@@ -204,6 +210,12 @@ def test_the_whole_ui_speaks_the_language_chosen_on_the_system_panel(
     expect(page.get_by_test_id("language-de")).to_have_attribute("aria-pressed", "true")
     assert page.evaluate("document.documentElement.lang") == "de"
     german = shown_words(page)
+    page.get_by_test_id("nav-program").tap()
+    tabs = page.get_by_role("tab")  # the longest names, on a tablet's narrow side column
+    expect(tabs).to_have_count(4)
+    clipped = tabs.evaluate_all("els => els.filter(e => e.scrollWidth > e.clientWidth)")
+    assert clipped == [], "a tab's name does not fit it"
+    page.get_by_test_id("nav-system").tap()
     for panel in PANELS:
         untranslated = (english[panel] & german[panel]) - SAME_IN_BOTH
         assert not untranslated, (panel, sorted(untranslated)[:80])

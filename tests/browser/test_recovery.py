@@ -7,11 +7,12 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from playwright.sync_api import Playwright, expect
+from playwright.sync_api import BrowserContext, Playwright, Route, expect
 
 from tests.browser.conftest import (
     BROWSER_DEADMAN,
     TABLET,
+    PageErrors,
     add_robot,
     open_context,
     robot_joints,
@@ -75,3 +76,38 @@ def test_the_jog_page_is_usable_again_after_the_runtime_restarts(
         if second is not None:
             second.stop()
         first.stop()
+
+
+def test_control_is_kept_through_a_renewal_the_runtime_could_not_answer(
+    runtime: Runtime, tablet: BrowserContext
+) -> None:
+    # While the runtime restarts, a renewal meets a gateway whose device manager is not up
+    # yet (503). The lease is alive (leases outlive restarts): the tablet keeps it.
+    add_robot(runtime)
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/jog")
+    page.get_by_test_id("control").tap()
+    lease = page.get_by_test_id("lease")
+    expect(lease).to_contain_text("You have control")
+
+    def unavailable(route: Route) -> None:
+        body = {"error": {"code": "service_unavailable", "message": "not responding"}}
+        route.fulfill(status=503, json=body)
+
+    page.route("**/api/devices/robot/lease", unavailable)
+    with page.expect_response(
+        lambda r: r.url.endswith("/lease") and r.status == 503, timeout=12_000
+    ):
+        pass  # the next renewal (every 5 s) meets the 503
+    page.unroute("**/api/devices/robot/lease")
+    expires = runtime.api("GET", "/devices/robot/lease").json()["expires"]
+    wait_for(
+        lambda: (runtime.api("GET", "/devices/robot/lease").json()["expires"] or 0) > expires,
+        12,
+        what="the next renewal",
+    )
+    expect(lease).to_contain_text("You have control")
+    page.get_by_test_id("control").tap()
+    expect(lease).to_contain_text("Nobody has control")
+    assert [e for e in errors.errors if "503" not in e] == []

@@ -88,7 +88,10 @@ export class Control extends EventTarget {
     window.clearInterval(this.timers.get(robot));
     const timer = window.setInterval(() => {
       this.take(robot).catch((err: unknown) => {
-        if (err instanceof ApiError && err.status !== 0) this.forget(robot);
+        // Refused (409) or the robot gone (404): the lease is lost. No answer, or a service
+        // not answering (5xx, e.g. while the runtime restarts): the lease may well be alive
+        // (leases outlive restarts), so the token is kept and renewed on the next round.
+        if (err instanceof ApiError && err.status >= 400 && err.status < 500) this.forget(robot);
       });
     }, RENEW_EVERY_MS);
     this.timers.set(robot, timer);

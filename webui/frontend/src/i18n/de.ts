@@ -297,10 +297,10 @@ export const de: Catalogue = {
   "program.breakpoint.remove": "Haltepunkt entfernen",
   "program.breakpoint.add": "Haltepunkt setzen",
   // catalog.ts
-  "program.choices.no_robots": "(kein Roboter hinzugefügt)",
-  "program.choices.no_waypoints": "(kein Wegpunkt geteacht)",
-  "program.choices.no_inputs": "(keine Eingänge)",
-  "program.choices.no_outputs": "(keine Ausgänge)",
+  "program.choices.no_robots": "(keiner)",
+  "program.choices.no_waypoints": "(keiner)",
+  "program.choices.no_inputs": "(keine)",
+  "program.choices.no_outputs": "(keine)",
   // name-dialog.ts
   "program.name_dialog.save": "Speichern",
   "program.name_dialog.name": "Name",

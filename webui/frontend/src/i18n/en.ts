@@ -290,10 +290,10 @@ export const en = {
   "program.breakpoint.remove": "Remove breakpoint",
   "program.breakpoint.add": "Add breakpoint",
   // catalog.ts
-  "program.choices.no_robots": "(no robot added)",
-  "program.choices.no_waypoints": "(no waypoint taught)",
-  "program.choices.no_inputs": "(no inputs)",
-  "program.choices.no_outputs": "(no outputs)",
+  "program.choices.no_robots": "(none added)",
+  "program.choices.no_waypoints": "(none)",
+  "program.choices.no_inputs": "(none)",
+  "program.choices.no_outputs": "(none)",
   // name-dialog.ts
   "program.name_dialog.save": "Save",
   "program.name_dialog.name": "Name",

@@ -237,7 +237,8 @@ export class OpProgramPanel extends LitElement {
       }
       .tabs button {
         flex: 1 1 auto;
-        padding: 0 8px; /* four tabs side by side, in German too */
+        padding: 0 6px; /* four tabs side by side, in German too */
+        font-size: 16px;
         min-width: 0;
         white-space: nowrap;
         overflow: hidden;
