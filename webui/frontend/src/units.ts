@@ -47,10 +47,16 @@ export function angle(radians: number, digits = ANGLES[units.angle].digits): str
   return (radians * ANGLES[units.angle].perRadian).toFixed(digits);
 }
 
+/** A number already in the chosen angle unit, with that unit ("90.0°", "1.571 rad"). */
+export const angleText = (number: string): string =>
+  units.angle === "deg" ? `${number}°` : `${number} rad`;
+
 /** An angle in radians with its unit ("90.0°", "1.571 rad"). */
-export function angleWithUnit(radians: number): string {
-  return units.angle === "deg" ? `${angle(radians)}°` : `${angle(radians)} rad`;
-}
+export const angleWithUnit = (radians: number): string => angleText(angle(radians));
+
+/** A distance at a glance, with its unit: whole millimetres, or inches to 0.01. */
+export const roughLength = (metres: number): string =>
+  `${length(metres, units.length === "mm" ? 0 : 2)} ${lengthUnit()}`;
 
 /** A field's value for a length in metres, rounded as people type it. */
 export function lengthToField(metres: number): number {
@@ -78,3 +84,31 @@ export const angleFieldStep = (): number => (units.angle === "deg" ? 1 : 0.01);
 const RAD_PER_DEG = Math.PI / 180;
 /** Degrees (as math.ts gives roll, pitch, yaw) to radians, for the functions above. */
 export const radians = (degrees: number): number => degrees * RAD_PER_DEG;
+/** Radians to degrees, as math.ts takes roll, pitch, yaw. */
+export const degrees = (radians: number): number => radians / RAD_PER_DEG;
+
+/** How a field reads and is typed: its unit, its step, and its number each way from SI. */
+export interface FieldScale {
+  unit: () => string;
+  step: () => number;
+  toField: (value: number) => number;
+  fromField: (value: number) => number;
+}
+
+export const LENGTH_FIELD: FieldScale = {
+  unit: lengthUnit,
+  step: lengthFieldStep,
+  toField: lengthToField,
+  fromField: lengthFromField,
+};
+
+export const ANGLE_FIELD: FieldScale = {
+  unit: angleUnit,
+  step: angleFieldStep,
+  toField: angleToField,
+  fromField: angleFromField,
+};
+
+/** A value rounded as its field shows it: saving stores what was shown, changed or not. */
+export const asShown = (scale: FieldScale, value: number): number =>
+  scale.fromField(scale.toField(value));

@@ -3,7 +3,7 @@ import { api } from "../api";
 import { t } from "../i18n";
 import { feed } from "../live";
 import { shared } from "../styles";
-import { length, lengthUnit, units } from "../units";
+import { roughLength } from "../units";
 
 interface Clearance {
   distance: number | null;
@@ -72,9 +72,7 @@ export class OpClearanceChip extends LitElement {
     if (!c) {
       return html`<span class="chip" data-testid="clearance">${t("jog.clearance.unknown")}</span>`;
     }
-    // Whole millimetres are close enough to see how near the arm is; inches to 0.01.
-    const distance = (metres: number): string =>
-      `${length(metres, units.length === "mm" ? 0 : 2)} ${lengthUnit()}`;
+    const distance = roughLength; // whole millimetres show how near the arm is
     const names = { part: c.robot_part ?? "", other: c.other ?? "" };
     const text = c.distance == null
       ? t("jog.clearance.nothing_near")

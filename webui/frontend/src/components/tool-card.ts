@@ -6,14 +6,11 @@ import { quaternionToRpy, rpyToQuaternion } from "../math";
 import { shared } from "../styles";
 import type { Pose } from "../types";
 import {
-  angleFieldStep,
-  angleFromField,
-  angleToField,
-  angleUnit,
-  lengthFieldStep,
-  lengthFromField,
-  lengthToField,
-  lengthUnit,
+  ANGLE_FIELD,
+  asShown,
+  degrees,
+  type FieldScale,
+  LENGTH_FIELD,
   radians,
 } from "../units";
 
@@ -62,47 +59,27 @@ const FIELDS: [keyof Draft, StringKey, Measure][] = [
 ];
 
 const round = (v: number) => Math.round(v * 10) / 10;
-const same = (v: number) => v;
-
-/** How a measure reads and is typed: its unit, its step, and a field's number each way. */
-interface Scale {
-  unit: () => string;
-  step: () => number;
-  toField: (value: number) => number;
-  fromField: (value: number) => number;
-}
-
-const MEASURES: Record<Measure, Scale> = {
-  length: {
-    unit: lengthUnit,
-    step: lengthFieldStep,
-    toField: lengthToField,
-    fromField: lengthFromField,
-  },
-  angle: {
-    unit: angleUnit,
-    step: angleFieldStep,
-    toField: angleToField,
-    fromField: angleFromField,
-  },
-  mass: { unit: () => "kg", step: () => 0.1, toField: same, fromField: same },
+const KILOGRAMS: FieldScale = {
+  unit: () => "kg",
+  step: () => 0.1,
+  toField: (v) => v,
+  fromField: (v) => v,
 };
-
-/** A value rounded as its field shows it: saving stores what was shown, changed or not. */
-const asShown = (measure: Measure, value: number): number =>
-  MEASURES[measure].fromField(MEASURES[measure].toField(value));
+const MEASURES: Record<Measure, FieldScale> = {
+  length: LENGTH_FIELD,
+  angle: ANGLE_FIELD,
+  mass: KILOGRAMS,
+};
 
 function draftOf(info: ToolInfo): Draft {
   const [roll, pitch, yaw] = quaternionToRpy(info.tcp.orientation).map(radians);
   const [x, y, z] = info.tcp.position;
   const [cx, cy, cz] = info.payload.center_of_mass;
-  const l = (v: number) => asShown("length", v);
-  const a = (v: number) => asShown("angle", v);
+  const l = (v: number) => asShown(LENGTH_FIELD, v);
+  const a = (v: number) => asShown(ANGLE_FIELD, v);
   return { x: l(x), y: l(y), z: l(z), roll: a(roll), pitch: a(pitch), yaw: a(yaw),
     mass: round(info.payload.mass), cx: l(cx), cy: l(cy), cz: l(cz) };
 }
-
-const degrees = (rad: number): number => (rad * 180) / Math.PI;
 
 export class OpToolCard extends LitElement {
   static properties = {

@@ -12,13 +12,14 @@ import type { Marker } from "../three/scene";
 import type { Pose, RobotState } from "../types";
 import {
   angle,
+  angleText,
   angleUnit,
   angleWithUnit,
   length,
   lengthUnit,
   lengthWithUnit,
   radians,
-  units,
+  roughLength,
 } from "../units";
 import "../components/clearance-chip";
 import "../components/jog-pad";
@@ -44,13 +45,8 @@ function stepLabel(size: { linear: number; angular: number }): string {
   const turn = short(angle(size.angular, 6));
   return t("jog.step", {
     length: `${short(length(size.linear, 6))} ${lengthUnit()}`,
-    angle: units.angle === "deg" ? `${turn}°` : `${turn} ${angleUnit()}`,
+    angle: angleText(turn),
   });
-}
-
-/** A distance to go, in whole millimetres (inches to 0.01). */
-function roundLength(metres: number): string {
-  return `${length(metres, units.length === "mm" ? 0 : 2)} ${lengthUnit()}`;
 }
 
 type Dialog =
@@ -556,7 +552,7 @@ export class OpJogPanel extends LitElement {
     if (!target || !state) return null;
     const p = state.tcp_pose.position;
     const left = Math.hypot(...[0, 1, 2].map((i) => target.tcp_position[i] - p[i]));
-    return { name: target.name, text: t("jog.moving_to_go", { distance: roundLength(left) }) };
+    return { name: target.name, text: t("jog.moving_to_go", { distance: roughLength(left) }) };
   }
 
   private deadman() {

@@ -7,10 +7,13 @@ import { quaternionToRpy, rpyToQuaternion } from "../math";
 import { RobotLoader } from "../robot-loader";
 import { shared } from "../styles";
 import {
+  ANGLE_FIELD,
   angleFieldStep,
-  angleFromField,
-  angleToField,
   angleUnit,
+  asShown,
+  degrees,
+  type FieldScale,
+  LENGTH_FIELD,
   lengthFromField,
   lengthToField,
   lengthUnit,
@@ -48,18 +51,13 @@ const MOUNT_FIELDS: [keyof Mount, Measure, () => TemplateResult | string][] = [
   ["yaw", "angle", () => t("scene.mount.yaw", { unit: angleUnit() })],
 ];
 
-const toField = (measure: Measure, value: number): number =>
-  measure === "length" ? lengthToField(value) : angleToField(value);
-const fromField = (measure: Measure, value: number): number =>
-  measure === "length" ? lengthFromField(value) : angleFromField(value);
-const degrees = (rad: number): number => (rad * 180) / Math.PI;
+const SCALE: Record<Measure, FieldScale> = { length: LENGTH_FIELD, angle: ANGLE_FIELD };
 
 function mountOf(base: PoseJson | null): Mount {
   const [x, y, z] = base?.position ?? [0, 0, 0];
   const [roll, pitch, yaw] = quaternionToRpy(base?.orientation ?? [0, 0, 0, 1]).map(radians);
-  // Rounded as the fields show them: saving stores what was shown, changed or not.
-  const l = (v: number) => fromField("length", toField("length", v));
-  const a = (v: number) => fromField("angle", toField("angle", v));
+  const l = (v: number) => asShown(LENGTH_FIELD, v);
+  const a = (v: number) => asShown(ANGLE_FIELD, v);
   return { x: l(x), y: l(y), z: l(z), roll: a(roll), pitch: a(pitch), yaw: a(yaw) };
 }
 
@@ -414,10 +412,10 @@ export class OpScenePanel extends LitElement {
         ${MOUNT_FIELDS.map(([key, measure, label]) => html`<label>
           <span>${label()}</span>
           <input type="number" inputmode="decimal" step=${steps[measure]}
-            data-testid="mount-${key}" .value=${String(toField(measure, m[key]))}
+            data-testid="mount-${key}" .value=${String(SCALE[measure].toField(m[key]))}
             @change=${(e: Event) => {
               const value = Number((e.target as HTMLInputElement).value);
-              this.mount = { ...m, [key]: fromField(measure, value) };
+              this.mount = { ...m, [key]: SCALE[measure].fromField(value) };
             }} /></label>`)}
       </div>
       <div class="row">
