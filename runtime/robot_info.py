@@ -8,9 +8,9 @@ from typing import Any
 import yaml
 
 from runtime.interfaces.robot import RobotInfo
-from runtime.kinematics import load_urdf_model, urdf_joint_limits
 from runtime.kit.errors import InvalidValue, NotFound
 from runtime.paths import ROBOTS_DIR, resolve_package_uri
+from runtime.robotics.kinematics import load_urdf_model, urdf_joint_limits
 
 
 def available_models(directory: Path = ROBOTS_DIR) -> list[str]:

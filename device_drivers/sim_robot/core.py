@@ -23,8 +23,8 @@ from runtime.interfaces.robot import (
     TrajectoryState,
     TrajectoryStatus,
 )
-from runtime.kinematics import Kinematics
 from runtime.kit.errors import NotFound, RobotError
+from runtime.robotics.kinematics import Kinematics
 
 CYCLE = 0.002
 STREAM_MODES = (CommandMode.jog, CommandMode.velocity_command, CommandMode.position_command)

@@ -21,8 +21,8 @@ from runtime.interfaces.robot import (
     TrajectoryStatus,
 )
 from runtime.interfaces.robot_driver import RobotDriver, RobotStatus
-from runtime.kinematics import Kinematics
 from runtime.kit.errors import RobotError
+from runtime.robotics.kinematics import Kinematics
 
 log = logging.getLogger(__name__)
 

@@ -22,11 +22,11 @@ from websockets.asyncio.client import ClientConnection
 
 from runtime.device_manager.models import ConnectionStatus
 from runtime.device_manager.tools import send_tool_setup
+from runtime.interfaces.variables import DeviceRecord
 from runtime.kit.discovery import clean_text
 from runtime.kit.errors import OpenPendantError, Unavailable
 from runtime.kit.settings import LinkSettings
 from runtime.links.freshness import Freshness, state_stamp
-from runtime.variable_storage.types import DeviceRecord
 
 log = logging.getLogger(__name__)
 

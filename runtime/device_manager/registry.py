@@ -26,6 +26,7 @@ from runtime.device_manager.models import (
 )
 from runtime.device_manager.tools import stored_tool, tool_variable
 from runtime.interfaces.robot import RobotInfo, ToolSetup
+from runtime.interfaces.variables import DeviceRecord
 from runtime.kit.discovery import Detected, checked_uuid, clean_text
 from runtime.kit.errors import (
     Conflict,
@@ -38,7 +39,6 @@ from runtime.kit.errors import (
 from runtime.kit.settings import LinkSettings
 from runtime.kit.websocket import Fanout
 from runtime.variable_storage.client import StorageClient
-from runtime.variable_storage.types import DeviceRecord
 
 log = logging.getLogger(__name__)
 

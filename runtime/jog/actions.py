@@ -12,10 +12,10 @@ import pinocchio as pin
 
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import CommandMode, RobotState
-from runtime.jog.velocity import VelocityController
-from runtime.kinematics import Kinematics
 from runtime.links.robot import InputLink
-from runtime.motion.joint_move import PlannedMove
+from runtime.robotics.joint_move import PlannedMove
+from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.velocity import VelocityController
 
 # The driver halts on its own if the stream stops for this long (the deadman's backstop).
 COMMAND_TIMEOUT = 0.2

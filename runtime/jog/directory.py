@@ -14,12 +14,12 @@ from typing import Any
 from runtime.device_manager.client import check_lease, require_token
 from runtime.interfaces.robot import RobotInfo
 from runtime.jog.jogger import Jogger
-from runtime.jog.velocity import Constraint
-from runtime.kinematics import Kinematics
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import DeviceError, OpenPendantError, Unavailable
 from runtime.links.hub import LinkHub
 from runtime.links.robot import InputLink, input_link, robot_link
+from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.velocity import Constraint
 
 log = logging.getLogger(__name__)
 

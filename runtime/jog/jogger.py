@@ -15,12 +15,12 @@ import numpy as np
 
 from runtime.interfaces.robot import CommandMode, OperationalMode
 from runtime.jog.actions import Action, RampedJog
-from runtime.jog.velocity import MANUAL_TCP_SPEED, Constraint, VelocityController
-from runtime.kinematics import Kinematics
 from runtime.kit.errors import OpenPendantError, RobotError
 from runtime.links.hub import LINK_FAULTS
 from runtime.links.robot import RobotLink
-from runtime.motion.avoidance import SAFETY
+from runtime.robotics.avoidance import SAFETY
+from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.velocity import MANUAL_TCP_SPEED, Constraint, VelocityController
 
 log = logging.getLogger(__name__)
 

@@ -9,20 +9,20 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, FastAPI, Header, WebSocket
 
+from runtime.cell.mirror import WorldMirror
+from runtime.interfaces.variables import Variable
 from runtime.jog.clearance import PathCheck
 from runtime.jog.directory import Directory
 from runtime.jog.models import SpeedRequest, TeachRequest
 from runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
-from runtime.jog.velocity import MANUAL_TCP_SPEED
 from runtime.jog.waypoints import robot_waypoints, teach
 from runtime.kit.app import create_app
 from runtime.kit.client import ServiceClient
 from runtime.kit.settings import RuntimeSettings
 from runtime.links.hub import LinkHub
-from runtime.motion.mirror import WorldMirror
 from runtime.paths import package_roots
+from runtime.robotics.velocity import MANUAL_TCP_SPEED
 from runtime.variable_storage.client import StorageClient
-from runtime.variable_storage.store import Variable
 
 LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 

@@ -41,7 +41,7 @@ from runtime.jog.waypoints import joint_goal, teach
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue, OpenPendantError
 from runtime.kit.websocket import Fanout
-from runtime.motion.joint_move import plan_joint_move
+from runtime.robotics.joint_move import plan_joint_move
 from runtime.variable_storage.client import StorageClient
 
 log = logging.getLogger(__name__)

@@ -7,32 +7,18 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import pinocchio as pin
 
+from runtime.cell.bases import base_in_world
 from runtime.interfaces.common import Pose
 from runtime.interfaces.limits import FloatArray, JointLimitChecker
 from runtime.interfaces.robot import RobotState
+from runtime.interfaces.variables import Variable
 from runtime.jog.models import TeachRequest
-from runtime.kinematics import Kinematics, pose_to_se3, se3_to_pose
-from runtime.kit.errors import Conflict, InvalidValue, NotFound
+from runtime.kit.errors import Conflict, InvalidValue
+from runtime.robotics.kinematics import Kinematics, pose_to_se3, se3_to_pose
 from runtime.variable_storage.client import StorageClient
-from runtime.variable_storage.store import Variable
 
 WAYPOINT_TYPES = ("joint_waypoint", "pose_waypoint")
-
-
-def frame_variable(robot: str) -> str:
-    return f"frames.{robot}"
-
-
-async def base_in_world(storage: StorageClient, robot: str) -> pin.SE3:
-    try:
-        frame = await storage.get(frame_variable(robot))
-    except NotFound:
-        return pin.SE3.Identity()
-    if frame.type != "frame":
-        raise InvalidValue(f"{frame_variable(robot)} should be a frame, not a {frame.type}")
-    return pose_to_se3(Pose.model_validate(frame.value["pose"]))
 
 
 async def teach(

@@ -11,7 +11,7 @@ import numpy as np
 from runtime.interfaces.robot import CommandMode, RobotState, TrajectoryState
 from runtime.kit.errors import OpenPendantError, RobotError
 from runtime.links.robot import RobotLink
-from runtime.motion.timing import TimedPath
+from runtime.robotics.timing import TimedPath
 
 WATCH_PERIOD = 0.02  # s
 # The robot's position and its setpoint this far apart means it is not following.

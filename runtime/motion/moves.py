@@ -10,15 +10,15 @@ import numpy as np
 import pinocchio as pin
 
 from runtime.interfaces.limits import FloatArray, JointLimitChecker
-from runtime.kinematics import pose_to_se3
 from runtime.kit.errors import InvalidValue, OpenPendantError
-from runtime.motion.checker import Collision, PathChecker
-from runtime.motion.joint_move import plan_joint_move
 from runtime.motion.models import CollisionReport, MoveKind, MoveRequest, PlanReport, Target
-from runtime.motion.paths import sample_joint_polyline, sample_tcp_path
-from runtime.motion.planner import plan_around
-from runtime.motion.timing import SAMPLE_PERIOD, TimedPath, at_rest, time_scale
-from runtime.motion.world import World
+from runtime.robotics.checker import Collision, PathChecker
+from runtime.robotics.joint_move import plan_joint_move
+from runtime.robotics.kinematics import pose_to_se3
+from runtime.robotics.paths import sample_joint_polyline, sample_tcp_path
+from runtime.robotics.planner import plan_around
+from runtime.robotics.timing import SAMPLE_PERIOD, TimedPath, at_rest, time_scale
+from runtime.robotics.world import World
 
 PREVIEW_POINTS = 300
 

@@ -11,11 +11,11 @@ import time
 import numpy as np
 import pinocchio as pin
 
+from runtime.cell.mirror import MAX_AGE, MirrorConstraint
 from runtime.interfaces.robot import CommandMode
-from runtime.jog.velocity import VelocityController
 from runtime.links.robot import RobotLink
 from runtime.motion.executor import MoveFailed, check_faults
-from runtime.motion.mirror import MAX_AGE, MirrorConstraint
+from runtime.robotics.velocity import VelocityController
 
 PERIOD = 0.01  # s
 GAIN = 3.0  # 1/s: how fast the remaining error is closed near the goal

@@ -10,14 +10,14 @@ from collections.abc import AsyncIterator
 import numpy as np
 import pinocchio as pin
 
+from runtime.cell.mirror import CellReading
 from runtime.device_manager.client import check_lease, require_token
 from runtime.interfaces.common import Pose
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import NotFound
 from runtime.links.hub import LinkHub
 from runtime.links.robot import RobotLink, robot_link
-from runtime.motion.mirror import CellReading
-from runtime.motion.world import World
+from runtime.robotics.world import World
 from runtime.variable_storage.client import StorageClient
 
 

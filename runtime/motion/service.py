@@ -13,15 +13,15 @@ from typing import Annotated, Any
 import numpy as np
 from fastapi import APIRouter, FastAPI, Header
 
+from runtime.cell.mirror import WorldMirror
 from runtime.interfaces.limits import JointLimitChecker
 from runtime.interfaces.robot import CommandMode, OperationalMode
-from runtime.jog.velocity import MANUAL_TCP_SPEED, VelocityController
+from runtime.interfaces.variables import JointWaypoint, PoseWaypoint
 from runtime.kit.app import create_app
 from runtime.kit.errors import Conflict, NotFound, OpenPendantError
 from runtime.kit.settings import RuntimeSettings
 from runtime.links.hub import LinkHub
 from runtime.motion.executor import Execution
-from runtime.motion.mirror import WorldMirror
 from runtime.motion.models import (
     MoveKind,
     MoveRequest,
@@ -34,8 +34,8 @@ from runtime.motion.moves import MovePlanner, Plan, Refused, resolve
 from runtime.motion.reactive import PERIOD as REACTIVE_PERIOD
 from runtime.motion.reactive import ReactiveExecution
 from runtime.motion.robots import Robots, world_pose
+from runtime.robotics.velocity import MANUAL_TCP_SPEED, VelocityController
 from runtime.variable_storage.client import StorageClient
-from runtime.variable_storage.types import JointWaypoint, PoseWaypoint
 
 LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 # Who asks for a move (a program run): a stop naming it refuses its later moves too, so a

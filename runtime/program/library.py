@@ -9,6 +9,7 @@ from typing import Any
 
 from blockly_blocks.generator import Generated, generate
 from blockly_blocks.workspace import WorkspaceError, dump_json, parse_json
+from runtime.interfaces.variables import StoredProgram, Variable
 from runtime.kit.errors import InvalidValue, NotFound
 from runtime.program.models import (
     PREFIX,
@@ -17,11 +18,9 @@ from runtime.program.models import (
     Program,
     ProgramSummary,
     Saved,
-    StoredProgram,
     check_program_name,
 )
 from runtime.variable_storage.client import StorageClient
-from runtime.variable_storage.store import Variable
 from sandbox.policy import ProgramCompileError, compile_program
 
 

@@ -25,15 +25,6 @@ def check_program_name(name: str) -> str:
     return name
 
 
-class StoredProgram(Strict):
-    """The variable storage's `program` type. The workspace is kept as JSON text: a long
-    stack of blocks nests deeper than stored values may."""
-
-    source: Literal["blocks", "python"]
-    workspace_json: str | None = None
-    python: str = Field(max_length=2_000_000)
-
-
 class Program(BaseModel):
     name: str
     source: Literal["blocks", "python"]

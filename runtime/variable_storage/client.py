@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from runtime.interfaces.variables import Variable
 from runtime.kit.client import ServiceClient
-from runtime.variable_storage.store import Variable
 
 
 class StorageClient:

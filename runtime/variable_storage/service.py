@@ -12,11 +12,12 @@ from fastapi import APIRouter, FastAPI, Query, Request, Response, WebSocket
 from pydantic import Field
 
 from runtime.interfaces.common import Strict
+from runtime.interfaces.variables import Variable
 from runtime.kit.app import create_app
 from runtime.kit.errors import InvalidValue
 from runtime.kit.settings import RuntimeSettings
 from runtime.kit.websocket import Fanout
-from runtime.variable_storage.store import HistoryEntry, Variable, VariableStore
+from runtime.variable_storage.store import HistoryEntry, VariableStore
 from runtime.variable_storage.types import REGISTRY
 
 MAX_IMPORT_BYTES = 64 * 1024 * 1024

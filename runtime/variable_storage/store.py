@@ -14,8 +14,9 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel
 
+from runtime.interfaces.variables import Variable
 from runtime.kit import deadline
 from runtime.kit.errors import Conflict, InvalidValue, NotFound
 from runtime.variable_storage.types import validate_value
@@ -48,17 +49,6 @@ CREATE TABLE IF NOT EXISTS history (
     PRIMARY KEY (name, version)
 );
 """
-
-
-class Variable(BaseModel):
-    name: str
-    type: str
-    value: Any
-    tags: list[str] = Field(default_factory=list)
-    doc: str = ""
-    created: float
-    updated: float
-    version: int
 
 
 class HistoryEntry(BaseModel):

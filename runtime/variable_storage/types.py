@@ -9,14 +9,20 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from pydantic import BaseModel, Field, ValidationError
+from pydantic import BaseModel, ValidationError
 
-from runtime.interfaces.common import JointVector, Pose, Strict, all_finite
+from runtime.interfaces.common import Pose, all_finite
 from runtime.interfaces.robot import ToolSetup
 from runtime.interfaces.scene import SceneObject
+from runtime.interfaces.variables import (
+    DeviceRecord,
+    Frame,
+    JointWaypoint,
+    PoseWaypoint,
+    StoredProgram,
+)
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue
-from runtime.program.models import StoredProgram
 
 MAX_VALUE_BYTES = 4 * 1024 * 1024
 MAX_DEPTH = 64
@@ -107,39 +113,6 @@ def _list(value: Any) -> list[Any]:
 
 def _json(value: Any) -> Any:
     return value
-
-
-class JointWaypoint(Strict):
-    """A joint-space point, taught on a given robot (radians, in its joint order)."""
-
-    joints: JointVector
-    robot: str = Field(min_length=1, max_length=64)
-
-
-class PoseWaypoint(Strict):
-    """A TCP pose in a named frame ("base" of the robot, "world", or a stored frame)."""
-
-    pose: Pose
-    frame: str = Field(default="base", min_length=1, max_length=64)
-    robot: str | None = Field(default=None, max_length=64)
-
-
-class Frame(Strict):
-    """A coordinate frame: its pose in a parent frame."""
-
-    pose: Pose
-    parent: str = Field(default="world", min_length=1, max_length=64)
-
-
-class DeviceRecord(Strict):
-    """A device the user added, under its local name (written by the device manager)."""
-
-    uuid: str = Field(min_length=1, max_length=64)
-    local_name: str = Field(pattern=r"^[a-z][a-z0-9_]{0,31}$")
-    kind: str = Field(max_length=16)
-    model: str = Field(max_length=64)
-    name: str = Field(max_length=64)
-    url: str = Field(max_length=256)
 
 
 register("number", "a finite number", _number)

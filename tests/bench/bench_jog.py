@@ -17,9 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from runtime.jog.actions import TwistJog
-from runtime.jog.velocity import VelocityController
-from runtime.kinematics import Kinematics
 from runtime.robot_info import load_robot_info
+from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.velocity import VelocityController
 from tests.bench.runner import Figure
 from tests.bench.stats import percentile, quick
 from tests.support.jog import Cell, JogClient

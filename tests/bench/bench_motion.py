@@ -12,13 +12,13 @@ import numpy as np
 from scipy.optimize import lsq_linear
 
 from runtime.interfaces.scene import SceneObject
-from runtime.jog.velocity import VelocityController
-from runtime.kinematics import Kinematics
-from runtime.motion.avoidance import AvoidanceConstraint
 from runtime.motion.models import MoveRequest
 from runtime.motion.moves import MovePlanner, Point
-from runtime.motion.world import World
 from runtime.robot_info import load_robot_info
+from runtime.robotics.avoidance import AvoidanceConstraint
+from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.velocity import VelocityController
+from runtime.robotics.world import World
 from tests.bench.runner import Figure
 from tests.bench.stats import percentile, quick
 

@@ -15,9 +15,9 @@ import pinocchio as pin
 import pytest
 
 from runtime.interfaces.scene import SceneObject
-from runtime.kinematics import Kinematics
-from runtime.motion.world import World
 from runtime.robot_info import load_robot_info
+from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.world import World
 from tests.support.jog import Cell
 from tests.support.posts import LEFT, RIGHT, SCENE, clear_posts, put_posts
 from tests.support.processes import Runtime

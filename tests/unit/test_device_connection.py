@@ -17,10 +17,10 @@ from fastapi import FastAPI, WebSocket
 from starlette.websockets import WebSocketDisconnect
 
 from runtime.device_manager.connection import DeviceConnection
+from runtime.interfaces.variables import DeviceRecord
 from runtime.kit.errors import OpenPendantError
 from runtime.kit.serve import listening_socket
 from runtime.kit.settings import LinkSettings
-from runtime.variable_storage.types import DeviceRecord
 
 UUID = "robot-1"
 TIMING = LinkSettings(stale_after=0.1, driver_timeout=0.2)

@@ -7,10 +7,10 @@ import numpy as np
 import pinocchio as pin
 
 from runtime.interfaces.scene import SceneObject
-from runtime.jog.velocity import VelocityController
-from runtime.motion.avoidance import SAFETY, AvoidanceConstraint
-from runtime.motion.world import World
 from runtime.robot_info import load_robot_info
+from runtime.robotics.avoidance import SAFETY, AvoidanceConstraint
+from runtime.robotics.velocity import VelocityController
+from runtime.robotics.world import World
 
 INFO = load_robot_info("ur5")
 PERIOD = 0.01

@@ -7,8 +7,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.kinematics import Kinematics, Unreachable
 from runtime.robot_info import load_robot_info
+from runtime.robotics.kinematics import Kinematics, Unreachable
 
 
 @pytest.mark.parametrize("model", ["ur5", "panda"])

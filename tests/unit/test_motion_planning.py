@@ -11,14 +11,14 @@ import pinocchio as pin
 import pytest
 
 from runtime.interfaces.scene import SceneObject
-from runtime.motion.checker import PathChecker
-from runtime.motion.geometry import proximity
 from runtime.motion.models import MoveRequest
 from runtime.motion.moves import MovePlanner, Point
-from runtime.motion.paths import PathError, sample_tcp_path
-from runtime.motion.timing import time_scale
-from runtime.motion.world import World
 from runtime.robot_info import load_robot_info
+from runtime.robotics.checker import PathChecker
+from runtime.robotics.geometry import proximity
+from runtime.robotics.paths import PathError, sample_tcp_path
+from runtime.robotics.timing import time_scale
+from runtime.robotics.world import World
 
 INFO = load_robot_info("ur5")
 # Left and right of the robot (a UR's base x axis points backwards), arm folded over the table.

@@ -22,9 +22,9 @@ from runtime.interfaces.robot import (
     TrajectoryState,
     TrajectoryWaypoint,
 )
-from runtime.kinematics import Kinematics
 from runtime.kit.errors import RobotError
 from runtime.robot_info import load_robot_info
+from runtime.robotics.kinematics import Kinematics
 
 
 @pytest.fixture(scope="module")
@@ -330,7 +330,7 @@ def straight_trajectory(
 ) -> tuple[str, FloatArray, FloatArray]:
     """A time-optimal move along a straight line in joint space, sent as 8 ms waypoints with
     velocities, as the motion service sends it; (trajectory id, start, goal)."""
-    from runtime.motion.joint_move import plan_joint_move
+    from runtime.robotics.joint_move import plan_joint_move
 
     start = core.tracker.position.copy()
     goal = start + np.array(offset)

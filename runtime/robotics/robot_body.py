@@ -12,11 +12,11 @@ import numpy as np
 import pinocchio as pin
 
 from runtime.interfaces.limits import FloatArray
-from runtime.kinematics import Kinematics
 from runtime.kit.errors import InvalidValue
-from runtime.motion import geometry
-from runtime.motion.geometry import Shape
 from runtime.paths import resolve_package_uri
+from runtime.robotics import geometry
+from runtime.robotics.geometry import Shape
+from runtime.robotics.kinematics import Kinematics
 
 
 @dataclass

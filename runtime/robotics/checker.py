@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from runtime.interfaces.limits import FloatArray
-from runtime.motion.world import Contact, World
+from runtime.robotics.world import Contact, World
 
 RESOLUTION = 0.004  # m of travel of any body point between checks, at worst
 

@@ -12,7 +12,7 @@ from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
 
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import RobotInfo
-from runtime.kinematics import Kinematics
+from runtime.robotics.kinematics import Kinematics
 
 # Planned moves run at most at this fraction of the joints' limits (at 100 % override).
 MOVE_SPEED_FRACTION = 0.5

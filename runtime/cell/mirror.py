@@ -16,17 +16,17 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from runtime.cell.bases import base_in_world
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.scene import SceneObject
-from runtime.jog.waypoints import base_in_world
-from runtime.kinematics import Kinematics
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import OpenPendantError
 from runtime.links.hub import LinkHub
 from runtime.links.robot import RobotLink, robot_link
-from runtime.motion.avoidance import AvoidanceConstraint
-from runtime.motion.robot_body import RobotBody
-from runtime.motion.world import Contact, World, build_obstacles
+from runtime.robotics.avoidance import AvoidanceConstraint
+from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.robot_body import RobotBody
+from runtime.robotics.world import Contact, World, build_obstacles
 from runtime.variable_storage.client import StorageClient
 
 log = logging.getLogger(__name__)

@@ -12,12 +12,12 @@ import pinocchio as pin
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import RobotInfo
 from runtime.interfaces.scene import SceneObject
-from runtime.kinematics import Kinematics, pose_to_se3
 from runtime.kit.errors import NotFound
-from runtime.motion import geometry
-from runtime.motion.geometry import Proximity, Shape, proximity
-from runtime.motion.robot_body import BodyPart, RobotBody
 from runtime.paths import resolve_package_uri
+from runtime.robotics import geometry
+from runtime.robotics.geometry import Proximity, Shape, proximity
+from runtime.robotics.kinematics import Kinematics, pose_to_se3
+from runtime.robotics.robot_body import BodyPart, RobotBody
 
 # Self pairs whose bounding spheres come this near get their exact distance (m): elsewhere the
 # spheres' gap is a good enough lower bound.

@@ -22,7 +22,7 @@ import numpy as np
 from qpsolvers import solve_qp
 
 from runtime.interfaces.limits import FloatArray
-from runtime.kinematics import Kinematics
+from runtime.robotics.kinematics import Kinematics
 
 MANUAL_TCP_SPEED = 0.25  # m/s
 # Angular errors are weighed as the motion they cause at this distance from the TCP.

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from runtime.interfaces.limits import FloatArray
-from runtime.motion.world import Contact, World
+from runtime.robotics.world import Contact, World
 
 INFLUENCE = 0.15  # m: pairs further apart than this add no constraint
 SAFETY = 0.02  # m: the distance kept

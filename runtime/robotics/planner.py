@@ -11,7 +11,7 @@ from ompl import util as ou
 
 from runtime.interfaces.limits import FloatArray
 from runtime.kit.errors import InvalidValue
-from runtime.motion.checker import PathChecker
+from runtime.robotics.checker import PathChecker
 
 ou.setLogLevel(ou.LogLevel.LOG_WARN)
 

@@ -12,7 +12,7 @@ import numpy as np
 import pinocchio as pin
 
 from runtime.interfaces.limits import FloatArray
-from runtime.motion.meshes import convex_hull
+from runtime.robotics.meshes import convex_hull
 
 
 @dataclass

@@ -14,7 +14,7 @@ from scipy.interpolate import CubicSpline
 
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import RobotInfo
-from runtime.kinematics import Kinematics
+from runtime.robotics.kinematics import Kinematics
 
 SAMPLE_PERIOD = 0.008  # s between the trajectory points sent to the driver
 MAX_SLOWDOWNS = 12

@@ -10,8 +10,8 @@ import numpy as np
 import pinocchio as pin
 
 from runtime.interfaces.limits import FloatArray
-from runtime.kinematics import Kinematics, Unreachable
 from runtime.kit.errors import InvalidValue
+from runtime.robotics.kinematics import Kinematics, Unreachable
 
 LINEAR_STEP = 0.001  # m between IK samples along a TCP path
 ANGULAR_STEP = 0.005  # rad
