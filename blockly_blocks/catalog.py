@@ -1,33 +1,41 @@
-"""The project's block definitions (definitions/<category>.json, Blockly's JSON format) and
-the toolbox (toolbox.json), as the UI loads them. Dropdowns marked with "op_options" are
+"""The blocks as the editor and the generator see them: every plugin's blocks (the project's
+own are the built-in "blocks" plugin's, from definitions/<category>.json) placed into the
+toolbox (toolbox.json holds its categories and Blockly's standard blocks; a category with a
+`toolboxitemid` takes the blocks declared for it). Dropdowns marked with "op_options" are
 filled by the UI from the runtime (robots, waypoints, I/O names); their values are checked
 by the runtime when the program runs, not against the placeholder options here."""
 
 from __future__ import annotations
 
+import copy
 import json
 from functools import cache
 from pathlib import Path
 from typing import Any
 
+from plugins.api import Block
+from plugins.registry import registry
+
 HERE = Path(__file__).parent
-DEFINITIONS = HERE / "definitions"
 TOOLBOX = HERE / "toolbox.json"
+
+
+def blocks() -> dict[str, Block]:
+    return registry().blocks
 
 
 @cache
 def definitions() -> dict[str, list[dict[str, Any]]]:
-    """Category file name -> its block definitions."""
-    return {path.stem: json.loads(path.read_text()) for path in sorted(DEFINITIONS.glob("*.json"))}
+    """Category id -> the Blockly definitions of its blocks."""
+    found: dict[str, list[dict[str, Any]]] = {}
+    for block in blocks().values():
+        found.setdefault(block.category, []).append({"type": block.type, **block.definition})
+    return found
 
 
-@cache
 def definition(block_type: str) -> dict[str, Any] | None:
-    for blocks in definitions().values():
-        for block in blocks:
-            if block["type"] == block_type:
-                return block
-    return None
+    block = blocks().get(block_type)
+    return None if block is None else {"type": block.type, **block.definition}
 
 
 def static_options(block_type: str, field: str) -> tuple[str, ...] | None:
@@ -47,7 +55,60 @@ def static_options(block_type: str, field: str) -> tuple[str, ...] | None:
 @cache
 def toolbox() -> dict[str, Any]:
     data: dict[str, Any] = json.loads(TOOLBOX.read_text())
+    entries: dict[str, list[dict[str, Any]]] = {}
+    for block in blocks().values():
+        entry = dict(block.toolbox) if block.toolbox else {"kind": "block", "type": block.type}
+        entries.setdefault(block.category, []).append(entry)
+    contents: list[dict[str, Any]] = data["contents"]
+    placed = set()
+    for item in contents:
+        category = item.get("toolboxitemid")
+        if item.get("kind") == "category" and category in entries:
+            item["contents"] = entries[category]
+            placed.add(category)
+    # The plugins' own categories go after the project's, before Variables and Functions.
+    at = max(i for i, item in enumerate(contents) if item.get("kind") == "sep")
+    for category in registry().categories.values():
+        if category.id in placed:
+            continue
+        contents.insert(
+            at,
+            {
+                "kind": "category",
+                "name": category.name.get("en", category.id),
+                "colour": category.colour,
+                "toolboxitemid": category.id,
+                "contents": entries.get(category.id, []),
+            },
+        )
+        at += 1
+        placed.add(category.id)
+    registry_ = registry()
+    for category in set(entries) - placed:
+        for entry in entries[category]:
+            owner = registry_.owner.get(("block", entry["type"]), "?")
+            registry_.fail(owner, entry["type"], f"no toolbox category {category!r}")
     return data
+
+
+@cache
+def words() -> dict[str, dict[str, Any]]:
+    """The plugins' translations: per language, block words by type and category names by
+    their English name (the UI's own catalogue has the built-in blocks')."""
+    found: dict[str, dict[str, Any]] = {}
+    for block in blocks().values():
+        for language, texts in block.words.items():
+            found.setdefault(language, {"blocks": {}, "categories": {}})["blocks"][block.type] = (
+                copy.deepcopy(dict(texts))
+            )
+    for category in registry().categories.values():
+        english = category.name.get("en", category.id)
+        for language, name in category.name.items():
+            if language != "en":
+                found.setdefault(language, {"blocks": {}, "categories": {}})["categories"][
+                    english
+                ] = name
+    return found
 
 
 def toolbox_blocks() -> list[dict[str, Any]]:

@@ -15,6 +15,8 @@ from typing import Any
 
 from blockly_blocks.names import NameTable
 from blockly_blocks.workspace import Block, Reader, Workspace, WorkspaceError, parse_json
+from plugins.api import resolve
+from plugins.registry import registry
 
 INDENT = "    "
 StatementGen = Callable[[Block, "Generator"], list[str]]
@@ -250,5 +252,24 @@ def generate(workspace_json: Any) -> Generated:
 
 
 def _load_generators() -> None:
-    # The generator modules register themselves on import.
-    from blockly_blocks import project, standard  # noqa: F401
+    """Blockly's standard blocks' generators (standard.py registers them on import) and every
+    plugin's blocks' (each `Block.generator`: a value block's returns an expression, a
+    statement block's its lines)."""
+    from blockly_blocks import standard  # noqa: F401
+
+    if _plugins_loaded:
+        return
+    plugins = registry()
+    for block in plugins.blocks.values():
+        try:
+            function = resolve(block.generator)
+        except Exception as exc:  # a broken plugin leaves its blocks ungenerated
+            owner = plugins.owner.get(("block", block.type), "?")
+            plugins.fail(owner, block.generator, f"{type(exc).__name__}: {exc}")
+            continue
+        table: dict[str, Any] = VALUES if "output" in block.definition else STATEMENTS
+        table[block.type] = function
+    _plugins_loaded.append(True)
+
+
+_plugins_loaded: list[bool] = []

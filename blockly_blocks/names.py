@@ -7,12 +7,15 @@ from __future__ import annotations
 import keyword
 import re
 
+from plugins.registry import registry
 from sandbox.builtins import SAFE_NAMES
 from sandbox.library import REGISTRY
 from sandbox.policy import FORBIDDEN_NAMES
 
+# The sandbox functions: the library's and every plugin block's.
+FUNCTIONS = {*REGISTRY, *(name for b in registry().blocks.values() for name in b.functions)}
 RESERVED = frozenset(
-    {*keyword.kwlist, *keyword.softkwlist, *SAFE_NAMES, *REGISTRY, *FORBIDDEN_NAMES, "print"}
+    {*keyword.kwlist, *keyword.softkwlist, *SAFE_NAMES, *FUNCTIONS, *FORBIDDEN_NAMES, "print"}
 )
 MAX_NAME = 60
 

@@ -1,10 +1,11 @@
-"""Generators for the project's blocks (definitions/*.json): robot, waypoints and poses, time,
-I/O, the variable storage and program control. Each calls one sandbox function."""
+"""Generators for the project's blocks (definitions/*.json, which name them): robot, waypoints
+and poses, time, I/O, the variable storage and program control. Each calls sandbox
+functions."""
 
 from __future__ import annotations
 
 from blockly_blocks.catalog import static_options
-from blockly_blocks.generator import Generator, py_string, statement, value
+from blockly_blocks.generator import Generator, py_string
 from blockly_blocks.workspace import Block, WorkspaceError
 
 MAX_NAME = 128
@@ -25,45 +26,37 @@ def _choice(block: Block, g: Generator, name: str) -> str:
 # Robot ------------------------------------------------------------------------------------
 
 
-@statement("robot_use")
 def robot_use(block: Block, g: Generator) -> list[str]:
     return [f"use_robot({py_string(_choice(block, g, 'ROBOT'))})"]
 
 
-@statement("robot_move_joint", "robot_move_linear")
 def robot_move(block: Block, g: Generator) -> list[str]:
     fn = "move_joint" if block.type == "robot_move_joint" else "move_linear"
     return [f"{fn}({g.value(block, 'TARGET')})"]
 
 
-@statement("robot_move_relative")
 def robot_move_relative(block: Block, g: Generator) -> list[str]:
     x, y, z = (g.value(block, axis, "0") for axis in ("X", "Y", "Z"))
     frame = _choice(block, g, "FRAME")
     return [f"move_relative({x}, {y}, {z}, {frame!r})"]
 
 
-@statement("robot_set_speed")
 def robot_set_speed(block: Block, g: Generator) -> list[str]:
     return [f"set_speed({g.value(block, 'SPEED', '100')})"]
 
 
-@value("robot_joint_positions")
 def robot_joint_positions(block: Block, g: Generator) -> str:
     return "joint_positions()"
 
 
-@value("robot_tcp_pose")
 def robot_tcp_pose(block: Block, g: Generator) -> str:
     return "tcp_pose()"
 
 
-@statement("robot_tool")
 def robot_tool(block: Block, g: Generator) -> list[str]:
     return ["tool_open()" if _choice(block, g, "ACTION") == "OPEN" else "tool_close()"]
 
 
-@statement("robot_home")
 def robot_home(block: Block, g: Generator) -> list[str]:
     return ["move_home()"]
 
@@ -71,40 +64,33 @@ def robot_home(block: Block, g: Generator) -> list[str]:
 # Waypoints and poses ----------------------------------------------------------------------
 
 
-@value("waypoint_get")
 def waypoint_get(block: Block, g: Generator) -> str:
     return f"waypoint({py_string(_choice(block, g, 'WAYPOINT'))})"
 
 
-@value("pose_create")
 def pose_create(block: Block, g: Generator) -> str:
     parts = [g.value(block, n, "0") for n in ("X", "Y", "Z", "ROLL", "PITCH", "YAW")]
     return f"pose({', '.join(parts)})"
 
 
-@value("pose_compose")
 def pose_compose(block: Block, g: Generator) -> str:
     return f"pose_compose({g.value(block, 'A')}, {g.value(block, 'B')})"
 
 
-@value("pose_inverse")
 def pose_inverse(block: Block, g: Generator) -> str:
     return f"pose_inverse({g.value(block, 'POSE')})"
 
 
-@value("pose_offset")
 def pose_offset(block: Block, g: Generator) -> str:
     x, y, z = (g.value(block, axis, "0") for axis in ("X", "Y", "Z"))
     return f"pose_offset({g.value(block, 'POSE')}, {x}, {y}, {z})"
 
 
-@value("pose_get_component")
 def pose_get_component(block: Block, g: Generator) -> str:
     component = _choice(block, g, "COMPONENT")
     return f"pose_get({g.value(block, 'POSE')}, {component!r})"
 
 
-@value("pose_set_component")
 def pose_set_component(block: Block, g: Generator) -> str:
     component = _choice(block, g, "COMPONENT")
     return f"pose_set({g.value(block, 'POSE')}, {component!r}, {g.value(block, 'VALUE', '0')})"
@@ -113,12 +99,10 @@ def pose_set_component(block: Block, g: Generator) -> str:
 # Time -------------------------------------------------------------------------------------
 
 
-@statement("time_wait")
 def time_wait(block: Block, g: Generator) -> list[str]:
     return [f"wait({g.value(block, 'SECONDS', '0')})"]
 
 
-@statement("time_wait_until")
 def time_wait_until(block: Block, g: Generator) -> list[str]:
     condition = g.value(block, "CONDITION", "True")
     return [f"wait_until(lambda: {condition}, {g.value(block, 'TIMEOUT', '10')})"]
@@ -127,23 +111,19 @@ def time_wait_until(block: Block, g: Generator) -> list[str]:
 # I/O --------------------------------------------------------------------------------------
 
 
-@statement("io_set_output")
 def io_set_output(block: Block, g: Generator) -> list[str]:
     name = py_string(_choice(block, g, "NAME"))
     return [f"set_output({name}, bool({g.value(block, 'VALUE', 'False')}))"]
 
 
-@value("io_get_input")
 def io_get_input(block: Block, g: Generator) -> str:
     return f"get_input({py_string(_choice(block, g, 'NAME'))})"
 
 
-@value("io_get_output")
 def io_get_output(block: Block, g: Generator) -> str:
     return f"get_output({py_string(_choice(block, g, 'NAME'))})"
 
 
-@statement("io_wait_input")
 def io_wait_input(block: Block, g: Generator) -> list[str]:
     name = py_string(_choice(block, g, "NAME"))
     state = _choice(block, g, "STATE") == "TRUE"
@@ -153,12 +133,10 @@ def io_wait_input(block: Block, g: Generator) -> list[str]:
 # Variable storage -------------------------------------------------------------------------
 
 
-@value("store_get")
 def store_get(block: Block, g: Generator) -> str:
     return f"stored({py_string(_choice(block, g, 'NAME'))})"
 
 
-@statement("store_set")
 def store_set(block: Block, g: Generator) -> list[str]:
     return [f"store({py_string(_choice(block, g, 'NAME'))}, {g.value(block, 'VALUE')})"]
 
@@ -166,17 +144,14 @@ def store_set(block: Block, g: Generator) -> list[str]:
 # Program ----------------------------------------------------------------------------------
 
 
-@statement("program_log")
 def program_log(block: Block, g: Generator) -> list[str]:
     level = _choice(block, g, "LEVEL")
     return [f"log({g.value(block, 'TEXT', repr(''))}, {level!r})"]
 
 
-@statement("program_confirm")
 def program_confirm(block: Block, g: Generator) -> list[str]:
     return [f"confirm({g.value(block, 'MESSAGE', repr('Continue?'))})"]
 
 
-@statement("program_stop")
 def program_stop(block: Block, g: Generator) -> list[str]:
     return ["stop_program()"]

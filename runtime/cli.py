@@ -44,16 +44,10 @@ def _service(args: argparse.Namespace) -> int:
     return 0
 
 
-def _sim_robot(rest: list[str]) -> int:
-    from device_drivers.sim_robot.__main__ import main
+def _driver(name: str, rest: list[str]) -> int:
+    from runtime.drivers.run import run_driver
 
-    return main(rest)
-
-
-def _spacemouse(rest: list[str]) -> int:
-    from device_drivers.spacemouse.__main__ import main
-
-    return main(rest)
+    return run_driver(name, rest)
 
 
 def _bench(args: argparse.Namespace) -> int:
@@ -71,6 +65,17 @@ def _bench(args: argparse.Namespace) -> int:
     return int(runner.main(only=args.only, json_path=args.json))
 
 
+def _drivers(rest: list[str]) -> int:
+    if not rest or rest[0].startswith("-"):
+        from plugins.registry import registry
+
+        print("openpendant driver NAME [--help | options]; installed drivers:")
+        for name, spec in sorted(registry().drivers.items()):
+            print(f"  {name:16} {spec.kind:9} {spec.description}")
+        return 0 if rest[:1] in (["--list"], ["-h"], ["--help"]) else 2
+    return _driver(rest[0], rest[1:])
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="openpendant", description="OpenPendant teach pendant")
     p.add_argument("--version", action="version", version=f"openpendant {__version__}")
@@ -85,14 +90,13 @@ def parser() -> argparse.ArgumentParser:
     run.set_defaults(handler=_run)
 
     sub.add_parser(
-        "sim-robot", help="start one more simulated robot (see sim-robot --help)", add_help=False
+        "driver", help="run an installed driver (driver NAME --help; driver --list)", add_help=False
     )
-    sub.add_parser("spacemouse", help="serve a 3D mouse (see spacemouse --help)", add_help=False)
+    sub.add_parser("sim-robot", help="the same as driver sim-robot", add_help=False)
+    sub.add_parser("spacemouse", help="the same as driver spacemouse", add_help=False)
 
     service = sub.add_parser("service", help="run one service (the launcher does this)")
-    from runtime.services import ALL_SERVICES
-
-    service.add_argument("name", choices=sorted(ALL_SERVICES))
+    service.add_argument("name", help="the service's name")
     service.add_argument("--fd", type=int, default=None, help="inherited listening socket")
     service.add_argument(
         "--public-fd", type=int, default=None, help="inherited public socket (jog: its socket)"
@@ -117,10 +121,10 @@ def parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if argv[:1] == ["sim-robot"]:
-        return _sim_robot(argv[1:])
-    if argv[:1] == ["spacemouse"]:
-        return _spacemouse(argv[1:])
+    if argv[:1] in (["sim-robot"], ["spacemouse"]):
+        return _driver(argv[0], argv[1:])
+    if argv[:1] == ["driver"]:
+        return _drivers(argv[1:])
     args = parser().parse_args(argv)
     return int(args.handler(args))
 

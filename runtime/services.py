@@ -1,5 +1,7 @@
-"""The runtime's services: one entry each. Adding a service is one line here plus its package;
-the webui routes /api/<prefix>/… to the service that owns <prefix>."""
+"""Running the runtime's services. A service is a package with a `build_app(settings, urls)`
+and a `Service` declaration in a plugin (the core's are in `runtime/plugin.py`); the
+launcher starts every declared service, and the webui routes /api/<prefix>/… to the
+service that owns <prefix>."""
 
 from __future__ import annotations
 
@@ -8,12 +10,13 @@ import json
 import os
 import socket
 from collections.abc import Callable
-from dataclasses import dataclass
 
 from fastapi import FastAPI
 from starlette.responses import PlainTextResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
+from plugins.api import Service
+from plugins.registry import registry
 from runtime.kit.logs import setup_logging
 from runtime.kit.serve import listening_socket, run_app
 from runtime.kit.settings import RuntimeSettings, settings_from_env
@@ -23,28 +26,19 @@ URLS_ENV = "OPENPENDANT_SERVICE_URLS"
 AppFactory = Callable[[RuntimeSettings, dict[str, str]], FastAPI]
 
 
-@dataclass(frozen=True)
-class ServiceSpec:
-    name: str
-    factory: str  # "module:function" that builds the app from (settings, service urls)
-    prefixes: tuple[str, ...] = ()
-    # Paths also served to browsers on a public port of the service's own (none: only
-    # through the webui).
-    public_paths: tuple[str, ...] = ()
+WEBUI = Service("webui", "webui.server:build_app")
 
 
-SERVICES: tuple[ServiceSpec, ...] = (
-    ServiceSpec("variable_storage", "runtime.variable_storage.service:build_app", ("variables",)),
-    ServiceSpec("device_manager", "runtime.device_manager.service:build_app", ("devices",)),
-    ServiceSpec("jog", "runtime.jog.service:build_app", ("jog",), public_paths=("/jog/ws",)),
-    ServiceSpec("motion", "runtime.motion.service:build_app", ("motion",)),
-    ServiceSpec("program", "runtime.program.service:build_app", ("programs",)),
-)
-WEBUI = ServiceSpec("webui", "webui.server:build_app")
-ALL_SERVICES = {spec.name: spec for spec in (*SERVICES, WEBUI)}
+def services() -> tuple[Service, ...]:
+    """The runtime's services: the core's and every plugin's (plugins/api.py `Service`)."""
+    return tuple(registry().services.values())
 
 
-def load_factory(spec: ServiceSpec) -> AppFactory:
+def all_services() -> dict[str, Service]:
+    return {spec.name: spec for spec in (*services(), WEBUI)}
+
+
+def load_factory(spec: Service) -> AppFactory:
     module, _, attr = spec.factory.partition(":")
     factory: AppFactory = getattr(importlib.import_module(module), attr)
     return factory
@@ -69,7 +63,7 @@ def run_service(
 ) -> None:
     """Run one service in this process, on an inherited socket or a port of its own, and on
     its public socket (inherited) if it has one."""
-    spec = ALL_SERVICES[name]
+    spec = all_services()[name]
     settings = settings or settings_from_env()
     setup_logging(name, settings.log_level)
     app: ASGIApp = load_factory(spec)(settings, urls_from_env())

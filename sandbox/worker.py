@@ -19,6 +19,8 @@ import traceback
 from dataclasses import dataclass, field
 from typing import Any, BinaryIO
 
+from plugins.api import resolve
+from plugins.registry import registry
 from sandbox.builtins import safe_builtins
 from sandbox.guards import guard_globals
 from sandbox.library import REGISTRY
@@ -242,11 +244,29 @@ class Printer:
         return ""
 
 
+def plugin_functions() -> dict[str, Any]:
+    """The sandbox functions every plugin's blocks declare (the built-in blocks' are the
+    library's own), imported before the program is read; one that cannot be imported is left
+    out, and a program calling it fails with a NameError at its block."""
+    found: dict[str, Any] = {}
+    for block in registry().blocks.values():
+        for name, reference in block.functions.items():
+            try:
+                found[name] = resolve(reference)
+            except Exception as exc:  # one plugin's fault is not the run's
+                print(f"sandbox function {name} ({reference}) left out: {exc}", file=sys.stderr)
+    return found
+
+
+PLUGIN_FUNCTIONS = plugin_functions()
+
+
 def program_globals(worker: Worker) -> dict[str, Any]:
     names: dict[str, Any] = {"__builtins__": safe_builtins(), "__name__": "program"}
     names.update(guard_globals())
     names["_print_"] = worker.print_factory
     names.update(REGISTRY)
+    names.update(PLUGIN_FUNCTIONS)
     return names
 
 

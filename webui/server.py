@@ -18,8 +18,9 @@ from runtime.kit.app import create_app
 from runtime.kit.errors import NotFound
 from runtime.kit.settings import RuntimeSettings
 from runtime.paths import package_roots
-from runtime.services import SERVICES
+from runtime.services import services as declared_services
 from webui.logs import MAX_ENTRIES, recent_entries
+from webui.plugins import plugins_router
 from webui.proxy import ServiceProxy
 
 DIST = Path(__file__).resolve().parent / "frontend" / "dist"
@@ -62,7 +63,7 @@ def robot_file_path(package: str, path: str) -> Path:
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     routes = {
         prefix: (spec.name, urls[spec.name])
-        for spec in SERVICES
+        for spec in declared_services()
         if spec.name in urls
         for prefix in spec.prefixes
     }
@@ -79,7 +80,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
 
     @app.get("/api/health")
     async def health() -> dict[str, Any]:
-        names = [spec.name for spec in SERVICES]
+        names = [spec.name for spec in declared_services()]
         results = await asyncio.gather(
             *(service_health(proxy.http, name, urls[name]) for name in names if name in urls)
         )
@@ -90,6 +91,8 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             services[name] = {"status": "down", "message": "no address configured"}
         ok = all(s.get("status") == "ok" for s in services.values())
         return {"status": "ok" if ok else "degraded", "services": services}
+
+    app.include_router(plugins_router(urls, proxy.http))
 
     @app.get("/api/robot-files/{package}/{path:path}")
     async def robot_file(package: str, path: str) -> FileResponse:

@@ -73,7 +73,7 @@ class SimRobot(RobotDriver):
         self._thread = threading.Thread(target=self._loop, name="sim-control", daemon=True)
         self._thread.start()
 
-    async def close(self) -> None:
+    async def shutdown(self) -> None:
         await self.halt()
         self._running.clear()
         if self._thread is not None:

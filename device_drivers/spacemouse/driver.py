@@ -47,7 +47,7 @@ class SpaceMouseDriver(InputDriver):
         self._thread = threading.Thread(target=self._loop, name="spacemouse", daemon=True)
         self._thread.start()
 
-    async def close(self) -> None:
+    async def shutdown(self) -> None:
         self._running.clear()
         if self._thread is not None:
             self._thread.join(timeout=2.0)

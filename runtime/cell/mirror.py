@@ -11,18 +11,17 @@ import logging
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
 from runtime.cell.bases import base_in_world
+from runtime.clients.devices import Devices
+from runtime.clients.robot import RobotClient
+from runtime.device_manager.client import AddedDevice, DeviceManagerClient
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.scene import SceneObject
-from runtime.kit.client import ServiceClient
 from runtime.kit.errors import OpenPendantError
-from runtime.links.hub import LinkHub
-from runtime.links.robot import RobotLink, robot_link
 from runtime.robotics.avoidance import AvoidanceConstraint
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_body import RobotBody
@@ -36,12 +35,10 @@ LOOKAHEAD = 0.02  # s: another robot is placed this far ahead of its reported st
 MAX_AGE = 0.2  # s: ... plus the report's age up to this (older means the feed is stuck)
 
 
-async def connected_robots(devices: ServiceClient) -> dict[str, dict[str, Any]]:
+async def connected_robots(manager: DeviceManagerClient) -> dict[str, AddedDevice]:
     """The device manager's connected robots by local name."""
-    added: list[dict[str, Any]] = await devices.get("/devices")
-    return {
-        d["local_name"]: d for d in added if d["kind"] == "robot" and d["status"] == "connected"
-    }
+    added = await manager.devices()
+    return {d.local_name: d for d in added if d.kind == "robot" and d.status == "connected"}
 
 
 async def scene_objects(storage: StorageClient) -> dict[str, SceneObject]:
@@ -62,16 +59,16 @@ class CellReading:
     """The connected robots, the scene and the bases, read at once (one round of requests,
     not one after another: this is on the way to every move)."""
 
-    robots: dict[str, dict[str, Any]]
+    robots: dict[str, AddedDevice]
     scene: dict[str, SceneObject]
     bases: dict[str, pin.SE3]
 
     @classmethod
     async def read(
-        cls, devices: ServiceClient, storage: StorageClient, known: Iterable[str]
+        cls, manager: DeviceManagerClient, storage: StorageClient, known: Iterable[str]
     ) -> CellReading:
         robots, scene, bases = await asyncio.gather(
-            connected_robots(devices), scene_objects(storage), robot_bases(storage, known)
+            connected_robots(manager), scene_objects(storage), robot_bases(storage, known)
         )
         return cls(robots, scene, bases)
 
@@ -85,12 +82,11 @@ class CellReading:
 
 
 class WorldMirror:
-    def __init__(self, devices: ServiceClient, storage: StorageClient, hub: LinkHub) -> None:
+    def __init__(self, devices: Devices, storage: StorageClient) -> None:
         self.devices = devices
         self.storage = storage
-        self.hub = hub
         self.world = World()
-        self.links: dict[str, RobotLink] = {}
+        self.links: dict[str, RobotClient] = {}
         self.refreshed = asyncio.Event()
         self._task: asyncio.Task[None] | None = None
 
@@ -113,7 +109,7 @@ class WorldMirror:
             await asyncio.sleep(REFRESH)
 
     async def refresh(self) -> None:
-        cell = await CellReading.read(self.devices, self.storage, self.world.robots)
+        cell = await CellReading.read(self.devices.manager, self.storage, self.world.robots)
         for name in [n for n in self.links if n not in cell.robots]:
             del self.links[name]
             self.world.remove_robot(name)
@@ -131,7 +127,7 @@ class WorldMirror:
     async def _ensure(self, name: str) -> None:
         link = self.links.get(name)
         if link is None:
-            link = self.links[name] = await robot_link(self.hub, name)
+            link = self.links[name] = await self.devices.robot(name)
         info = link.info
         known = self.world.robots.get(name)
         if known is None or known.kinematics.info != info:

@@ -1,13 +1,18 @@
-"""What other services ask the device manager over HTTP: is this lease token in control, and
-an added robot's description. Links to devices go over the link socket (runtime/links)."""
+"""The device manager for other services: the added devices, their newest states, and the
+control leases. Commands to devices go over their links (runtime/clients), not here."""
 
 from __future__ import annotations
 
 from typing import Any
 
-from runtime.interfaces.robot import RobotInfo
+from runtime.device_manager.leases import LeaseGranted
+from runtime.device_manager.models import AddedDevice, DeviceDetails
+
+__all__ = ["AddedDevice", "DeviceDetails", "DeviceManagerClient", "LeaseGranted", "require_token"]
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import OpenPendantError
+
+LEASE_HEADER = "X-Lease-Token"
 
 
 def require_token(name: str, token: str | None) -> str:
@@ -16,16 +21,38 @@ def require_token(name: str, token: str | None) -> str:
     return token
 
 
-async def check_lease(devices: ServiceClient, name: str, token: str) -> dict[str, Any]:
-    """The device manager's answer for a holder's token (which renews the lease), or its
-    refusal raised."""
-    granted: dict[str, Any] = await devices.request(
-        "POST", f"/devices/{name}/lease/check", headers={"X-Lease-Token": token}
-    )
-    return granted
+class DeviceManagerClient:
+    def __init__(self, base_url: str, timeout: float = 3.0) -> None:
+        self.http = ServiceClient(base_url, timeout=timeout, name="device manager")
 
+    async def aclose(self) -> None:
+        await self.http.aclose()
 
-async def robot_info(devices: ServiceClient, name: str) -> RobotInfo:
-    """An added robot's info, as the device manager has it from the driver."""
-    details = await devices.get(f"/devices/{name}")
-    return RobotInfo.model_validate(details["info"]["info"])
+    async def devices(self) -> list[AddedDevice]:
+        found = await self.http.get("/devices")
+        return [AddedDevice.model_validate(d) for d in found]
+
+    async def device(self, name: str) -> DeviceDetails:
+        return await self.http.request("GET", f"/devices/{name}", model=DeviceDetails)
+
+    async def state(self, name: str) -> dict[str, Any]:
+        """The device's newest state, as it streams it (empty while there is none)."""
+        state: dict[str, Any] = await self.http.get(f"/devices/{name}/state") or {}
+        return state
+
+    async def take_lease(self, name: str, holder: str) -> LeaseGranted:
+        return await self.http.request(
+            "POST", f"/devices/{name}/lease", json={"holder": holder}, model=LeaseGranted
+        )
+
+    async def check_lease(self, name: str, token: str) -> LeaseGranted:
+        """The holder's lease (a check renews it), or the refusal raised."""
+        return await self.http.request(
+            "POST",
+            f"/devices/{name}/lease/check",
+            headers={LEASE_HEADER: token},
+            model=LeaseGranted,
+        )
+
+    async def release_lease(self, name: str, token: str) -> None:
+        await self.http.delete(f"/devices/{name}/lease", headers={LEASE_HEADER: token})

@@ -20,6 +20,7 @@ import httpx
 import websockets
 from websockets.asyncio.client import ClientConnection
 
+from plugins.registry import registry
 from runtime.device_manager.models import ConnectionStatus
 from runtime.device_manager.tools import send_tool_setup
 from runtime.interfaces.variables import DeviceRecord
@@ -29,6 +30,14 @@ from runtime.kit.settings import LinkSettings
 from runtime.links.freshness import Freshness, state_stamp
 
 log = logging.getLogger(__name__)
+
+
+def has_session(kind: str) -> bool:
+    """Devices of this kind move: the link holds an ordered command session on them, which
+    the driver halts on when it closes or goes silent, and their states must stay fresh."""
+    declared = registry().kinds.get(kind)
+    return declared is not None and declared.session
+
 
 RETRY = (0.1, 0.25, 0.5)  # s between attempts; a returning device is met within 0.5 s
 CONNECT_TIMEOUT = 1.0
@@ -220,7 +229,7 @@ class DeviceConnection:
                     if self.record.kind == "robot":
                         info = await self._apply_tool(http, info)
                     state_ws = await self._open(url, "/state/ws")
-                    if self.record.kind == "robot":
+                    if has_session(self.record.kind):
                         command_ws = await self._open(url, "/command/ws")
                         timeout = self.timing.driver_timeout
                         await command_ws.send(json.dumps({"type": "session", "timeout": timeout}))
@@ -339,8 +348,8 @@ class DeviceConnection:
     def _observe(self, text: str) -> float:
         stamp = state_stamp(text)
         age = self.freshness.observe(stamp.seqno, stamp.ts)
-        # Only a robot's state changes every cycle; other devices repeat theirs at rest.
-        return age if self.record.kind == "robot" else 0.0
+        # Only a moving device's state changes every cycle; others repeat theirs at rest.
+        return age if has_session(self.record.kind) else 0.0
 
     def _state(self, text: str) -> None:
         self.last_state = text

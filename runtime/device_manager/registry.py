@@ -14,7 +14,14 @@ from typing import Any
 
 import httpx
 
-from runtime.device_manager.connection import DeviceConnection, describe, fetch_info, short
+from plugins.registry import registry
+from runtime.device_manager.connection import (
+    DeviceConnection,
+    describe,
+    fetch_info,
+    has_session,
+    short,
+)
 from runtime.device_manager.leases import LeaseBook, LeaseGranted, LeaseInfo
 from runtime.device_manager.links import LinkServer
 from runtime.device_manager.models import (
@@ -60,6 +67,7 @@ class DeviceRegistry:
         self.links = LinkServer(self)
         self.timing = timing or LinkSettings()
         self.detected: dict[str, Detected] = {}
+        self._unknown_kinds: set[str] = set()
         self.connections: dict[str, DeviceConnection] = {}
         self.claims: dict[str, AddressClaim] = {}  # local name -> another address it was seen at
         self.loaded = False
@@ -70,6 +78,15 @@ class DeviceRegistry:
     # Discovery ------------------------------------------------------------------------------
 
     def on_found(self, device: Detected) -> None:
+        if device.kind not in registry().kinds:
+            if device.kind not in self._unknown_kinds:  # once per kind, not per announcement
+                self._unknown_kinds.add(device.kind)
+                log.warning(
+                    "ignoring devices of kind %r (first: %s): no installed plugin knows them",
+                    device.kind,
+                    device.uuid,
+                )
+            return
         self.detected[device.uuid] = device
         self._publish_detected()
         for conn in self.connections.values():
@@ -176,6 +193,11 @@ class DeviceRegistry:
                     raise Conflict(
                         f"this device is already added as {conn.name!r}", code="already_added"
                     )
+            if record.kind not in registry().kinds:
+                raise DeviceError(
+                    f"no installed plugin knows devices of kind {record.kind!r}",
+                    code="unknown_kind",
+                )
             # Persist first: if storage refuses, nothing has changed.
             await self.storage.put(
                 RECORD_PREFIX + record.local_name,
@@ -274,6 +296,9 @@ class DeviceRegistry:
             await conn.stop()
 
     # Views ----------------------------------------------------------------------------------
+
+    def connection(self, local_name: str) -> DeviceConnection:
+        return self._get(local_name)
 
     def _get(self, local_name: str) -> DeviceConnection:
         conn = self.connections.get(local_name)
@@ -431,7 +456,7 @@ def _state_age(conn: DeviceConnection) -> float | None:
     if conn.status != "connected":
         return None
     fresh = conn.freshness
-    age = fresh.age() if conn.record.kind == "robot" else fresh.silence()
+    age = fresh.age() if has_session(conn.record.kind) else fresh.silence()
     return round(age, 4) if math.isfinite(age) else None
 
 

@@ -8,7 +8,9 @@ from collections.abc import AsyncIterator
 from typing import Annotated, Any
 
 from fastapi import APIRouter, FastAPI, Header, Response, WebSocket
+from fastapi.responses import JSONResponse
 
+from runtime.device_manager.calls import CallRequest, call_device
 from runtime.device_manager.leases import LeaseGranted, LeaseInfo, LeaseRequest
 from runtime.device_manager.models import (
     AddDeviceRequest,
@@ -100,6 +102,14 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
         """The robot's TCP and payload (needs control; the robot halts). Stored as
         `tools.<robot>` and applied again whenever the robot connects."""
         return await registry.set_tool(local_name, body, token)
+
+    @router.post("/{local_name}/call/{method}")
+    async def call(
+        local_name: str, method: str, body: CallRequest, token: LeaseToken = None
+    ) -> Response:
+        """Call a method the device's kind declares (a command needs control)."""
+        status, content = await call_device(registry, local_name, method, body, token)
+        return JSONResponse(content, status_code=status)
 
     @router.get("/{local_name}/state")
     async def state(local_name: str) -> Response:

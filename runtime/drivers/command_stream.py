@@ -20,13 +20,8 @@ from pydantic import ValidationError
 from starlette.websockets import WebSocketDisconnect
 
 from runtime.drivers.command_log import CommandLog
-from runtime.interfaces.robot import (
-    CommandMode,
-    CommandModeRequest,
-    JogJointCommand,
-    PositionCommand,
-    VelocityCommand,
-)
+from runtime.interfaces.endpoints import stream_commands
+from runtime.interfaces.robot import CommandMode
 from runtime.interfaces.robot_driver import RobotDriver
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import OpenPendantError
@@ -140,33 +135,23 @@ class CommandStream:
 
 
 async def dispatch_stream_command(driver: RobotDriver, message: Any, log: CommandLog) -> None:
+    """One streamed command: `{"type": <the endpoint's stream type>, ...its body}`."""
     if not isinstance(message, dict):
         raise OpenPendantError("a command must be a JSON object", code="bad_message")
     kind = message.get("type")
+    ep = stream_commands(type(driver)).get(kind) if isinstance(kind, str) else None
+    if ep is None:
+        raise OpenPendantError(f"unknown command type {str(kind)[:40]!r}", code="bad_message")
     fields = {k: v for k, v in message.items() if k not in ("type", "id")}
-    try:
-        if kind == "jog_joint":
-            jog = JogJointCommand.model_validate(fields)
-            await driver.jog_joint(jog)
-            log.record(kind, jog.tag)
-        elif kind == "velocity_command":
-            velocity = VelocityCommand.model_validate(fields)
-            await driver.velocity_command(velocity)
-            log.record(kind, velocity.tag)
-        elif kind == "position_command":
-            position = PositionCommand.model_validate(fields)
-            await driver.position_command(position)
-            log.record(kind, position.tag)
-        elif kind == "halt":
-            await driver.halt()
-            tag = fields.get("tag")
-            log.record(kind, tag[:64] if isinstance(tag, str) else None)
-        elif kind == "command_mode":
-            request = CommandModeRequest.model_validate(fields)
-            await driver.set_command_mode(request.mode)
-            log.record(f"command_mode:{request.mode.value}")
-        else:
-            raise OpenPendantError(f"unknown command type {kind!r}", code="bad_message")
-    except ValidationError as exc:
-        text, _ = describe_validation_errors(exc.errors())
-        raise OpenPendantError(text, code="invalid_request", status=422) from exc
+    args: tuple[Any, ...] = ()
+    if ep.body is not None:
+        try:
+            args = (ep.body.model_validate(fields),)
+        except ValidationError as exc:
+            text, _ = describe_validation_errors(exc.errors())
+            raise OpenPendantError(text, code="invalid_request", status=422) from exc
+    await getattr(driver, ep.name)(*args)
+    label, tag = ep.describe(args)
+    if tag is None and isinstance(fields.get("tag"), str):
+        tag = fields["tag"][:64]  # a halt's reason
+    log.record(label, tag)

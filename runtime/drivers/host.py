@@ -13,7 +13,11 @@ from typing import Any
 
 from fastapi import APIRouter, FastAPI, WebSocket
 
+from plugins.api import resolve
+from plugins.registry import registry
 from runtime.drivers import command_stream
+from runtime.drivers.command_log import CommandLog
+from runtime.drivers.routes import interface_router
 from runtime.drivers.state_stream import StateStream
 from runtime.interfaces.device import DeviceDriver
 from runtime.kit.app import create_app
@@ -98,14 +102,25 @@ def build_driver_app(
             pusher.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await pusher
-            await driver.close()
+            await driver.shutdown()
 
     name = f"{driver.kind}-driver:{driver.identity.name}"
     app = create_app(name, lifespan=lifespan)
+    log = CommandLog()
     app.include_router(device_router(driver, stream))
-    for router in routers:
+    app.include_router(interface_router(driver, log))
+    for router in (*kind_routers(driver, log), *routers):
         app.include_router(router)
     return app
+
+
+def kind_routers(driver: DeviceDriver, log: CommandLog) -> list[APIRouter]:
+    """The routes of the driver's kind that its declarations cannot say (a robot's command
+    socket, a camera's frame stream)."""
+    kind = registry().kinds.get(driver.kind)
+    if kind is None:
+        raise ValueError(f"no installed plugin declares devices of kind {driver.kind!r}")
+    return [resolve(kind.routes)(driver, log)] if kind.routes else []
 
 
 def serve_driver(

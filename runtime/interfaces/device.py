@@ -3,18 +3,16 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import Literal
 
 from pydantic import BaseModel, Field
 
 from runtime.kit.discovery import API_VERSION
 
-DeviceKind = Literal["robot", "camera", "detector", "io", "gripper", "input"]
-
 
 class DeviceIdentity(BaseModel):
     uuid: str = Field(min_length=1, max_length=64)
-    kind: DeviceKind
+    # robot, camera, detector, io, gripper, input, or a kind a plugin declares
+    kind: str = Field(pattern=r"^[a-z][a-z0-9_]{0,15}$")
     model: str = Field(max_length=64)
     name: str = Field(max_length=64)
     api: str = API_VERSION
@@ -41,5 +39,5 @@ class DeviceDriver(ABC):
     async def start(self) -> None:
         """Connect to the device (or start the simulation)."""
 
-    async def close(self) -> None:
+    async def shutdown(self) -> None:
         """Leave the device safe and release it."""

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from abc import abstractmethod
+from abc import ABC, abstractmethod
 
 from pydantic import BaseModel, Field
 
@@ -37,7 +37,11 @@ class InputState(BaseModel):
     error: str = ""
 
 
-class InputDriver(DeviceDriver):
+class InputDevice(ABC):  # noqa: B024 (no commands: its state is all it has)
+    """An input device has no commands: six axes and its buttons, streamed."""
+
+
+class InputDriver(DeviceDriver, InputDevice):
     def __init__(self, identity: DeviceIdentity, info: InputInfo) -> None:
         if identity.kind != "input":
             raise ValueError("an input driver needs an input identity")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from enum import StrEnum
 from typing import Annotated
 
@@ -9,6 +10,7 @@ from pydantic import BaseModel, Field, model_validator
 
 from runtime.interfaces.common import JointVector, Pose, Strict, Vector3
 from runtime.interfaces.device import DeviceIdentity
+from runtime.interfaces.endpoints import endpoint
 
 MAX_COMMAND_TIMEOUT = 1.0
 
@@ -215,3 +217,111 @@ class SpeedRatioRequest(Strict):
 class TrajectoryAccepted(BaseModel):
     id: str
     duration: float
+
+
+# The interface ---------------------------------------------------------------------------
+
+
+class Robot(ABC):
+    """The standard robot, on both sides of the wire: the driver implements it with its
+    checks (`RobotDriver`), the typed client over the robot's one link (`RobotClient`).
+    Commands with a `stream` type also go, in order, over the runtime's command session."""
+
+    @endpoint("POST", "/enable", returns=RobotState)
+    @abstractmethod
+    async def enable(self) -> RobotState: ...
+
+    @endpoint("POST", "/disable", returns=RobotState)
+    @abstractmethod
+    async def disable(self) -> RobotState: ...
+
+    @endpoint("POST", "/reset_errors", returns=RobotState)
+    @abstractmethod
+    async def reset_errors(self) -> RobotState: ...
+
+    @endpoint("POST", "/halt", stream="halt")
+    @abstractmethod
+    async def halt(self) -> None:
+        """Stop now, whatever runs; always allowed."""
+
+    @endpoint(
+        "PUT",
+        "/command_mode",
+        body=CommandModeRequest,
+        returns=RobotState,
+        stream="command_mode",
+        label=lambda body: f"command_mode:{body.mode.value}",
+    )
+    @abstractmethod
+    async def set_command_mode(self, request: CommandModeRequest) -> RobotState:
+        """A change between two motion modes passes through halt."""
+
+    @endpoint("PUT", "/speed_ratio", body=SpeedRatioRequest, returns=RobotState)
+    @abstractmethod
+    async def set_speed_ratio(self, request: SpeedRatioRequest) -> RobotState: ...
+
+    @endpoint("PUT", "/tool_setup", body=ToolSetup, returns=RobotDescription)
+    @abstractmethod
+    async def set_tool_setup(self, setup: ToolSetup) -> RobotDescription:
+        """The mounted tool's TCP and payload; the robot halts first. Answers the new info."""
+
+    @endpoint(
+        "POST",
+        "/tool",
+        body=ToolCommand,
+        returns=RobotState,
+        label=lambda body: "tool:open" if body.open else "tool:close",
+    )
+    @abstractmethod
+    async def set_tool(self, command: ToolCommand) -> RobotState: ...
+
+    @endpoint(
+        "PUT",
+        "/digital_outputs/{index}",
+        body=DigitalOutputCommand,
+        returns=RobotState,
+        label=lambda index, body: f"digital_output:{index}:{int(body.value)}",
+    )
+    @abstractmethod
+    async def set_digital_output(self, index: int, command: DigitalOutputCommand) -> RobotState: ...
+
+    @endpoint("POST", "/jog_joint", body=JogJointCommand, stream="jog_joint")
+    @abstractmethod
+    async def jog_joint(self, command: JogJointCommand) -> None:
+        """Holds until `timeout` (at most 1 s) passes without a new command."""
+
+    @endpoint("POST", "/velocity_command", body=VelocityCommand, stream="velocity_command")
+    @abstractmethod
+    async def velocity_command(self, command: VelocityCommand) -> None: ...
+
+    @endpoint("POST", "/position_command", body=PositionCommand, stream="position_command")
+    @abstractmethod
+    async def position_command(self, command: PositionCommand) -> None: ...
+
+    @endpoint(
+        "POST",
+        "/trajectory",
+        body=JointTrajectory,
+        returns=TrajectoryAccepted,
+        label=lambda _: "trajectory",
+    )
+    @abstractmethod
+    async def execute_trajectory(self, trajectory: JointTrajectory) -> TrajectoryAccepted:
+        """Starts at the current position at t = 0."""
+
+    @endpoint(
+        "POST", "/trajectory/pause", returns=TrajectoryStatus, label=lambda: "trajectory:pause"
+    )
+    @abstractmethod
+    async def pause_trajectory(self) -> TrajectoryStatus:
+        """A controlled stop along the running trajectory's path; resumable."""
+
+    @endpoint(
+        "POST", "/trajectory/resume", returns=TrajectoryStatus, label=lambda: "trajectory:resume"
+    )
+    @abstractmethod
+    async def resume_trajectory(self) -> TrajectoryStatus: ...
+
+    @endpoint("GET", "/trajectory/{trajectory_id}", returns=TrajectoryStatus)
+    @abstractmethod
+    async def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus: ...

@@ -10,13 +10,18 @@ from runtime.interfaces.device import DeviceDriver, DeviceIdentity
 from runtime.interfaces.limits import CheckedTrajectory, FloatArray, JointLimitChecker
 from runtime.interfaces.robot import (
     CommandMode,
+    CommandModeRequest,
+    DigitalOutputCommand,
     JogJointCommand,
     JointTrajectory,
     PositionCommand,
+    Robot,
     RobotDescription,
     RobotFlags,
     RobotInfo,
     RobotState,
+    SpeedRatioRequest,
+    ToolCommand,
     ToolSetup,
     TrajectoryAccepted,
     TrajectoryStatus,
@@ -33,7 +38,7 @@ class RobotStatus:
     joint_position_command: list[float]
 
 
-class RobotDriver(DeviceDriver):
+class RobotDriver(DeviceDriver, Robot):
     def __init__(self, identity: DeviceIdentity, info: RobotInfo) -> None:
         if identity.kind != "robot":
             raise ValueError("a robot driver needs a robot identity")
@@ -44,7 +49,7 @@ class RobotDriver(DeviceDriver):
     def describe(self) -> RobotDescription:
         return RobotDescription(identity=self.identity, info=self.info)
 
-    async def close(self) -> None:
+    async def shutdown(self) -> None:
         """Halt and release the robot."""
         await self.halt()
 
@@ -68,33 +73,38 @@ class RobotDriver(DeviceDriver):
     async def stop(self) -> None:
         await self.halt()
 
-    async def disable(self) -> None:
+    async def disable(self) -> RobotState:
         await self._disable()
+        return self.state()
 
-    async def reset_errors(self) -> None:
+    async def reset_errors(self) -> RobotState:
         await self._reset_errors()
+        return self.state()
 
-    async def enable(self) -> None:
+    async def enable(self) -> RobotState:
         flags = self.status().flags
         if flags.estop:
             raise RobotError("the E-stop is engaged; release it first", code="estop")
         if flags.error:
             raise RobotError("the robot has an error; reset errors first", code="robot_fault")
         await self._enable()
+        return self.state()
 
-    async def set_speed_ratio(self, ratio: float) -> None:
-        if not 0.0 < ratio <= 1.0:
+    async def set_speed_ratio(self, request: SpeedRatioRequest) -> RobotState:
+        if not 0.0 < request.ratio <= 1.0:
             raise RobotError("speed ratio must be in (0, 1]", code="invalid_value")
-        await self._set_speed_ratio(ratio)
+        await self._set_speed_ratio(request.ratio)
+        return self.state()
 
-    async def set_command_mode(self, mode: CommandMode) -> None:
-        if mode is not CommandMode.halt:
+    async def set_command_mode(self, request: CommandModeRequest) -> RobotState:
+        if request.mode is not CommandMode.halt:
             self._require_ready()
-        await self._set_command_mode(mode)
+        await self._set_command_mode(request.mode)
+        return self.state()
 
     # Tool and I/O: allowed whenever the E-stop is released --------------------------------
 
-    async def set_tool_setup(self, setup: ToolSetup) -> None:
+    async def set_tool_setup(self, setup: ToolSetup) -> RobotDescription:
         """A new TCP and payload. The robot halts first: a TCP changed under a move would
         change where the move goes."""
         self._require_no_estop()
@@ -108,21 +118,24 @@ class RobotDriver(DeviceDriver):
         info = self.info.model_copy(update={"tcp": setup.tcp, "payload": setup.payload})
         await self._set_tool_setup(info)
         self.info = info
+        return self.describe()
 
-    async def set_tool(self, open_: bool) -> None:
+    async def set_tool(self, command: ToolCommand) -> RobotState:
         if "tool" not in self.info.capabilities:
             raise RobotError(f"{self.info.model} has no tool to open or close", code="no_tool")
         self._require_no_estop()
-        await self._set_tool(open_)
+        await self._set_tool(command.open)
+        return self.state()
 
-    async def set_digital_output(self, index: int, value: bool) -> None:
+    async def set_digital_output(self, index: int, command: DigitalOutputCommand) -> RobotState:
         if not 0 <= index < self.info.digital_outputs:
             raise RobotError(
                 f"no digital output {index}; this robot has {self.info.digital_outputs}",
                 code="unknown_io",
             )
         self._require_no_estop()
-        await self._set_digital_output(index, value)
+        await self._set_digital_output(index, command.value)
+        return self.state()
 
     # Motion commands: checked, then handed to the driver -----------------------------------
 
@@ -154,9 +167,6 @@ class RobotDriver(DeviceDriver):
         checked = self.limits.trajectory(trajectory, start)
         trajectory_id = await self._execute_trajectory(checked)
         return TrajectoryAccepted(id=trajectory_id, duration=checked.duration)
-
-    @abstractmethod
-    async def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus: ...
 
     async def pause_trajectory(self) -> TrajectoryStatus:
         """Bring the running trajectory to a controlled stop along its path (it stays

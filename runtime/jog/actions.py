@@ -5,14 +5,14 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 import pinocchio as pin
 
+from runtime.clients.input import InputClient
+from runtime.clients.robot import Halt, Streamed
 from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import CommandMode, RobotState
-from runtime.links.robot import InputLink
+from runtime.interfaces.robot import CommandMode, PositionCommand, RobotState, VelocityCommand
 from runtime.robotics.joint_move import PlannedMove
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.velocity import VelocityController
@@ -47,7 +47,7 @@ class Action(ABC):
         return f"{self.press}#{self.ticks}"
 
     @abstractmethod
-    def tick(self, state: RobotState, now: float) -> dict[str, Any] | None:
+    def tick(self, state: RobotState, now: float) -> Streamed | None:
         """The next command, or None to send nothing this cycle."""
 
 
@@ -82,7 +82,7 @@ class RampedJog(Action):
             return np.array(state.joint_velocity)
         return self.previous
 
-    def command(self, velocity: FloatArray, now: float) -> dict[str, Any]:
+    def command(self, velocity: FloatArray, now: float) -> VelocityCommand:
         settled = not np.any(np.abs(velocity) > 1e-6)
         overdue = self.released is not None and now - self.released[0] > RAMP + 0.5
         if self.released is not None and self.level(now) == 0.0 and (settled or overdue):
@@ -90,12 +90,7 @@ class RampedJog(Action):
             self.done = True
             self.outcome = ("stopped", "released")
         self.previous = velocity
-        return {
-            "type": "velocity_command",
-            "velocity": velocity.tolist(),
-            "timeout": COMMAND_TIMEOUT,
-            "tag": self.tag(),
-        }
+        return VelocityCommand(velocity=velocity.tolist(), timeout=COMMAND_TIMEOUT, tag=self.tag())
 
 
 class JointVelocityJog(RampedJog):
@@ -111,7 +106,7 @@ class JointVelocityJog(RampedJog):
         self.velocity = velocity
         self.tcp_cap = tcp_cap
 
-    def tick(self, state: RobotState, now: float) -> dict[str, Any]:
+    def tick(self, state: RobotState, now: float) -> VelocityCommand:
         q = np.array(state.joint_position_command)
         wanted = self.velocity * self.level(now)
         step = self.controller.from_joint_velocity(q, wanted, self.tcp_cap, self.last(state))
@@ -169,7 +164,7 @@ class TwistJog(RampedJog):
             rotation_error = pin.log3(intended @ current.rotation.T)
         return CORRECTION_GAIN * np.concatenate((position_error, rotation_error))
 
-    def tick(self, state: RobotState, now: float) -> dict[str, Any]:
+    def tick(self, state: RobotState, now: float) -> VelocityCommand:
         q = np.array(state.joint_position_command)
         if self.start is None:
             self._begin(q)
@@ -188,7 +183,7 @@ class PlannedMoveAction(Action):
         self.move = move
         self.started: float | None = None
 
-    def tick(self, state: RobotState, now: float) -> dict[str, Any]:
+    def tick(self, state: RobotState, now: float) -> PositionCommand:
         if self.started is None:
             self.started = now
         t = now - self.started
@@ -198,13 +193,12 @@ class PlannedMoveAction(Action):
             reached = np.abs(np.array(state.joint_position_command) - self.move.goal)
             still = np.all(np.abs(state.joint_velocity) < 1e-9)
             self.done = bool(np.all(reached < ARRIVED) and still)
-        return {
-            "type": "position_command",
-            "position": position.tolist(),
-            "velocity": velocity.tolist(),
-            "timeout": COMMAND_TIMEOUT,
-            "tag": self.tag(),
-        }
+        return PositionCommand(
+            position=position.tolist(),
+            velocity=velocity.tolist(),
+            timeout=COMMAND_TIMEOUT,
+            tag=self.tag(),
+        )
 
 
 class MouseJog(Action):
@@ -219,7 +213,7 @@ class MouseJog(Action):
         press: str,
         controller: VelocityController,
         kinematics: Kinematics,
-        feed: InputLink,
+        feed: InputClient,
         *,
         cartesian: bool,
         frame: str,
@@ -289,12 +283,12 @@ class MouseJog(Action):
         self.course = pin.SE3(pin.exp3(rotation) @ current.rotation, current.translation + position)
         return twist + CORRECTION_GAIN * np.concatenate((position, rotation))
 
-    def _halt(self, reason: str) -> dict[str, Any]:
+    def _halt(self, reason: str) -> Halt:
         self.done = True
         self.outcome = ("halted", reason)
-        return {"type": "halt", "tag": f"{self.press}:halt"}
+        return Halt(f"{self.press}:halt")
 
-    def tick(self, state: RobotState, now: float) -> dict[str, Any] | None:
+    def tick(self, state: RobotState, now: float) -> Streamed | None:
         device = self.feed.state
         if device is None or not device.connected:
             return self._halt("the 3D mouse is disconnected")
@@ -334,9 +328,6 @@ class MouseJog(Action):
         else:
             self.idle = False
         self.previous = step.velocity
-        return {
-            "type": "velocity_command",
-            "velocity": step.velocity.tolist(),
-            "timeout": COMMAND_TIMEOUT,
-            "tag": self.tag(),
-        }
+        return VelocityCommand(
+            velocity=step.velocity.tolist(), timeout=COMMAND_TIMEOUT, tag=self.tag()
+        )

@@ -5,8 +5,8 @@ Move-to must not drive the arm through a box."""
 from __future__ import annotations
 
 from runtime.interfaces.limits import FloatArray
-from runtime.kit.client import ServiceClient
 from runtime.kit.errors import OpenPendantError
+from runtime.motion.client import MotionClient, MoveKind, MoveRequest, Target
 
 
 class PathRefused(OpenPendantError):
@@ -15,24 +15,22 @@ class PathRefused(OpenPendantError):
 
 
 class PathCheck:
-    def __init__(self, motion: ServiceClient) -> None:
+    def __init__(self, motion: MotionClient) -> None:
         self.motion = motion
 
     async def joint_line(self, robot: str, goal: FloatArray) -> None:
         """Raises PathRefused, naming the colliding pair, when the straight joint line from
         where the robot is to `goal` would touch anything."""
-        report = await self.motion.post(
-            f"/motion/robots/{robot}/plan",
-            json={
-                "kind": "joint",
-                "target": {"joints": [float(v) for v in goal]},
-                "avoid_obstacles": False,  # the jog follows this line, or nothing
-            },
+        request = MoveRequest(
+            kind=MoveKind.joint,
+            target=Target(joints=[float(v) for v in goal]),
+            avoid_obstacles=False,  # the jog follows this line, or nothing
         )
-        if not report.get("ok"):
-            collision = report.get("collision")
+        report = await self.motion.plan(robot, request)
+        if not report.ok:
+            collision = report.collision
             raise PathRefused(
-                str(report.get("message") or "the path is not clear"),
-                code=str(report.get("code") or "collision"),
-                details={"collision": collision} if isinstance(collision, dict) else None,
+                report.message or "the path is not clear",
+                code=report.code or "collision",
+                details={"collision": collision.model_dump()} if collision else None,
             )

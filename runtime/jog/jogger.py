@@ -13,11 +13,11 @@ from typing import Any
 
 import numpy as np
 
-from runtime.interfaces.robot import CommandMode, OperationalMode
+from runtime.clients.robot import RobotClient
+from runtime.interfaces.robot import CommandMode, OperationalMode, VelocityCommand
 from runtime.jog.actions import Action, RampedJog
 from runtime.kit.errors import OpenPendantError, RobotError
 from runtime.links.hub import LINK_FAULTS
-from runtime.links.robot import RobotLink
 from runtime.robotics.avoidance import SAFETY
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.velocity import MANUAL_TCP_SPEED, Constraint, VelocityController
@@ -44,7 +44,7 @@ HELD_CLEARANCE = SAFETY + 0.01  # m: nearer than this, the avoidance is what hol
 
 class Jogger:
     def __init__(
-        self, link: RobotLink, kinematics: Kinematics, constraints: list[Constraint] | None = None
+        self, link: RobotClient, kinematics: Kinematics, constraints: list[Constraint] | None = None
     ) -> None:
         self.link = link
         self.kinematics = kinematics
@@ -133,13 +133,8 @@ class Jogger:
     async def _brake(self, action: Action) -> None:
         if action.mode is CommandMode.velocity_command:
             zero = [0.0] * len(self.link.info.joints)
-            await self.link.send(
-                {
-                    "type": "velocity_command",
-                    "velocity": zero,
-                    "timeout": 0.2,
-                    "tag": f"{action.press}:release",
-                },
+            await self.link.stream(
+                VelocityCommand(velocity=zero, timeout=0.2, tag=f"{action.press}:release"),
                 action.generation,
             )
         else:
@@ -190,7 +185,7 @@ class Jogger:
         now = time.monotonic()
         command = action.tick(state, now)
         if command is not None:
-            await self.link.send(command, action.generation)
+            await self.link.stream(command, action.generation)
         self._report_held(action, now)
         if action.done and self.action is action:
             self.action = None

@@ -10,6 +10,8 @@ from typing import Annotated, Any
 from fastapi import APIRouter, FastAPI, Header, WebSocket
 
 from runtime.cell.mirror import WorldMirror
+from runtime.clients.devices import Devices
+from runtime.interfaces.robot import RobotState, SpeedRatioRequest
 from runtime.interfaces.variables import Variable
 from runtime.jog.clearance import PathCheck
 from runtime.jog.directory import Directory
@@ -17,9 +19,8 @@ from runtime.jog.models import SpeedRequest, TeachRequest
 from runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
 from runtime.jog.waypoints import robot_waypoints, teach
 from runtime.kit.app import create_app
-from runtime.kit.client import ServiceClient
 from runtime.kit.settings import RuntimeSettings
-from runtime.links.hub import LinkHub
+from runtime.motion.client import MotionClient
 from runtime.paths import package_roots
 from runtime.robotics.velocity import MANUAL_TCP_SPEED
 from runtime.variable_storage.client import StorageClient
@@ -95,28 +96,25 @@ def jog_router(
         jogger = await directory.jogger(robot)
         if body.ratio > jogger.link.current().speed_ratio + 1e-9:
             await directory.check_lease(robot, token)
-        state: dict[str, Any] = await jogger.link.call("PUT", "/speed_ratio", body.model_dump())
-        return {"robot": robot, "speed_ratio": state["speed_ratio"]}
+        state = await jogger.link.set_speed_ratio(SpeedRatioRequest(ratio=body.ratio))
+        return {"robot": robot, "speed_ratio": state.speed_ratio}
 
-    for command in ("enable", "disable", "reset_errors"):
-        router.add_api_route(
-            f"/robots/{{robot}}/{command}",
-            _power(directory, command),
-            methods=["POST"],
-            response_model=None,
-        )
-    return router
-
-
-def _power(directory: Directory, command: str) -> Any:
-    async def run(robot: str, token: LeaseToken = None) -> dict[str, Any]:
+    @router.post("/robots/{robot}/enable")
+    async def enable(robot: str, token: LeaseToken = None) -> RobotState:
         await directory.check_lease(robot, token)
-        jogger = await directory.jogger(robot)
-        state: dict[str, Any] = await jogger.link.call("POST", f"/{command}")
-        return state
+        return await (await directory.jogger(robot)).link.enable()
 
-    run.__name__ = command
-    return run
+    @router.post("/robots/{robot}/disable")
+    async def disable(robot: str, token: LeaseToken = None) -> RobotState:
+        await directory.check_lease(robot, token)
+        return await (await directory.jogger(robot)).link.disable()
+
+    @router.post("/robots/{robot}/reset_errors")
+    async def reset_errors(robot: str, token: LeaseToken = None) -> RobotState:
+        await directory.check_lease(robot, token)
+        return await (await directory.jogger(robot)).link.reset_errors()
+
+    return router
 
 
 def avoidance_router(mirror: WorldMirror) -> APIRouter:
@@ -142,23 +140,21 @@ def _public_uri(urdf: str) -> str | None:
 
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
-    devices = ServiceClient(urls["device_manager"], timeout=3.0, name="device manager")
-    motion = ServiceClient(urls["motion"], timeout=10.0, name="motion")
-    hub = LinkHub(urls["device_manager"], "jog", settings.link.stale_after)
-    mirror = WorldMirror(devices, storage, hub)
-    directory = Directory(urls["device_manager"], hub, avoidance=mirror.constraint)
+    motion = MotionClient(urls["motion"])
+    devices = Devices(urls["device_manager"], "jog", settings.link.stale_after)
+    mirror = WorldMirror(devices, storage)
+    directory = Directory(devices, avoidance=mirror.constraint)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
-        await hub.start()
+        await devices.start()
         await mirror.start()
         try:
             yield
         finally:
             await directory.close()
             await mirror.close()
-            await hub.close()
-            await devices.aclose()
+            await devices.close()
             await motion.aclose()
             await storage.aclose()
 

@@ -8,6 +8,7 @@ import os
 import time
 from collections.abc import AsyncIterator, Awaitable, Callable
 from contextlib import AbstractAsyncContextManager, asynccontextmanager
+from dataclasses import asdict
 from typing import Any
 
 from fastapi import FastAPI, Request
@@ -74,6 +75,13 @@ def _freeze_startup_objects() -> None:
     gc.freeze()
 
 
+def plugin_failures() -> list[dict[str, str]]:
+    """What of the plugins this process could not load (the System panel shows them)."""
+    from plugins.registry import registry
+
+    return [asdict(failure) for failure in registry().failures]
+
+
 def create_app(
     service: str,
     *,
@@ -107,6 +115,9 @@ def create_app(
         }
         if health is not None:
             body.update(await health())
+        failures = plugin_failures()
+        if failures:
+            body["plugin_failures"] = failures
         return body
 
     return app

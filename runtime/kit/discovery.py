@@ -35,7 +35,8 @@ log = logging.getLogger(__name__)
 SERVICE_TYPE = "_openpendant._tcp.local."
 API_VERSION = "1"
 SO_RCVBUFFORCE = getattr(socket, "SO_RCVBUFFORCE", 33)
-KINDS = ("robot", "camera", "detector", "io", "gripper", "input")
+# A device kind, as its plugin names it (robot, camera, detector, io, gripper, input, …).
+KIND_PATTERN = re.compile(r"^[a-z][a-z0-9_]{0,15}$")
 DEFAULT_TTL = 15
 FOLLOW_INTERFACES = 5.0  # s between re-scans of the network interfaces
 RECEIVE_BUFFER = 4 << 20  # bytes: a burst of announcements must not overflow the socket
@@ -149,8 +150,8 @@ class Advertiser:
         self._follower: asyncio.Task[None] | None = None
 
     async def start(self, ad: Advertisement) -> None:
-        if ad.kind not in KINDS:
-            raise ValueError(f"unknown device kind {ad.kind!r}")
+        if not KIND_PATTERN.match(ad.kind):
+            raise ValueError(f"malformed device kind {ad.kind!r}")
         self._zc = make_zeroconf(self._interfaces)
         self._info = ad.service_info()
         # Instance names carry the device uuid, so probing for conflicts only costs time
@@ -207,7 +208,7 @@ def parse_info(info: AsyncServiceInfo) -> Detected | None:
         return None
     kind = clean_text(props.get(b"kind"), 16)
     addresses = info.parsed_addresses(IPVersion.V4Only)
-    if kind not in KINDS or not addresses or not info.port:
+    if not KIND_PATTERN.match(kind) or not addresses or not info.port:
         return None
     return Detected(
         uuid=uuid,

@@ -47,11 +47,19 @@ class LinkSettings(BaseModel):
     driver_timeout: float = Field(default=0.3, ge=0.05, le=5.0)
 
 
-class SimRobotSpec(BaseModel):
+class DeviceSpec(BaseModel):
+    """A device the launcher starts and supervises: an installed driver (`openpendant driver
+    NAME`) with its options."""
+
     model_config = ConfigDict(extra="forbid")
 
-    model: str = "ur5"
-    name: str = "sim-ur5"
+    driver: str = Field(min_length=1, max_length=32)
+    name: str = Field(min_length=1, max_length=64)
+    options: dict[str, Any] = Field(default_factory=dict)
+
+
+def default_devices() -> list[DeviceSpec]:
+    return [DeviceSpec(driver="sim-robot", name="sim-ur5", options={"model": "ur5"})]
 
 
 class RuntimeSettings(BaseSettings):
@@ -67,8 +75,9 @@ class RuntimeSettings(BaseSettings):
     data_dir: Path = Field(default_factory=default_data_dir)
     log_dir: Path | None = None
     log_level: Literal["debug", "info", "warning", "error"] = "info"
+    # Start the simulated devices of the `devices` list (--no-sim: only the others).
     sim: bool = True
-    sim_robots: list[SimRobotSpec] = Field(default_factory=lambda: [SimRobotSpec()])
+    devices: list[DeviceSpec] = Field(default_factory=default_devices)
     discovery: DiscoverySettings = Field(default_factory=DiscoverySettings)
     link: LinkSettings = Field(default_factory=LinkSettings)
     state_rate_hz: float = Field(default=100.0, gt=0, le=500)

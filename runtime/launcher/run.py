@@ -14,11 +14,12 @@ from types import FrameType
 
 import httpx
 
+from plugins.registry import registry
 from runtime import __version__
 from runtime.kit.serve import listening_socket
 from runtime.kit.settings import RuntimeSettings, settings_for_child
 from runtime.launcher.supervisor import Child, Supervisor, process_env
-from runtime.services import SERVICES, URLS_ENV, WEBUI
+from runtime.services import URLS_ENV, WEBUI, all_services, services
 
 log = logging.getLogger("openpendant.launcher")
 
@@ -63,35 +64,50 @@ def runtime_id(settings: RuntimeSettings) -> str:
         return made
 
 
-def _sim_children(settings: RuntimeSettings, env: dict[str, str]) -> list[Child]:
-    if not settings.sim:
-        return []
-    # Two runtimes on one network each simulate their own "sim-ur5": the uuid is this
-    # installation's, not just the model's and name's, so neither adds the other's robot.
+def device_uuid(installation: str, driver: str, name: str) -> str:
+    """A device the launcher starts is this installation's: two runtimes on one network each
+    simulating their "sim-ur5" do not share a uuid, so neither adds the other's robot."""
+    return str(uuid.uuid5(SIM_NAMESPACE, f"{installation}/{driver}/{name}"))
+
+
+def _device_children(settings: RuntimeSettings, env: dict[str, str]) -> list[Child]:
+    """The `devices` list: each an installed driver in a process of its own (simulated ones
+    only with `sim`)."""
+    drivers = registry().drivers
+    children = []
     installation = runtime_id(settings)
-    return [
-        Child(
-            name=f"sim-robot:{spec.name}",
-            argv=[
-                sys.executable,
-                "-m",
-                "device_drivers.sim_robot",
-                "--model",
-                spec.model,
-                "--name",
-                spec.name,
-                "--uuid",
-                str(uuid.uuid5(SIM_NAMESPACE, f"{installation}/{spec.model}/{spec.name}")),
-                "--host",
-                settings.host if settings.host != "localhost" else "127.0.0.1",
-                "--port",
-                "0",
-            ],
-            env=env,
-            log_path=settings.logs / f"sim-robot-{spec.name}.log",
+    for spec in settings.devices:
+        driver = drivers.get(spec.driver)
+        if driver is None:
+            log.error("devices: no driver %r is installed; %s not started", spec.driver, spec.name)
+            continue
+        if driver.simulated and not settings.sim:
+            continue
+        children.append(
+            Child(
+                name=f"{spec.driver}:{spec.name}",
+                argv=[
+                    sys.executable,
+                    "-m",
+                    "runtime.cli",
+                    "driver",
+                    spec.driver,
+                    "--name",
+                    spec.name,
+                    "--uuid",
+                    device_uuid(installation, spec.driver, spec.name),
+                    "--host",
+                    settings.host if settings.host != "localhost" else "127.0.0.1",
+                    "--port",
+                    "0",
+                    "--options-json",
+                    json.dumps(spec.options),
+                ],
+                env=env,
+                log_path=settings.logs / f"{spec.driver}-{spec.name}.log",
+            )
         )
-        for spec in settings.sim_robots
-    ]
+    return children
 
 
 def wait_healthy(urls: dict[str, str], supervisor: Supervisor, timeout: float) -> None:
@@ -128,7 +144,8 @@ def run(settings: RuntimeSettings) -> int:
             file=sys.stderr,
         )
         return 1
-    sockets = {spec.name: listening_socket("127.0.0.1", 0) for spec in SERVICES}
+    declared = services()
+    sockets = {spec.name: listening_socket("127.0.0.1", 0) for spec in declared}
     urls = {name: f"http://127.0.0.1:{s.getsockname()[1]}" for name, s in sockets.items()}
     public_port = public.getsockname()[1]
     try:
@@ -152,11 +169,11 @@ def run(settings: RuntimeSettings) -> int:
     signal.signal(signal.SIGINT, on_signal)
     signal.signal(signal.SIGTERM, on_signal)
 
-    for spec in SERVICES:
+    for spec in declared:
         public_socket = jog_public if spec.public_paths else None
         supervisor.add(_service_child(spec.name, sockets[spec.name], env, settings, public_socket))
     supervisor.add(_service_child(WEBUI.name, public, env, settings))
-    for child in _sim_children(settings, env):
+    for child in _device_children(settings, env):
         supervisor.add(child)
 
     ui_host = "127.0.0.1" if settings.host in ("0.0.0.0", "") else settings.host
@@ -168,16 +185,15 @@ def run(settings: RuntimeSettings) -> int:
         supervisor.stop_all()
         return 1
 
-    sims = (
-        ", ".join(f"{s.name} ({s.model})" for s in settings.sim_robots) if settings.sim else "none"
-    )
+    names = [c.name for c in supervisor.children if c.name not in all_services()]
+    devices = ", ".join(names) or "none"
     print(
         f"OpenPendant {__version__} is running (started in "
         f"{time.monotonic() - started:.1f} s).\n"
         f"  OpenPendant UI: {ui_url}\n"
         f"  Logs: {settings.logs}\n"
         f"  Data: {settings.data_dir}\n"
-        f"  Simulated robots: {sims}\n"
+        f"  Devices: {devices}\n"
         "The on-screen STOP is a software stop, not an emergency stop.\n"
         "Press Ctrl-C to stop.",
         flush=True,

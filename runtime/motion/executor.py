@@ -8,9 +8,16 @@ import contextlib
 
 import numpy as np
 
-from runtime.interfaces.robot import CommandMode, RobotState, TrajectoryState
+from runtime.clients.robot import RobotClient
+from runtime.interfaces.robot import (
+    CommandMode,
+    CommandModeRequest,
+    JointTrajectory,
+    RobotState,
+    TrajectoryState,
+    TrajectoryWaypoint,
+)
 from runtime.kit.errors import OpenPendantError, RobotError
-from runtime.links.robot import RobotLink
 from runtime.robotics.timing import TimedPath
 
 WATCH_PERIOD = 0.02  # s
@@ -24,13 +31,16 @@ class MoveFailed(OpenPendantError):
     code = "move_failed"
 
 
-def waypoints(timed: TimedPath) -> dict[str, object]:
-    return {
-        "waypoints": [
-            {"time_from_start": float(t), "position": p.tolist(), "velocity": v.tolist()}
+def trajectory(timed: TimedPath) -> JointTrajectory:
+    """The timed path as the driver takes it (built unchecked: the driver checks it)."""
+    return JointTrajectory.model_construct(
+        waypoints=[
+            TrajectoryWaypoint.model_construct(
+                time_from_start=float(t), position=p.tolist(), velocity=v.tolist()
+            )
             for t, p, v in zip(timed.times, timed.positions, timed.velocities, strict=True)
         ]
-    }
+    )
 
 
 def check_faults(state: RobotState) -> None:
@@ -42,7 +52,7 @@ def check_faults(state: RobotState) -> None:
 
 
 class Execution:
-    def __init__(self, link: RobotLink, timed: TimedPath, *, mode_ready: bool = False) -> None:
+    def __init__(self, link: RobotClient, timed: TimedPath, *, mode_ready: bool = False) -> None:
         self.link = link
         self.timed = timed
         self.mode_ready = mode_ready  # the driver was put in trajectory mode for this move
@@ -60,8 +70,10 @@ class Execution:
         zero), or on again from there. Before the upload, the move starts paused."""
         self.paused = paused
         if self._uploaded:
-            path = "/trajectory/pause" if paused else "/trajectory/resume"
-            await self.link.call("POST", path, generation=self.generation)
+            if paused:
+                await self.link.pause_trajectory(generation=self.generation)
+            else:
+                await self.link.resume_trajectory(generation=self.generation)
 
     async def run(self) -> None:
         """Returns when the robot has arrived; raises MoveFailed otherwise (robot halted)."""
@@ -77,21 +89,19 @@ class Execution:
             return
         gen = self.generation
         if not self.mode_ready or state.command_mode is not CommandMode.trajectory:
-            mode = {"mode": CommandMode.trajectory.value}
-            await self.link.call("PUT", "/command_mode", mode, generation=gen)
+            mode = CommandModeRequest(mode=CommandMode.trajectory)
+            await self.link.set_command_mode(mode, generation=gen)
         try:
-            accepted = await self.link.call(
-                "POST", "/trajectory", waypoints(self.timed), generation=gen
-            )
+            accepted = await self.link.execute_trajectory(trajectory(self.timed), generation=gen)
         except RobotError as exc:
             if exc.code == "wrong_mode":  # something else took the robot since it was set
                 raise MoveFailed(f"{exc.message}; plan again", code="wrong_mode") from exc
             raise
-        trajectory_id = accepted["id"]
+        trajectory_id = accepted.id
         self._uploaded = True
         try:
             if self.paused:  # paused while it was planned: it waits at its start
-                await self.link.call("POST", "/trajectory/pause", generation=gen)
+                await self.link.pause_trajectory(generation=gen)
             await self._watch(trajectory_id)
         except BaseException:
             await self.link.halt("motion: stop")
@@ -112,16 +122,12 @@ class Execution:
                 # The driver's progress: a pause or the speed override slow the clock.
                 self.progress = running.progress
                 continue
-            status = await self.link.call(
-                "GET", f"/trajectory/{trajectory_id}", generation=self.generation
-            )
-            if status["state"] == TrajectoryState.finished.value:
+            status = await self.link.trajectory_status(trajectory_id, generation=self.generation)
+            if status.state is TrajectoryState.finished:
                 self.progress = 1.0
                 return
-            if status["state"] != TrajectoryState.running.value:
-                raise MoveFailed(
-                    f"the robot ended the move: {status.get('message') or status['state']}"
-                )
+            if status.state is not TrajectoryState.running:
+                raise MoveFailed(f"the robot ended the move: {status.message or status.state}")
 
     @staticmethod
     def _check(state: RobotState) -> None:

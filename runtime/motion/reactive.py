@@ -12,8 +12,8 @@ import numpy as np
 import pinocchio as pin
 
 from runtime.cell.mirror import MAX_AGE, MirrorConstraint
-from runtime.interfaces.robot import CommandMode
-from runtime.links.robot import RobotLink
+from runtime.clients.robot import RobotClient
+from runtime.interfaces.robot import CommandMode, VelocityCommand
 from runtime.motion.executor import MoveFailed, check_faults
 from runtime.robotics.velocity import VelocityController
 
@@ -33,7 +33,7 @@ COMMAND_TIMEOUT = 0.2
 class ReactiveExecution:
     def __init__(
         self,
-        link: RobotLink,
+        link: RobotClient,
         controller: VelocityController,
         avoidance: MirrorConstraint,
         goal: pin.SE3,
@@ -131,12 +131,7 @@ class ReactiveExecution:
         return message
 
     async def _send(self, velocity: np.ndarray) -> None:
-        await self.link.send(
-            {
-                "type": "velocity_command",
-                "velocity": velocity.tolist(),
-                "timeout": COMMAND_TIMEOUT,
-                "tag": "motion:reactive",
-            },
-            self.generation,
+        command = VelocityCommand(
+            velocity=velocity.tolist(), timeout=COMMAND_TIMEOUT, tag="motion:reactive"
         )
+        await self.link.stream(command, self.generation)

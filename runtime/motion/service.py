@@ -14,13 +14,13 @@ import numpy as np
 from fastapi import APIRouter, FastAPI, Header
 
 from runtime.cell.mirror import WorldMirror
+from runtime.clients.devices import Devices
 from runtime.interfaces.limits import JointLimitChecker
-from runtime.interfaces.robot import CommandMode, OperationalMode
+from runtime.interfaces.robot import CommandMode, CommandModeRequest, OperationalMode
 from runtime.interfaces.variables import JointWaypoint, PoseWaypoint
 from runtime.kit.app import create_app
 from runtime.kit.errors import Conflict, NotFound, OpenPendantError
 from runtime.kit.settings import RuntimeSettings
-from runtime.links.hub import LinkHub
 from runtime.motion.executor import Execution
 from runtime.motion.models import (
     MoveKind,
@@ -149,7 +149,7 @@ class Moves:
         try:
             if link.current().command_mode is CommandMode.trajectory:
                 return True
-            await link.call("PUT", "/command_mode", {"mode": CommandMode.trajectory.value})
+            await link.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory))
         except OpenPendantError:
             return False
         return True
@@ -252,7 +252,7 @@ class Moves:
         entry = self.running.get(robot)
         if entry is not None:
             entry[1].cancel()
-        await self.robots.hub.halt(robot, "motion: stop")
+        await self.robots.devices.halt(robot, "motion: stop")
 
     async def pause(self, robot: str, paused: bool, caller: str | None = None) -> MoveStatus:
         """Pause (a controlled stop along its path) or resume the move on `robot`: the one
@@ -382,14 +382,14 @@ def motion_router(moves: Moves, robots: Robots) -> APIRouter:
 
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
-    hub = LinkHub(urls["device_manager"], "motion", settings.link.stale_after)
-    robots = Robots(urls["device_manager"], storage, hub)
-    mirror = WorldMirror(robots.devices, storage, hub)
+    devices = Devices(urls["device_manager"], "motion", settings.link.stale_after)
+    robots = Robots(devices, storage)
+    mirror = WorldMirror(devices, storage)
     moves = Moves(robots, storage, mirror)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
-        await hub.start()
+        await devices.start()
         await mirror.start()
         try:
             yield
@@ -398,8 +398,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             for robot in list(moves.running):
                 with contextlib.suppress(Exception):
                     await moves.stop(robot)
-            await hub.close()
-            await robots.close()
+            await devices.close()
             await storage.aclose()
 
     app = create_app("motion", lifespan=lifespan)

@@ -9,10 +9,10 @@ import itertools
 import logging
 import time
 
-from runtime.kit.client import ServiceClient
+from runtime.clients.devices import Devices
 from runtime.kit.errors import Conflict, NotFound, OpenPendantError
 from runtime.kit.websocket import Fanout
-from runtime.links.hub import LinkHub
+from runtime.motion.client import MotionClient
 from runtime.program.host import RunHost
 from runtime.program.library import ProgramLibrary
 from runtime.program.models import ErrorInfo, OutputEntry, RunRequest, RunStatus
@@ -38,11 +38,10 @@ class Runs:
     def __init__(
         self,
         library: ProgramLibrary,
-        devices: ServiceClient,
-        motion: ServiceClient,
+        devices: Devices,
+        motion: MotionClient,
         storage: StorageClient,
         fanout: Fanout,
-        hub: LinkHub,
         records: RunRecords | None = None,
     ) -> None:
         self.library = library
@@ -55,7 +54,6 @@ class Runs:
         self._numbers = itertools.count(self.records.last_run() + 1)
         self._watchers: set[asyncio.Task[None]] = set()
         self.pool = WorkerPool()
-        self.hub = hub
 
     async def start(self, name: str, request: RunRequest) -> RunStatus:
         current = self.runs.get(name)
@@ -76,7 +74,6 @@ class Runs:
             self.devices,
             self.motion,
             self.storage,
-            self.hub,
             robot=request.robot,
             leases=request.leases,
             on_lease=lambda: self._record(name),
@@ -129,9 +126,7 @@ class Runs:
             for robot, token in leases.items():
                 while True:
                     try:
-                        await self.devices.delete(
-                            f"/devices/{robot}/lease", headers={"X-Lease-Token": token}
-                        )
+                        await self.devices.manager.release_lease(robot, token)
                         break
                     except OpenPendantError as exc:
                         if exc.status < 500:

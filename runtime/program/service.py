@@ -10,15 +10,15 @@ from typing import Any
 
 from fastapi import APIRouter, FastAPI, Request, Response, WebSocket
 
-from blockly_blocks.catalog import definitions, toolbox
+from blockly_blocks.catalog import definitions, toolbox, words
 from blockly_blocks.workspace import MAX_WORKSPACE_BYTES, allow_deep_json
+from runtime.clients.devices import Devices
 from runtime.kit.app import create_app
-from runtime.kit.client import ServiceClient
 from runtime.kit.errors import InvalidValue
 from runtime.kit.request_start import RequestStart, received_at
 from runtime.kit.settings import RuntimeSettings
 from runtime.kit.websocket import Fanout
-from runtime.links.hub import LinkHub
+from runtime.motion.client import MotionClient
 from runtime.program.library import (
     ProgramLibrary,
     generate_checked,
@@ -55,7 +55,7 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
     @router.get("/_blocks")
     async def blocks() -> dict[str, Any]:
         """Block definitions by category and the toolbox, for the editor."""
-        return {"definitions": definitions(), "toolbox": toolbox()}
+        return {"definitions": definitions(), "toolbox": toolbox(), "words": words()}
 
     @router.post("/_generate")
     async def preview(request: Request) -> dict[str, Any]:
@@ -152,25 +152,23 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     allow_deep_json()
     storage = StorageClient(urls["variable_storage"])
-    devices = ServiceClient(urls["device_manager"], timeout=3.0, name="device manager")
-    motion = ServiceClient(urls["motion"], timeout=10.0, name="motion")
+    devices = Devices(urls["device_manager"], "program", settings.link.stale_after)
+    motion = MotionClient(urls["motion"])
     library = ProgramLibrary(storage)
     fanout = Fanout()
-    hub = LinkHub(urls["device_manager"], "program", settings.link.stale_after)
     records = RunRecords(settings.data_dir / "program-runs.json")
-    runs = Runs(library, devices, motion, storage, fanout, hub, records)
+    runs = Runs(library, devices, motion, storage, fanout, records)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
-        await hub.start()
+        await devices.start()
         recovery = asyncio.create_task(runs.recover())
         try:
             yield
         finally:
             recovery.cancel()
             await runs.stop_all()
-            await hub.close()
-            await devices.aclose()
+            await devices.close()
             await motion.aclose()
             await storage.aclose()
 

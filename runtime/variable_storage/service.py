@@ -18,7 +18,7 @@ from runtime.kit.errors import InvalidValue
 from runtime.kit.settings import RuntimeSettings
 from runtime.kit.websocket import Fanout
 from runtime.variable_storage.store import HistoryEntry, VariableStore
-from runtime.variable_storage.types import REGISTRY
+from runtime.variable_storage.types import types
 
 MAX_IMPORT_BYTES = 64 * 1024 * 1024
 
@@ -48,8 +48,8 @@ def variables_router(store: VariableStore, changes: Fanout) -> APIRouter:
         return await asyncio.to_thread(store.query, tag, type)
 
     @router.get("/_types")
-    async def types() -> dict[str, str]:
-        return {name: t.description for name, t in sorted(REGISTRY.items())}
+    async def variable_types() -> dict[str, str]:
+        return {name: t.description for name, t in sorted(types().items())}
 
     @router.get("/_export")
     async def export() -> Response:

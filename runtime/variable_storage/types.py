@@ -1,5 +1,6 @@
 """The one registry of variable types. Each type validates a value and returns it in its
-stored (normalised, JSON-ready) form; a later issue adds a type with one `register` call."""
+stored (normalised, JSON-ready) form. The types are the plugins' (the built-in ones are the
+core plugin's, `runtime/plugin.py`): a plugin adds one with a `VariableType` declaration."""
 
 from __future__ import annotations
 
@@ -7,20 +8,14 @@ import json
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cache
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from runtime.interfaces.common import Pose, all_finite
-from runtime.interfaces.robot import ToolSetup
-from runtime.interfaces.scene import SceneObject
-from runtime.interfaces.variables import (
-    DeviceRecord,
-    Frame,
-    JointWaypoint,
-    PoseWaypoint,
-    StoredProgram,
-)
+from plugins.api import resolve
+from plugins.registry import registry
+from runtime.interfaces.common import all_finite
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue
 
@@ -37,26 +32,34 @@ class VariableType:
     validate: Validator
 
 
-REGISTRY: dict[str, VariableType] = {}
-
-
-def register(name: str, description: str, validator: Validator | type[BaseModel]) -> None:
-    if name in REGISTRY:
-        raise ValueError(f"variable type {name!r} is already registered")
-    if isinstance(validator, type) and issubclass(validator, BaseModel):
-        REGISTRY[name] = VariableType(name, description, _model_validator(validator))
-    else:
-        REGISTRY[name] = VariableType(name, description, validator)
+@cache
+def types() -> dict[str, VariableType]:
+    """Every installed plugin's variable types; one whose validator cannot be loaded is left
+    out and reported with its plugin."""
+    found: dict[str, VariableType] = {}
+    plugins = registry()
+    for name, declared in plugins.variable_types.items():
+        try:
+            validator = resolve(declared.validator)
+        except Exception as exc:  # a broken plugin leaves the rest working
+            owner = plugins.owner.get(("variable type", name), "?")
+            plugins.fail(owner, declared.validator, f"{type(exc).__name__}: {exc}")
+            continue
+        if isinstance(validator, type) and issubclass(validator, BaseModel):
+            validator = _model_validator(validator)
+        found[name] = VariableType(name, declared.description, validator)
+    return found
 
 
 def validate_value(type_name: str, value: Any) -> Any:
-    if type_name not in REGISTRY:
-        known = ", ".join(sorted(REGISTRY))
+    known_types = types()
+    if type_name not in known_types:
+        known = ", ".join(sorted(known_types))
         raise InvalidValue(
             f"unknown variable type {type_name!r} (known: {known})", code="unknown_type"
         )
     _check_json_value(value)
-    return REGISTRY[type_name].validate(value)
+    return known_types[type_name].validate(value)
 
 
 def _check_json_value(value: Any) -> None:
@@ -85,7 +88,7 @@ def _model_validator(model: type[BaseModel]) -> Validator:
     return validate
 
 
-def _number(value: Any) -> float | int:
+def number(value: Any) -> float | int:
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise InvalidValue("a number variable needs a number")
     if isinstance(value, float) and not math.isfinite(value):
@@ -93,38 +96,23 @@ def _number(value: Any) -> float | int:
     return value
 
 
-def _string(value: Any) -> str:
+def string(value: Any) -> str:
     if not isinstance(value, str):
         raise InvalidValue("a string variable needs a string")
     return value
 
 
-def _bool(value: Any) -> bool:
+def boolean(value: Any) -> bool:
     if not isinstance(value, bool):
         raise InvalidValue("a bool variable needs true or false")
     return value
 
 
-def _list(value: Any) -> list[Any]:
+def json_list(value: Any) -> list[Any]:
     if not isinstance(value, list):
         raise InvalidValue("a list variable needs a JSON array")
     return value
 
 
-def _json(value: Any) -> Any:
+def any_json(value: Any) -> Any:
     return value
-
-
-register("number", "a finite number", _number)
-register("string", "text", _string)
-register("bool", "true or false", _bool)
-register("joint_waypoint", "joint positions (rad) and the robot they were taught on", JointWaypoint)
-register("pose_waypoint", "a TCP pose (m, unit quaternion) in a frame", PoseWaypoint)
-register("pose", "a pose: position (m) and orientation (unit quaternion)", Pose)
-register("frame", "a coordinate frame: pose in a parent frame", Frame)
-register("list", "a list of JSON values", _list)
-register("json", "any JSON value", _json)
-register("device", "a device added under a local name", DeviceRecord)
-register("tool", "what a robot carries: its TCP (in the flange frame) and payload", ToolSetup)
-register("scene_object", "an obstacle, keep-out zone or held object of the scene", SceneObject)
-register("program", "a program: its Blockly workspace and generated Python", StoredProgram)

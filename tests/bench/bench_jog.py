@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from runtime.jog.actions import TwistJog
-from runtime.robot_info import load_robot_info
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.robot_info import load_robot_info
 from runtime.robotics.velocity import VelocityController
 from tests.bench.runner import Figure
 from tests.bench.stats import percentile, quick

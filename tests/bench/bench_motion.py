@@ -14,9 +14,9 @@ from scipy.optimize import lsq_linear
 from runtime.interfaces.scene import SceneObject
 from runtime.motion.models import MoveRequest
 from runtime.motion.moves import MovePlanner, Point
-from runtime.robot_info import load_robot_info
 from runtime.robotics.avoidance import AvoidanceConstraint
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.robot_info import load_robot_info
 from runtime.robotics.velocity import VelocityController
 from runtime.robotics.world import World
 from tests.bench.runner import Figure

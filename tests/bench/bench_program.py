@@ -23,7 +23,7 @@ import httpx
 from websockets.sync.client import ClientConnection, connect
 
 from blockly_blocks.generator import generate
-from runtime.robot_info import load_robot_info
+from runtime.robotics.robot_info import load_robot_info
 from sandbox.supervisor import ProgramRun, RunState
 from tests.bench.runner import Figure
 from tests.bench.stats import percentile, quick

@@ -174,7 +174,7 @@ def robot_at_rest(runtime: Runtime, name: str = "robot") -> bool:
 
 def add_robot(runtime: Runtime, name: str = "robot") -> str:
     """Adds the simulated robot the runtime discovers, and waits until it is connected."""
-    sim = wait_for(lambda: runtime.api("GET", "/devices/detected").json(), 10)[0]
+    sim = runtime.own_device()
     runtime.api("POST", "/devices", json={"uuid": sim["uuid"], "local_name": name})
     wait_for(lambda: runtime.api("GET", f"/devices/{name}").json()["status"] == "connected", 10)
     return name

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, expect
 
-from runtime.robot_info import load_robot_info
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.robot_info import load_robot_info
 from tests.browser.conftest import PageErrors, add_robot, fits_the_screen
 from tests.support.png import decode
 from tests.support.processes import Runtime, wait_for

@@ -189,7 +189,7 @@ def test_ctrl_c_stops_everything(home: Path) -> None:
 
 def test_a_bad_config_file_stops_start_up_with_its_reason(home: Path) -> None:
     config = home / "bad.yaml"
-    config.write_text("port: 8080\nsim_robots:\n  - {model: ur5, nmae: typo}\n")
+    config.write_text("port: 8080\ndevices:\n  - {driver: sim-robot, nmae: typo}\n")
     result = subprocess.run(
         [sys.executable, "-m", "runtime.cli", "run", "--config", str(config)],
         env=child_env(home),

@@ -12,7 +12,7 @@ def test_control_lease_between_two_pendants(home: Path) -> None:
     runtime = Runtime(home, env=child_env(home, OPENPENDANT_LEASE_SECONDS="1.0"))
     try:
         runtime.wait_ready()
-        sim = wait_for(lambda: runtime.api("GET", "/devices/detected").json(), 10)[0]
+        sim = runtime.own_device()
         runtime.api("POST", "/devices", json={"uuid": sim["uuid"], "local_name": "robot"})
         assert runtime.api("POST", "/devices/nobody/lease", json={"holder": "a"}).status_code == 404
 

@@ -15,8 +15,8 @@ import pinocchio as pin
 import pytest
 
 from runtime.interfaces.scene import SceneObject
-from runtime.robot_info import load_robot_info
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.robot_info import load_robot_info
 from runtime.robotics.world import World
 from tests.support.jog import Cell
 from tests.support.posts import LEFT, RIGHT, SCENE, clear_posts, put_posts

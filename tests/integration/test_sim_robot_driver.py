@@ -13,7 +13,7 @@ import pytest
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
-from runtime.robot_info import load_robot_info
+from runtime.robotics.robot_info import load_robot_info
 from tests.support.processes import SimRobotProc, wait_for
 
 INFO = load_robot_info("ur5")

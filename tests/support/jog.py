@@ -137,7 +137,7 @@ class RobotView:
 class Cell:
     def __init__(self, runtime: Runtime) -> None:
         self.runtime = runtime
-        sim = wait_for(lambda: runtime.api("GET", "/devices/detected").json(), 10)[0]
+        sim = runtime.own_device()
         runtime.api("POST", "/devices", json={"uuid": sim["uuid"], "local_name": "robot"})
         wait_for(lambda: runtime.api("GET", "/devices").json()[0]["status"] == "connected", 10)
         self.token = runtime.api("POST", "/devices/robot/lease", json={"holder": "tests"}).json()[

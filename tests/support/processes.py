@@ -18,6 +18,8 @@ from typing import Any, TypeVar
 
 import httpx
 
+from runtime.launcher.run import device_uuid
+
 T = TypeVar("T")
 
 # Joints that changed by less than this (rad) did not move: live floating-point state is never
@@ -174,6 +176,20 @@ class Runtime(Proc):
                     if isinstance(entry, dict) and entry.get("level") in ("error", "critical"):
                         found.append(f"{log.name}: {entry.get('msg')} {entry.get('exc', '')}")
         return found
+
+    def own_device(self, name: str = "sim-ur5", driver: str = "sim-robot") -> dict[str, Any]:
+        """One of the devices this runtime started, once detected (other runtimes on the same
+        loopback announce theirs too)."""
+        installation = (self.data_dir / "runtime-id").read_text().strip()
+        uuid = device_uuid(installation, driver, name)
+        return wait_for(
+            lambda: next(
+                (d for d in self.api("GET", "/devices/detected").json() if d["uuid"] == uuid),
+                None,
+            ),
+            10,
+            what=f"this runtime's {name} detected",
+        )
 
     def is_detected(self, uuid: str) -> bool:
         return any(d["uuid"] == uuid for d in self.api("GET", "/devices/detected").json())

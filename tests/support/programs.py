@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from runtime.robot_info import load_robot_info
+from runtime.robotics.robot_info import load_robot_info
 from tests.support.blocks import block, number, stack, text, var, waypoint, workspace
 from tests.support.processes import Runtime
 

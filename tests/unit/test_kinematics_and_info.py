@@ -9,8 +9,8 @@ import pinocchio as pin
 import pytest
 
 from runtime.kit.errors import InvalidValue, NotFound
-from runtime.robot_info import available_models, load_robot_info
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.robot_info import available_models, load_robot_info
 
 # Universal Robots' published DH parameters of the UR5 (CB3), an independent model.
 UR5_DH = {

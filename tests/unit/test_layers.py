@@ -8,10 +8,10 @@ import ast
 from collections.abc import Iterator
 from pathlib import Path
 
-from runtime.services import SERVICES
+from runtime.services import services
 
 ROOT = Path(__file__).resolve().parents[2]
-SERVICE_PACKAGES = {spec.factory.split(":")[0].rsplit(".", 1)[0] for spec in SERVICES}
+SERVICE_PACKAGES = {spec.factory.split(":")[0].rsplit(".", 1)[0] for spec in services()}
 WEB = ("fastapi", "starlette", "uvicorn", "httpx", "websockets")
 PURE = ("runtime.robotics", "runtime.interfaces")
 

@@ -10,7 +10,7 @@ import pytest
 from runtime.interfaces.limits import JointLimitChecker
 from runtime.interfaces.robot import JointTrajectory, TrajectoryWaypoint
 from runtime.kit.errors import RobotError
-from runtime.robot_info import load_robot_info
+from runtime.robotics.robot_info import load_robot_info
 
 
 @pytest.fixture(scope="module")

@@ -7,8 +7,8 @@ import numpy as np
 import pinocchio as pin
 
 from runtime.interfaces.scene import SceneObject
-from runtime.robot_info import load_robot_info
 from runtime.robotics.avoidance import SAFETY, AvoidanceConstraint
+from runtime.robotics.robot_info import load_robot_info
 from runtime.robotics.velocity import VelocityController
 from runtime.robotics.world import World
 

@@ -13,10 +13,10 @@ import pytest
 from runtime.interfaces.scene import SceneObject
 from runtime.motion.models import MoveRequest
 from runtime.motion.moves import MovePlanner, Point
-from runtime.robot_info import load_robot_info
 from runtime.robotics.checker import PathChecker
 from runtime.robotics.geometry import proximity
 from runtime.robotics.paths import PathError, sample_tcp_path
+from runtime.robotics.robot_info import load_robot_info
 from runtime.robotics.timing import time_scale
 from runtime.robotics.world import World
 

@@ -18,12 +18,15 @@ from runtime.kit.settings import (
 
 def test_precedence(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     config = tmp_path / "site.yaml"
-    config.write_text("port: 9001\nstate_rate_hz: 50\nsim_robots:\n  - {model: panda, name: p1}\n")
+    config.write_text(
+        "port: 9001\nstate_rate_hz: 50\ndevices:\n"
+        "  - {driver: sim-robot, name: p1, options: {model: panda}}\n"
+    )
     monkeypatch.setenv("OPENPENDANT_STATE_RATE_HZ", "60")
     settings = load_settings(config, port=9100)
     assert settings.port == 9100  # flag beats file
     assert settings.state_rate_hz == 60  # environment beats file
-    assert settings.sim_robots[0].model == "panda"  # file beats default
+    assert settings.devices[0].options == {"model": "panda"}  # file beats default
 
 
 def test_unknown_keys_in_a_config_file_are_errors(tmp_path: Path) -> None:
@@ -59,4 +62,4 @@ def test_the_example_site_config_is_valid() -> None:
     example = Path(__file__).parents[2] / "deploy" / "openpendant.example.yaml"
     settings = load_settings(example)
     assert settings.port == 8080
-    assert settings.sim_robots[0].model == "ur5"
+    assert settings.devices[0].options == {"model": "ur5"}

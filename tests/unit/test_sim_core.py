@@ -15,6 +15,7 @@ from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.limits import FloatArray, JointLimitChecker
 from runtime.interfaces.robot import (
     CommandMode,
+    CommandModeRequest,
     JogJointCommand,
     JointTrajectory,
     PositionCommand,
@@ -23,8 +24,8 @@ from runtime.interfaces.robot import (
     TrajectoryWaypoint,
 )
 from runtime.kit.errors import RobotError
-from runtime.robot_info import load_robot_info
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.robot_info import load_robot_info
 
 
 @pytest.fixture(scope="module")
@@ -278,7 +279,7 @@ def test_driver_rejects_non_finite_and_out_of_limit_targets(ur5: RobotInfo) -> N
         with pytest.raises(RobotError) as err:
             await robot.jog_joint(JogJointCommand(velocity=[0.0] * 5, timeout=0.1))
         assert err.value.code == "wrong_length"
-        await robot.set_command_mode(CommandMode.position_command)
+        await robot.set_command_mode(CommandModeRequest(mode=CommandMode.position_command))
         with pytest.raises(RobotError) as err:
             await robot.position_command(PositionCommand(position=[0, 0, 4.0, 0, 0, 0]))
         assert err.value.code == "position_limit"

@@ -2,12 +2,14 @@ import { LitElement, css, html } from "lit";
 import { t } from "./i18n";
 import { feed } from "./live";
 import { panels } from "./panels/registry";
+import { plugins } from "./plugins";
 import { shared } from "./styles";
 import "./status-bar";
 
 function panelFromHash(): string {
   const id = location.hash.replace(/^#\/?/, "");
-  return panels.some((p) => p.id === id) ? id : panels[0].id;
+  // A plugin's panel is known once the runtime has said which there are.
+  return id || panels()[0].id;
 }
 
 export class OpApp extends LitElement {
@@ -99,24 +101,39 @@ export class OpApp extends LitElement {
     this.panel = panelFromHash();
   };
 
+  private onPlugins = () => this.requestUpdate();
+  private retry = 0;
+
   connectedCallback(): void {
     super.connectedCallback();
     window.addEventListener("hashchange", this.onHash);
+    plugins.addEventListener("change", this.onPlugins);
+    this.loadPlugins();
     feed.start();
   }
 
   disconnectedCallback(): void {
     window.removeEventListener("hashchange", this.onHash);
+    plugins.removeEventListener("change", this.onPlugins);
+    window.clearTimeout(this.retry);
     super.disconnectedCallback();
   }
 
+  /** Until the runtime answers, the built-in panels show; asked again every 2 s. */
+  private loadPlugins(): void {
+    plugins.load().catch(() => {
+      this.retry = window.setTimeout(() => this.loadPlugins(), 2000);
+    });
+  }
+
   render() {
-    const active = panels.find((p) => p.id === this.panel) ?? panels[0];
+    const shown = panels();
+    const active = shown.find((p) => p.id === this.panel) ?? shown[0];
     return html`
       <op-status-bar></op-status-bar>
       <div class="body">
         <nav aria-label=${t("app.panels")}>
-          ${panels.map(
+          ${shown.map(
             (p) => html`<button
               data-testid="nav-${p.id}"
               aria-current=${p.id === active.id ? "page" : "false"}

@@ -89,6 +89,15 @@ export const de: Catalogue = {
   "system.log.which": "Welche Einträge",
   "system.loading": "Wird geladen…",
   "system.log.empty": "Nichts anzuzeigen.",
+  "system.plugins": "Plugins",
+  "system.plugins.builtin": "eingebaut",
+  "system.plugins.kinds": "Gerätearten",
+  "system.plugins.drivers": "Treiber",
+  "system.plugins.blocks": "Blöcke",
+  "system.plugins.panels": "Bereiche",
+  "system.plugins.services": "Dienste",
+  "system.plugins.failed": "Nicht geladen",
+  "system.plugins.failed_in": "in {process}",
   "system.services": "Runtime-Dienste",
   "system.service": "Dienst",
   "system.status": "Status",
@@ -134,6 +143,7 @@ export const de: Catalogue = {
   "app.link.stale": "veraltet",
   "app.link.disconnected": "getrennt",
   // api.ts
+  "app.plugin_panel_failed": "Der Bereich des Plugins {plugin} konnte nicht geladen werden:",
   "app.unreachable": "Die Runtime ist nicht erreichbar.",
   "app.request_failed": "Anfrage fehlgeschlagen (HTTP {status}).",
   // --- Jog panel ---
@@ -298,6 +308,7 @@ export const de: Catalogue = {
   "program.breakpoint.add": "Haltepunkt setzen",
   // catalog.ts
   "program.choices.no_robots": "(keiner)",
+  "program.choices.no_devices": "(keine)",
   "program.choices.no_waypoints": "(keiner)",
   "program.choices.no_inputs": "(keine)",
   "program.choices.no_outputs": "(keine)",

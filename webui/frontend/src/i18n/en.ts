@@ -88,6 +88,15 @@ export const en = {
   "system.log.which": "Which entries",
   "system.loading": "Loading…",
   "system.log.empty": "Nothing to show.",
+  "system.plugins": "Plugins",
+  "system.plugins.builtin": "built in",
+  "system.plugins.kinds": "Device kinds",
+  "system.plugins.drivers": "Drivers",
+  "system.plugins.blocks": "Blocks",
+  "system.plugins.panels": "Panels",
+  "system.plugins.services": "Services",
+  "system.plugins.failed": "Not loaded",
+  "system.plugins.failed_in": "in {process}",
   "system.services": "Runtime services",
   "system.service": "Service",
   "system.status": "Status",
@@ -132,6 +141,7 @@ export const en = {
   "app.link.stale": "stale",
   "app.link.disconnected": "disconnected",
   // api.ts
+  "app.plugin_panel_failed": "The panel of plugin {plugin} could not be loaded:",
   "app.unreachable": "The runtime is not reachable.",
   "app.request_failed": "Request failed (HTTP {status}).",
   // --- Jog panel ---
@@ -291,6 +301,7 @@ export const en = {
   "program.breakpoint.add": "Add breakpoint",
   // catalog.ts
   "program.choices.no_robots": "(none added)",
+  "program.choices.no_devices": "(none)",
   "program.choices.no_waypoints": "(none)",
   "program.choices.no_inputs": "(none)",
   "program.choices.no_outputs": "(none)",

@@ -4,6 +4,7 @@ import { HOLDER_MAX, control } from "../control";
 import { LANGUAGES, type Language, type StringKey, language, setLanguage, t } from "../i18n";
 import { type Theme, currentTheme, setTheme } from "../theme";
 import { shared } from "../styles";
+import { type PluginInfo, plugins } from "../plugins";
 import type { Health } from "../types";
 import { type AngleUnit, type LengthUnit, setUnits, units } from "../units";
 
@@ -195,6 +196,7 @@ export class OpSystemPanel extends LitElement {
       const [health, logs] = await Promise.all([
         api<Health>("GET", "/api/health"),
         api<LogEntry[]>("GET", `/api/logs?level=${this.logLevel}&limit=100`),
+        plugins.load(),
       ]);
       this.health = health;
       this.logs = logs;
@@ -237,6 +239,41 @@ export class OpSystemPanel extends LitElement {
     </section>`;
   }
 
+  private plugins() {
+    const report = plugins.report;
+    if (report === null) return "";
+    const adds = (p: PluginInfo): string =>
+      (
+        [
+          ["system.plugins.kinds", p.kinds],
+          ["system.plugins.drivers", p.drivers],
+          ["system.plugins.blocks", p.blocks],
+          ["system.plugins.services", p.services],
+          ["system.plugins.panels", p.panels],
+        ] as [StringKey, string[]][]
+      )
+        .filter(([, items]) => items.length > 0)
+        .map(([key, items]) => `${t(key)}: ${items.length > 4 ? items.length : items.join(", ")}`)
+        .join(" · ");
+    return html`<section class="card" data-testid="plugins">
+      <h2>${t("system.plugins")}</h2>
+      ${report.failures.map((f) => html`<p class="error" role="alert" data-testid="plugin-failure">
+        <strong>${t("system.plugins.failed")}:</strong>
+        <span translate="no">${f.plugin} (${f.source}) ${f.error}</span>
+        <span class="muted">${t("system.plugins.failed_in", { process: f.process })}</span>
+      </p>`)}
+      <table>
+        <tbody>
+          ${report.plugins.map((p) => html`<tr data-testid="plugin" data-name=${p.name}>
+            <td translate="no"><strong>${p.name}</strong></td>
+            <td translate="no">${p.builtin ? t("system.plugins.builtin") : `${p.package} ${p.version}`}</td>
+            <td><span class="muted" translate="no">${adds(p)}</span></td>
+          </tr>`)}
+        </tbody>
+      </table>
+    </section>`;
+  }
+
   render() {
     const services = Object.entries(this.health?.services ?? {});
     return html`
@@ -274,6 +311,7 @@ export class OpSystemPanel extends LitElement {
           </tbody>
         </table>
       </div>
+      ${this.plugins()}
       ${this.log()}
       <p class="note muted">
         ${t("system.stop_note")}

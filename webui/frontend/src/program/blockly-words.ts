@@ -48,10 +48,26 @@ export function applyBlocklyLanguage(): void {
 }
 
 type Json = Record<string, unknown>;
+type Words = { message0: string; tooltip: string; options?: Record<string, Record<string, string>> };
+
+/** What the runtime says of its plugins' blocks, per language. */
+export type RuntimeWords = Record<
+  string,
+  { blocks: Record<string, Words>; categories: Record<string, string> }
+>;
+
+let runtimeWords: RuntimeWords = {};
+
+/** The plugins' words, from GET /api/programs/_blocks: used after this UI's own. */
+export function useRuntimeWords(words: RuntimeWords): void {
+  runtimeWords = words;
+}
 
 /** A block definition with the chosen language's words (the English one as it is). */
 export function localizedBlock<T extends { type: string }>(definition: T): T {
-  const words = LANGUAGES[language()].blocks?.blocks[definition.type];
+  const words =
+    LANGUAGES[language()].blocks?.blocks[definition.type] ??
+    runtimeWords[language()]?.blocks[definition.type];
   if (!words) return definition;
   // Copied by hand, not structuredClone: dynamic dropdowns hold their menu function.
   const json: Json = { ...definition, message0: words.message0, tooltip: words.tooltip };
@@ -73,8 +89,10 @@ export function localizedBlock<T extends { type: string }>(definition: T): T {
 export function localizedToolbox(
   toolbox: Blockly.utils.toolbox.ToolboxDefinition,
 ): Blockly.utils.toolbox.ToolboxDefinition {
-  const names = LANGUAGES[language()].blocks?.categories;
-  if (!names) return toolbox;
+  const own = LANGUAGES[language()].blocks?.categories;
+  const plugins = runtimeWords[language()]?.categories;
+  if (!own && !plugins) return toolbox;
+  const names = { ...plugins, ...own };
   const copy = structuredClone(toolbox) as unknown as Json;
   const rename = (items: unknown): void => {
     if (!Array.isArray(items)) return;

@@ -3,10 +3,11 @@
 
 import * as Blockly from "blockly";
 import { type StringKey, t } from "../i18n";
-import { localizedBlock } from "./blockly-words";
+import { feed } from "../live";
+import { localizedBlock, type RuntimeWords, useRuntimeWords } from "./blockly-words";
 
 type BlockJson = { type: string } & Record<string, unknown>;
-type FieldJson = { type?: string; options?: unknown; op_options?: ChoiceKind } & Record<
+type FieldJson = { type?: string; options?: unknown; op_options?: string } & Record<
   string,
   unknown
 >;
@@ -14,6 +15,8 @@ type FieldJson = { type?: string; options?: unknown; op_options?: ChoiceKind } &
 export interface BlockCatalog {
   definitions: Record<string, BlockJson[]>;
   toolbox: Blockly.utils.toolbox.ToolboxDefinition;
+  /** The plugins' block and category words, per language. */
+  words?: RuntimeWords;
 }
 
 export type ChoiceKind = "robots" | "waypoints" | "inputs" | "outputs";
@@ -44,6 +47,17 @@ const used: Record<ChoiceKind, Set<string>> = {
 
 const dynamicFields = new Map<string, ChoiceKind>(); // "<block type>/<field name>" -> kind
 
+/** "devices:<kind>": the added devices of a kind (a plugin's blocks name theirs so). */
+function deviceMenu(kind: string): Blockly.MenuGeneratorFunction {
+  return function (this: Blockly.FieldDropdown): Blockly.MenuOption[] {
+    const names = new Set(feed.devices.filter((d) => d.kind === kind).map((d) => d.local_name));
+    const current = this.getValue();
+    if (current) names.add(current);
+    if (names.size === 0) return [[t("program.choices.no_devices"), ""]];
+    return [...names].sort().map((name) => [name, name]);
+  };
+}
+
 function menu(kind: ChoiceKind): Blockly.MenuGeneratorFunction {
   return function (this: Blockly.FieldDropdown): Blockly.MenuOption[] {
     const names = new Set([...choices[kind], ...used[kind]]);
@@ -59,14 +73,20 @@ let defined = false;
 /** Registers the project's blocks with Blockly (once; the standard ones come with it). */
 export function defineBlocks(catalog: BlockCatalog): void {
   if (defined) return;
+  useRuntimeWords(catalog.words ?? {});
   for (const definition of Object.values(catalog.definitions).flat()) {
     const json = structuredClone(definition);
     for (const [key, args] of Object.entries(json)) {
       if (!key.startsWith("args") || !Array.isArray(args)) continue;
       for (const field of args as FieldJson[]) {
-        if (field.op_options === undefined) continue;
-        dynamicFields.set(`${json.type}/${String(field.name)}`, field.op_options);
-        field.options = menu(field.op_options);
+        const choice = field.op_options;
+        if (choice === undefined) continue;
+        if (choice.startsWith("devices:")) {
+          field.options = deviceMenu(choice.slice("devices:".length));
+        } else if (choice in choices) {
+          dynamicFields.set(`${json.type}/${String(field.name)}`, choice as ChoiceKind);
+          field.options = menu(choice as ChoiceKind);
+        }
         delete field.op_options;
       }
     }

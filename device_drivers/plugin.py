@@ -1,0 +1,31 @@
+"""The drivers that come with OpenPendant, registered through the plugin API like a
+plugin's: `openpendant driver NAME`, and the runtime config's `devices:` list."""
+
+from __future__ import annotations
+
+from plugins.api import Driver, Plugin
+
+PLUGIN = Plugin(
+    name="drivers",
+    description="The simulated robot and the 3D mouse",
+    drivers=(
+        Driver(
+            "sim-robot",
+            "robot",
+            "device_drivers.sim_robot.entry:create",
+            options="device_drivers.sim_robot.entry:SimRobotOptions",
+            routes="device_drivers.sim_robot.entry:routes",
+            description="a simulated robot (UR3, UR5, UR10, Panda or a robot-info YAML)",
+            realtime=True,
+            simulated=True,
+        ),
+        Driver(
+            "spacemouse",
+            "input",
+            "device_drivers.spacemouse.entry:create",
+            options="device_drivers.spacemouse.entry:SpaceMouseOptions",
+            routes="device_drivers.spacemouse.entry:routes",
+            description="a 3Dconnexion SpaceMouse (hidapi, spacenavd, or a recording)",
+        ),
+    ),
+)

@@ -1,0 +1,89 @@
+"""The standard camera: what it is (with its intrinsics once calibrated), one frame captured
+on request, and a stream of frames at the consumer's pace."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Literal
+
+from pydantic import BaseModel, Field
+
+from runtime.interfaces.common import Strict
+from runtime.interfaces.device import DeviceDriver, DeviceIdentity
+from runtime.interfaces.endpoints import endpoint
+
+Encoding = Literal["jpeg", "png"]
+ENCODINGS: tuple[Encoding, ...] = ("jpeg", "png")
+
+
+class Intrinsics(BaseModel):
+    """The pinhole model with OpenCV's distortion coefficients (k1, k2, p1, p2, k3, …)."""
+
+    width: int = Field(gt=0)
+    height: int = Field(gt=0)
+    fx: float = Field(gt=0)
+    fy: float = Field(gt=0)
+    cx: float
+    cy: float
+    distortion: list[float] = Field(default_factory=list, max_length=14)
+
+
+class CameraInfo(BaseModel):
+    model: str
+    width: int = Field(gt=0)
+    height: int = Field(gt=0)
+    fps: float = Field(gt=0)
+    intrinsics: Intrinsics | None = None  # None until calibrated, or unknown
+    encodings: list[Encoding] = Field(default_factory=lambda: list(ENCODINGS))
+
+
+class CameraDescription(BaseModel):
+    identity: DeviceIdentity
+    info: CameraInfo
+
+
+class CameraState(BaseModel):
+    seqno: int
+    ts: float
+    connected: bool
+    frames: int = 0  # captured since start
+    last_frame: float | None = None  # when the newest frame was taken
+    error: str = ""
+
+
+class CaptureRequest(Strict):
+    encoding: Encoding = "jpeg"
+    quality: int = Field(default=90, ge=1, le=100)  # JPEG only
+
+
+class Image(BaseModel):
+    """One frame: `ts` is when it was taken, `data` the encoded image in base64."""
+
+    seqno: int
+    ts: float
+    width: int
+    height: int
+    encoding: Encoding
+    data: str
+
+
+class Camera(ABC):
+    """Frames are also streamed over `WS /frames/ws`: one binary message per frame, the next
+    sent only after the consumer acknowledges the last, so old frames never queue."""
+
+    @endpoint("POST", "/capture", body=CaptureRequest, returns=Image)
+    @abstractmethod
+    async def capture(self, request: CaptureRequest) -> Image:
+        """A new frame, taken after the request arrived."""
+
+
+class CameraDriver(DeviceDriver, Camera):
+    def __init__(self, identity: DeviceIdentity, info: CameraInfo) -> None:
+        super().__init__(identity)
+        self.info = info
+
+    def describe(self) -> CameraDescription:
+        return CameraDescription(identity=self.identity, info=self.info)
+
+    @abstractmethod
+    def state(self) -> CameraState: ...

@@ -1,0 +1,156 @@
+"""The runtime's answers to the built-in blocks' sandbox calls (declared with the blocks in
+`blockly_blocks/plugin.py`). Each is `async def handler(run, args)`: `run` is the run's
+RunHost, `args` what the sandbox function sent, checked here again."""
+
+from __future__ import annotations
+
+import re
+from typing import Any, TypeVar
+
+from pydantic import BaseModel, ValidationError
+
+from runtime.interfaces.robot import DigitalOutputCommand, ToolCommand
+from runtime.kit.app import describe_validation_errors
+from runtime.kit.errors import NotFound
+from runtime.motion.client import MoveKind, MoveRequest, Target
+from runtime.program.host import RunHost
+from sandbox.supervisor import CallRefused
+
+M = TypeVar("M", bound=BaseModel)
+IO_NAME = re.compile(r"^([a-z][a-z0-9_]{0,31})\.(di|do)(\d{1,2})$")
+WAYPOINT_TYPES = ("joint_waypoint", "pose_waypoint")
+
+
+def _checked(model: type[M], value: Any) -> M:
+    """A value from the sandbox as a model, or the reason it is not one."""
+    try:
+        return model.model_validate(value)
+    except ValidationError as exc:
+        message, _ = describe_validation_errors(exc.errors())
+        raise CallRefused(message, "invalid_request") from None
+
+
+# Robot ------------------------------------------------------------------------------------
+
+
+async def use_robot(run: RunHost, args: dict[str, Any]) -> None:
+    name = str(args["robot"])
+    try:
+        details = await run.devices.manager.device(name)
+    except NotFound:
+        raise CallRefused(f"there is no robot {name!r}", "unknown_device") from None
+    if details.kind != "robot":
+        raise CallRefused(f"{name} is a {details.kind}, not a robot", "not_a_robot")
+    run.robot = name
+
+
+async def move(run: RunHost, args: dict[str, Any]) -> None:
+    kind = args["kind"]
+    if kind not in ("joint", "linear"):
+        raise CallRefused(f"unknown move kind {kind!r}", "bad_call")
+    target = _checked(Target, args["target"])
+    await run.run_move(MoveRequest(kind=MoveKind(kind), target=target))
+
+
+async def move_relative(run: RunHost, args: dict[str, Any]) -> None:
+    request = {"kind": "relative", "offset": args["offset"], "offset_frame": args["frame"]}
+    await run.run_move(_checked(MoveRequest, request))
+
+
+async def move_home(run: RunHost, _: dict[str, Any]) -> None:
+    robot = await run.active_robot()
+    details = await run.devices.manager.device(robot)
+    home = (details.info or {})["info"]["home"]
+    await run.run_move(MoveRequest(kind=MoveKind.joint, target=Target(joints=home)))
+
+
+async def set_speed(run: RunHost, args: dict[str, Any]) -> None:
+    ratio = float(args["ratio"])
+    if not 0 < ratio <= 1:
+        raise CallRefused("speed must be between 1 and 100 %", "invalid_value")
+    run.speed = ratio
+
+
+async def _state(run: RunHost) -> dict[str, Any]:
+    robot = await run.active_robot()
+    state = await run.devices.manager.state(robot)
+    if not state:
+        raise CallRefused(f"no state from {robot}", "device_disconnected")
+    return state
+
+
+async def joint_positions(run: RunHost, _: dict[str, Any]) -> list[float]:
+    return [float(v) for v in (await _state(run))["joint_position"]]
+
+
+async def tcp_pose(run: RunHost, _: dict[str, Any]) -> Any:
+    return (await _state(run))["tcp_pose"]
+
+
+async def tool(run: RunHost, args: dict[str, Any]) -> None:
+    robot = await run.active_robot()
+    client = await run.robot_client(robot)
+    await client.set_tool(ToolCommand(open=bool(args["open"])))
+
+
+# Waypoints, I/O, stored values ------------------------------------------------------------
+
+
+async def check_waypoint(run: RunHost, args: dict[str, Any]) -> dict[str, str]:
+    name = str(args["name"])
+    try:
+        variable = await run.storage.get(name)
+    except NotFound:
+        raise CallRefused(f"there is no waypoint {name!r}", "unknown_waypoint") from None
+    if variable.type not in WAYPOINT_TYPES:
+        raise CallRefused(f"{name} is a {variable.type}, not a waypoint", "not_a_waypoint")
+    return {"type": variable.type}
+
+
+def _io(name: str) -> tuple[str, str, int]:
+    match = IO_NAME.match(name)
+    if match is None:
+        raise CallRefused(
+            f"I/O names look like robot.do0 or robot.di3, not {name[:40]!r}", "unknown_io"
+        )
+    return match.group(1), match.group(2), int(match.group(3))
+
+
+async def set_output(run: RunHost, args: dict[str, Any]) -> None:
+    robot, kind, index = _io(str(args["name"]))
+    if kind != "do":
+        raise CallRefused(f"{args['name']} is an input; only outputs can be set", "read_only")
+    client = await run.robot_client(robot)
+    await client.set_digital_output(index, DigitalOutputCommand(value=bool(args["value"])))
+
+
+async def get_io(run: RunHost, args: dict[str, Any]) -> bool:
+    robot, kind, index = _io(str(args["name"]))
+    state = await run.devices.manager.state(robot)
+    values = state.get("digital_inputs" if kind == "di" else "digital_outputs", [])
+    if index >= len(values):
+        raise CallRefused(f"{robot} has no {kind}{index}", "unknown_io")
+    return bool(values[index])
+
+
+async def get_stored(run: RunHost, args: dict[str, Any]) -> dict[str, Any]:
+    variable = await run.storage.get(str(args["name"]))
+    return {"type": variable.type, "value": variable.value}
+
+
+async def set_stored(run: RunHost, args: dict[str, Any]) -> None:
+    value = args["value"]
+    kind = args.get("type") or _type_of(value)
+    await run.storage.put(str(args["name"]), kind, value)
+
+
+def _type_of(value: Any) -> str:
+    if isinstance(value, bool):
+        return "bool"
+    if isinstance(value, int | float):
+        return "number"
+    if isinstance(value, str):
+        return "string"
+    if isinstance(value, list):
+        return "list"
+    return "json"
