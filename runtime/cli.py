@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 from pathlib import Path
 
@@ -51,18 +50,9 @@ def _driver(name: str, rest: list[str]) -> int:
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from runtime.paths import REPO_ROOT
+    from runtime.bench.runner import main
 
-    sys.path.insert(0, str(REPO_ROOT))
-    try:
-        runner = importlib.import_module("tests.bench.runner")
-    except ImportError:
-        print(
-            "openpendant bench: the benchmarks live in tests/bench of a source checkout",
-            file=sys.stderr,
-        )
-        return 2
-    return int(runner.main(only=args.only, json_path=args.json))
+    return main(only=args.only, json_path=args.json)
 
 
 def _drivers(rest: list[str]) -> int:
@@ -106,7 +96,7 @@ def parser() -> argparse.ArgumentParser:
     service.add_argument("--data-dir", type=Path, default=None)
     service.set_defaults(handler=_service)
 
-    bench = sub.add_parser("bench", help="run the benchmarks (tests/bench)")
+    bench = sub.add_parser("bench", help="run the benchmarks (runtime/bench)")
     bench.add_argument(
         "--only",
         action="append",

@@ -3,21 +3,24 @@
 from __future__ import annotations
 
 import site
+import sys
 import sysconfig
 from functools import cache
 from pathlib import Path
 
+import deploy
 from runtime.kit.errors import NotFound
 
-REPO_ROOT = Path(__file__).resolve().parent.parent
-ROBOTS_DIR = REPO_ROOT / "deploy" / "robots"
+# Package data (deploy/robots), found the same in a source checkout and an installed runtime.
+ROBOTS_DIR = Path(deploy.__file__).resolve().parent / "robots"
 
 
 @cache
 def package_roots() -> dict[str, Path]:
     """URDF `package://` names and the folders they stand for."""
     roots: dict[str, Path] = {}
-    candidates = [sysconfig.get_paths()["purelib"], *site.getsitepackages()]
+    # The environment's site-packages first, then anything else on the path (PYTHONPATH).
+    candidates = [sysconfig.get_paths()["purelib"], *site.getsitepackages(), *sys.path]
     for base in candidates:
         share = Path(base) / "cmeel.prefix" / "share" / "example-robot-data"
         if share.is_dir():

@@ -3,7 +3,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support.processes import LOOPBACK_ENV
+from runtime.bench.harness.processes import LOOPBACK_ENV
 
 # Anything started from a test (directly or by the runtime) does discovery on loopback only.
 os.environ.update(LOOPBACK_ENV)

@@ -206,7 +206,7 @@ def parse_info(info: AsyncServiceInfo) -> Detected | None:
     except ValueError as exc:
         log.warning("ignoring announcement %s: %s", clean_text(info.name, 80), exc)
         return None
-    kind = clean_text(props.get(b"kind"), 16)
+    kind = clean_text(props.get(b"kind"), 64)  # refused below when too long, never cut
     addresses = info.parsed_addresses(IPVersion.V4Only)
     if not KIND_PATTERN.match(kind) or not addresses or not info.port:
         return None

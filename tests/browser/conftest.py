@@ -21,7 +21,7 @@ from playwright.sync_api import (
     sync_playwright,
 )
 
-from tests.support.processes import Runtime, child_env, wait_for
+from runtime.bench.harness.processes import Runtime, child_env, wait_for
 
 pytestmark = pytest.mark.browser
 

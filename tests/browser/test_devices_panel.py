@@ -9,8 +9,8 @@ from pathlib import Path
 import httpx
 from playwright.sync_api import BrowserContext, expect
 
+from runtime.bench.harness.processes import Runtime, SimRobotProc
 from tests.browser.conftest import PageErrors, add_robot, fits_the_screen
-from tests.support.processes import Runtime, SimRobotProc
 
 
 def jog_first_joint(url: str, seconds: float) -> None:

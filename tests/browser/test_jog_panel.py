@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, expect
 
+from runtime.bench.harness.processes import STILL, Runtime, wait_for
 from tests.browser.conftest import (
     Finger,
     PageErrors,
@@ -20,7 +21,6 @@ from tests.browser.conftest import (
     robot_joints,
 )
 from tests.support.png import decode
-from tests.support.processes import STILL, Runtime, wait_for
 
 
 @pytest.fixture(scope="module")

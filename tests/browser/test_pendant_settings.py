@@ -9,8 +9,8 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import BrowserContext, Page, expect
 
+from runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
 from tests.browser.conftest import PageErrors, add_robot, fits_the_screen, robot_state
-from tests.support.processes import Runtime, SimRobotProc, wait_for
 
 DARK_BG = "rgb(16, 22, 29)"
 LIGHT_BG = "rgb(244, 246, 248)"

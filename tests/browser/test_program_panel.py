@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
 
+from runtime.bench.harness.blocks import ids_of
+from runtime.bench.harness.processes import STILL, Runtime, wait_for
 from tests.browser.conftest import (
     Finger,
     PageErrors,
@@ -22,8 +24,6 @@ from tests.browser.conftest import (
     robot_at_rest,
     robot_joints,
 )
-from tests.support.blocks import ids_of
-from tests.support.processes import STILL, Runtime, wait_for
 from tests.support.programs import (
     HOME,
     PICK_AND_PLACE_WAYPOINTS,

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from playwright.sync_api import BrowserContext, Playwright, Route, expect
 
+from runtime.bench.harness.processes import Runtime, child_env, wait_for
 from tests.browser.conftest import (
     BROWSER_DEADMAN,
     TABLET,
@@ -18,7 +19,6 @@ from tests.browser.conftest import (
     robot_joints,
 )
 from tests.browser.test_shop_floor import hold, take_control_and_enable
-from tests.support.processes import Runtime, child_env, wait_for
 
 BACK_WITHIN = 5.0  # s after the runtime answers again: what a technician would wait
 

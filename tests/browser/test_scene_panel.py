@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, expect
 
+from runtime.bench.harness.processes import Runtime, wait_for
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
 from tests.browser.conftest import PageErrors, add_robot, fits_the_screen
 from tests.support.png import decode
-from tests.support.processes import Runtime, wait_for
 
 INFO = load_robot_info("ur5")
 LEFT = [1.0, -1.0, 1.8, -2.37, -1.57, 0.0]

@@ -14,6 +14,8 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
 
+from runtime.bench.harness.blocks import block, text, workspace
+from runtime.bench.harness.processes import STILL, Runtime, SimRobotProc, SpaceMouseProc, wait_for
 from tests.browser.conftest import (
     PHONE,
     Finger,
@@ -25,8 +27,6 @@ from tests.browser.conftest import (
     robot_state,
 )
 from tests.integration.test_jog import mouse_recording
-from tests.support.blocks import block, text, workspace
-from tests.support.processes import STILL, Runtime, SimRobotProc, SpaceMouseProc, wait_for
 
 PANELS = ("jog", "program", "scene", "devices", "system")
 

@@ -3,7 +3,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.support.processes import SimRobotProc
+from runtime.bench.harness.processes import SimRobotProc
 
 pytestmark = pytest.mark.integration
 

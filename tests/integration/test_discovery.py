@@ -17,9 +17,9 @@ import pytest
 from websockets.sync.client import connect
 from zeroconf import ServiceInfo, Zeroconf
 
+from runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
 from runtime.kit.discovery import SERVICE_TYPE
 from tests.support.fake_device import FakeDevice
-from tests.support.processes import Runtime, SimRobotProc, child_env, wait_for
 
 SHORT_TTL = {"OPENPENDANT_DISCOVERY__TTL": "3"}
 

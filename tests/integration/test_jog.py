@@ -17,11 +17,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from runtime.bench.harness.jog import Cell, JogClient
+from runtime.bench.harness.processes import STILL, Runtime, SpaceMouseProc, child_env, wait_for
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
-from tests.support.jog import Cell, JogClient
 from tests.support.posts import LEFT, RIGHT, clear_posts, put_posts
-from tests.support.processes import STILL, Runtime, SpaceMouseProc, child_env, wait_for
 
 INFO = load_robot_info("ur5")
 KINEMATICS = Kinematics(INFO)

@@ -15,11 +15,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from runtime.bench.harness.jog import Cell, JogClient
+from runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
 from tests.integration.test_jog import add_mouse, bind_mouse, mouse_recording
-from tests.support.jog import Cell, JogClient
-from tests.support.processes import Runtime, SimRobotProc, child_env, wait_for
 
 INFO = load_robot_info("panda")
 KINEMATICS = Kinematics(INFO)

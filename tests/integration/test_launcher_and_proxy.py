@@ -18,7 +18,7 @@ import httpx
 import pytest
 from websockets.sync.client import connect
 
-from tests.support.processes import Runtime, child_env, free_port, wait_for
+from runtime.bench.harness.processes import Runtime, child_env, free_port, wait_for
 
 
 @pytest.fixture(scope="module")

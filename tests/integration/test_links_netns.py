@@ -20,10 +20,10 @@ import httpx
 import numpy as np
 import pytest
 
+from runtime.bench.harness.jog import JogClient
+from runtime.bench.harness.processes import STILL, Runtime, SimRobotProc, child_env, wait_for
 from tests.support import netns
-from tests.support.jog import JogClient
 from tests.support.netns import Link, Network, inside
-from tests.support.processes import STILL, Runtime, SimRobotProc, child_env, wait_for
 
 WHY_NOT = netns.available()
 pytestmark = [

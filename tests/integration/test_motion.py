@@ -14,13 +14,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from runtime.bench.harness.jog import Cell
+from runtime.bench.harness.processes import Runtime
 from runtime.interfaces.scene import SceneObject
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
 from runtime.robotics.world import World
-from tests.support.jog import Cell
 from tests.support.posts import LEFT, RIGHT, SCENE, clear_posts, put_posts
-from tests.support.processes import Runtime
 
 INFO = load_robot_info("ur5")
 KINEMATICS = Kinematics(INFO)

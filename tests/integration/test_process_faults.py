@@ -16,8 +16,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from tests.support.jog import Cell, JogClient
-from tests.support.processes import Runtime, wait_for
+from runtime.bench.harness.jog import Cell, JogClient
+from runtime.bench.harness.processes import Runtime, wait_for
 
 HALT_WITHIN = 0.2  # s from the kill to the halt at the driver (the bound)
 FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from websockets.sync.client import connect
 
-from tests.support.blocks import (
+from runtime.bench.harness.blocks import (
     block,
     ids_of,
     number,
@@ -25,9 +25,9 @@ from tests.support.blocks import (
     waypoint,
     workspace,
 )
-from tests.support.jog import Cell
+from runtime.bench.harness.jog import Cell
+from runtime.bench.harness.processes import STILL, Runtime, wait_for
 from tests.support.posts import LEFT, RIGHT, clear_posts, put_posts
-from tests.support.processes import STILL, Runtime, wait_for
 from tests.support.programs import HOME, PICK_AND_PLACE_WAYPOINTS, PLACE, pick_and_place, teach
 
 FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]

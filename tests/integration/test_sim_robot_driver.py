@@ -13,8 +13,8 @@ import pytest
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
+from runtime.bench.harness.processes import SimRobotProc, wait_for
 from runtime.robotics.robot_info import load_robot_info
-from tests.support.processes import SimRobotProc, wait_for
 
 INFO = load_robot_info("ur5")
 LOWER = np.array([j.lower for j in INFO.joints])

@@ -16,7 +16,7 @@ import pytest
 import yaml
 from websockets.sync.client import connect
 
-from tests.support.processes import Proc, child_env, free_port, wait_for
+from runtime.bench.harness.processes import Proc, child_env, free_port, wait_for
 from tests.unit.test_variable_store import REJECT, ROUND_TRIP
 
 

@@ -3,7 +3,7 @@ planned around them, which takes the planner seconds (long enough to stop it mea
 
 from __future__ import annotations
 
-from tests.support.processes import Runtime
+from runtime.bench.harness.processes import Runtime
 
 LEFT = [1.0, -1.0, 1.8, -2.37, -1.57, 0.0]
 RIGHT = [-1.0, -1.0, 1.8, -2.37, -1.57, 0.0]

@@ -17,9 +17,9 @@ import pytest
 from blockly_blocks.catalog import definition, toolbox_blocks
 from blockly_blocks.generator import generate, known_types
 from blockly_blocks.workspace import MAX_BLOCKS, MAX_NESTING, WorkspaceError
+from runtime.bench.harness import blocks as wb
 from sandbox.policy import compile_program
 from sandbox.supervisor import ProgramRun, RunLimits, RunState
-from tests.support import blocks as wb
 from tests.unit.test_sandbox_attacks import RecordingHost
 
 # Blockly's standard blocks: each dropdown with its options (the first is the default).

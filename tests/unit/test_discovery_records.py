@@ -41,8 +41,13 @@ def test_advertisement_round_trip() -> None:
     )
 
 
-def test_unknown_kind_missing_uuid_or_port_is_ignored() -> None:
-    assert parse_info(info({b"uuid": b"u", b"kind": b"toaster"})) is None
+def test_malformed_kind_missing_uuid_or_port_is_ignored() -> None:
+    # Any well-formed kind is read (a plugin may declare it; the device manager lists only
+    # kinds an installed plugin knows); a malformed one is not.
+    found = parse_info(info({b"uuid": b"u", b"kind": b"conveyor_2"}))
+    assert found is not None and found.kind == "conveyor_2"
+    for kind in (b"Toaster", b"", b"a" * 17, b"ro bot", b"9robot"):
+        assert parse_info(info({b"uuid": b"u", b"kind": kind})) is None, kind
     assert parse_info(info({b"kind": b"robot"})) is None
     assert parse_info(info({b"uuid": b"u", b"kind": b"robot"}, port=0)) is None
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 from fastapi.testclient import TestClient
 
+from runtime.bench.harness.processes import free_port
 from runtime.kit.settings import RuntimeSettings
-from tests.support.processes import free_port
 from webui.server import build_app
 
 

@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from tests.bench.stats import cpu_times, steal_percent
+from runtime.bench.stats import cpu_times, steal_percent
 
 MODULES = (
     "discovery",
@@ -41,7 +41,7 @@ class Figure:
 
 
 def load(module: str) -> Any:
-    return importlib.import_module(f"tests.bench.bench_{module}")
+    return importlib.import_module(f"runtime.bench.bench_{module}")
 
 
 def select(only: list[str] | None) -> list[str]:

@@ -14,9 +14,9 @@ from pathlib import Path
 import httpx
 import websockets
 
-from tests.bench.runner import Figure
-from tests.bench.stats import quick
-from tests.support.processes import SimRobotProc
+from runtime.bench.harness.processes import SimRobotProc
+from runtime.bench.runner import Figure
+from runtime.bench.stats import quick
 
 FIGURES = ("sim_loop_period_error_p99", "sim_loop_period_error_max", "host_timer_jitter_p99")
 

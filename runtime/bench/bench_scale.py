@@ -20,9 +20,9 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from tests.bench.runner import Figure
-from tests.bench.stats import percentile, quick
-from tests.support.processes import Runtime, SimRobotProc, child_env, wait_for
+from runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
+from runtime.bench.runner import Figure
+from runtime.bench.stats import percentile, quick
 
 FIGURES = (
     "scale_20_robots_min_rate",
@@ -70,7 +70,7 @@ def measure(runtime: Runtime, robots: int, seconds: float, home: Path) -> dict[s
     started = time.monotonic()
     url = runtime.url.replace("http://", "ws://") + "/api/devices/ws?batch=1"
     clients = subprocess.run(
-        [sys.executable, "-m", "tests.bench.ui_clients", url, str(CLIENTS), str(seconds)],
+        [sys.executable, "-m", "runtime.bench.ui_clients", url, str(CLIENTS), str(seconds)],
         capture_output=True,
         text=True,
         env=child_env(home),

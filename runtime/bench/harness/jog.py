@@ -11,7 +11,7 @@ import httpx
 import numpy as np
 from websockets.sync.client import ClientConnection, connect
 
-from tests.support.processes import Runtime, wait_for
+from runtime.bench.harness.processes import Runtime, wait_for
 
 _presses = itertools.count(1)
 

@@ -18,11 +18,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from tests.bench.bench_jog import driver_time
-from tests.bench.runner import Figure
-from tests.bench.stats import percentile, quick
-from tests.support.jog import Cell, JogClient
-from tests.support.processes import Runtime, child_env
+from runtime.bench.bench_jog import driver_time
+from runtime.bench.harness.jog import Cell, JogClient
+from runtime.bench.harness.processes import Runtime, child_env
+from runtime.bench.runner import Figure
+from runtime.bench.stats import percentile, quick
 
 FIGURES = ("jog_deadman_under_load_false_halts", "jog_deadman_under_load_halt_p99")
 CLIENTS = 200
@@ -78,7 +78,7 @@ def run() -> list[Figure]:
         cell.ready()
         jog = JogClient(runtime, token=cell.token)
         load = subprocess.Popen(
-            [sys.executable, "-m", "tests.bench.load", runtime.url, str(seconds), str(CLIENTS)],
+            [sys.executable, "-m", "runtime.bench.load", runtime.url, str(seconds), str(CLIENTS)],
             stdout=subprocess.PIPE,
             env=child_env(home),
             preexec_fn=lambda: os.nice(10),

@@ -23,13 +23,13 @@ import httpx
 from websockets.sync.client import ClientConnection, connect
 
 from blockly_blocks.generator import generate
+from runtime.bench.harness.blocks import block, number, stack, text, workspace
+from runtime.bench.harness.jog import Cell
+from runtime.bench.harness.processes import Runtime, wait_for
+from runtime.bench.runner import Figure
+from runtime.bench.stats import percentile, quick
 from runtime.robotics.robot_info import load_robot_info
 from sandbox.supervisor import ProgramRun, RunState
-from tests.bench.runner import Figure
-from tests.bench.stats import percentile, quick
-from tests.support.blocks import block, number, stack, text, workspace
-from tests.support.jog import Cell
-from tests.support.processes import Runtime, wait_for
 
 FIGURES = (
     "program_first_motion",

@@ -8,9 +8,9 @@ import time
 from functools import partial
 from pathlib import Path
 
-from tests.bench.runner import Figure
-from tests.bench.stats import percentile, quick
-from tests.support.processes import Runtime, SimRobotProc, wait_for
+from runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
+from runtime.bench.runner import Figure
+from runtime.bench.stats import percentile, quick
 
 FIGURES = ("discovery_time", "discovery_from_process_start")
 

@@ -11,6 +11,8 @@ from typing import Any
 import numpy as np
 from scipy.optimize import lsq_linear
 
+from runtime.bench.runner import Figure
+from runtime.bench.stats import percentile, quick
 from runtime.interfaces.scene import SceneObject
 from runtime.motion.models import MoveRequest
 from runtime.motion.moves import MovePlanner, Point
@@ -19,8 +21,6 @@ from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
 from runtime.robotics.velocity import VelocityController
 from runtime.robotics.world import World
-from tests.bench.runner import Figure
-from tests.bench.stats import percentile, quick
 
 FIGURES = (
     "ik_median",

@@ -7,9 +7,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from tests.bench.runner import Figure
-from tests.bench.stats import quick
-from tests.support.processes import Runtime
+from runtime.bench.harness.processes import Runtime
+from runtime.bench.runner import Figure
+from runtime.bench.stats import quick
 
 FIGURES = ("cold_start", "total_rss", "total_pss")
 

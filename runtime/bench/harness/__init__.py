@@ -1,0 +1,1 @@
+"""Real runtimes, drivers and clients on loopback, for the benchmarks and the test suite."""
