@@ -105,7 +105,8 @@ class DeviceConnection:
 
     @property
     def live(self) -> bool:
-        return self.status == "connected" and self._outbox is not None
+        """A session is up (for a device with a command session, that too)."""
+        return self.status == "connected" and self._http is not None
 
     def start(self) -> None:
         self._task = asyncio.create_task(self._run(), name=f"device:{self.name}")
@@ -137,7 +138,12 @@ class DeviceConnection:
         """Queue a command on this generation's session, in order; the driver's refusal, if
         any, goes to `on_refused`."""
         self._require(generation)
-        assert self._outbox is not None
+        if self._outbox is None:
+            raise OpenPendantError(
+                f"{self.name} takes no streamed commands (a {self.record.kind})",
+                code="not_streamed",
+                status=409,
+            )
         self._next_id += 1
         ident = self._next_id
         self._routes[ident] = on_refused

@@ -3,8 +3,10 @@ supervise until Ctrl-C or SIGTERM."""
 
 from __future__ import annotations
 
+import gc
 import json
 import logging
+import os
 import signal
 import socket
 import sys
@@ -14,11 +16,12 @@ from types import FrameType
 
 import httpx
 
+from plugins.api import resolve
 from plugins.registry import registry
 from runtime import __version__
 from runtime.kit.serve import listening_socket
 from runtime.kit.settings import RuntimeSettings, settings_for_child
-from runtime.launcher.supervisor import Child, Supervisor, process_env
+from runtime.launcher.supervisor import Child, Main, Supervisor, process_env
 from runtime.services import URLS_ENV, WEBUI, all_services, services
 
 log = logging.getLogger("openpendant.launcher")
@@ -31,12 +34,46 @@ class StartupFailed(RuntimeError):
     pass
 
 
+SPAWN_ENV = "OPENPENDANT_SPAWN"
+
+
+def forking() -> Main | None:
+    """How children start: forked from this process (its imports shared copy-on-write), or
+    with OPENPENDANT_SPAWN=exec each as a fresh interpreter."""
+    if os.environ.get(SPAWN_ENV, "fork") == "exec":
+        return None
+    from runtime.cli import main
+
+    return main
+
+
+def preload(settings: RuntimeSettings) -> None:
+    """Import, once, what the children will run, then keep those objects out of every later
+    garbage collection (which would write to, and so un-share, their pages). What fails to
+    import here is left to the child, which reports it in its own log."""
+    modules = [spec.factory for spec in (*services(), WEBUI)]
+    drivers = registry().drivers
+    for device in settings.devices:
+        driver = drivers.get(device.driver)
+        if driver is not None:
+            modules += [r for r in (driver.factory, driver.options, driver.routes) if r]
+    modules += ["runtime.drivers.run:run_driver", "runtime.services:run_service"]
+    for reference in modules:
+        try:
+            resolve(reference)
+        except Exception as exc:  # the child will say so in its log
+            log.debug("not preloaded: %s (%s)", reference, exc)
+    gc.collect()
+    gc.freeze()
+
+
 def _service_child(
     name: str,
     sock: socket.socket,
     env: dict[str, str],
     settings: RuntimeSettings,
     public: socket.socket | None = None,
+    main: Main | None = None,
 ) -> Child:
     fd = sock.fileno()
     argv = [sys.executable, "-m", "runtime.cli", "service", name, "--fd", str(fd)]
@@ -50,6 +87,7 @@ def _service_child(
         env=env,
         log_path=settings.logs / f"{name}.log",
         pass_fds=tuple(fds),
+        main=main,
     )
 
 
@@ -70,7 +108,9 @@ def device_uuid(installation: str, driver: str, name: str) -> str:
     return str(uuid.uuid5(SIM_NAMESPACE, f"{installation}/{driver}/{name}"))
 
 
-def _device_children(settings: RuntimeSettings, env: dict[str, str]) -> list[Child]:
+def _device_children(
+    settings: RuntimeSettings, env: dict[str, str], main: Main | None = None
+) -> list[Child]:
     """The `devices` list: each an installed driver in a process of its own (simulated ones
     only with `sim`)."""
     drivers = registry().drivers
@@ -105,6 +145,7 @@ def _device_children(settings: RuntimeSettings, env: dict[str, str]) -> list[Chi
                 ],
                 env=env,
                 log_path=settings.logs / f"{spec.driver}-{spec.name}.log",
+                main=main,
             )
         )
     return children
@@ -133,6 +174,10 @@ def wait_healthy(urls: dict[str, str], supervisor: Supervisor, timeout: float) -
 
 def run(settings: RuntimeSettings) -> int:
     started = time.monotonic()
+    # Small matrices only: one thread each (no BLAS or OpenMP pools per process, and none
+    # alive in this process when it forks).
+    for threads in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
+        os.environ.setdefault(threads, "1")
     settings.data_dir.mkdir(parents=True, exist_ok=True)
     settings.logs.mkdir(parents=True, exist_ok=True)
     try:
@@ -161,6 +206,9 @@ def run(settings: RuntimeSettings) -> int:
     settings = settings.model_copy(update={"jog_port": int(jog_public.getsockname()[1])})
     env = process_env({**settings_for_child(settings), URLS_ENV: json.dumps(urls)})
 
+    main = forking()
+    if main is not None:
+        preload(settings)
     supervisor = Supervisor()
 
     def on_signal(signum: int, _: FrameType | None) -> None:
@@ -171,9 +219,11 @@ def run(settings: RuntimeSettings) -> int:
 
     for spec in declared:
         public_socket = jog_public if spec.public_paths else None
-        supervisor.add(_service_child(spec.name, sockets[spec.name], env, settings, public_socket))
-    supervisor.add(_service_child(WEBUI.name, public, env, settings))
-    for child in _device_children(settings, env):
+        supervisor.add(
+            _service_child(spec.name, sockets[spec.name], env, settings, public_socket, main)
+        )
+    supervisor.add(_service_child(WEBUI.name, public, env, settings, main=main))
+    for child in _device_children(settings, env, main):
         supervisor.add(child)
 
     ui_host = "127.0.0.1" if settings.host in ("0.0.0.0", "") else settings.host

@@ -241,6 +241,16 @@ class SimRobotProc(Proc):
         return str(self.url)
 
 
+class DriverProc(SimRobotProc):
+    """`openpendant driver NAME …`: any installed driver, as its own advertised device."""
+
+    def __init__(self, home: Path, driver: str, name: str, *options: str) -> None:
+        argv = [sys.executable, "-m", "runtime.cli", "driver", driver, "--name", name, *options]
+        Proc.__init__(self, argv, child_env(home), home / "logs" / f"{driver}-{name}.log")
+        self.url = ""
+        self.uuid = ""
+
+
 class SpaceMouseProc(SimRobotProc):
     """`openpendant spacemouse` playing a recording, on request."""
 
