@@ -56,17 +56,42 @@ export interface RobotFlags {
   trajectory_running: boolean;
 }
 
+export type CommandMode = "halt" | "jog" | "trajectory" | "position_command" | "velocity_command";
+
+export type OperationalMode =
+  | "manual_reduced_speed"
+  | "manual_full_speed"
+  | "auto"
+  | "undefined";
+
+/** "paused": brought to a stop on its path; it resumes where it stopped. */
+export type TrajectoryState = "running" | "paused" | "finished" | "aborted" | "failed";
+
+export interface TrajectoryStatus {
+  id: string;
+  state: TrajectoryState;
+  progress: number;
+  message: string;
+}
+
+// runtime/interfaces/robot.py. Fields with a default there are always sent (a state is the
+// whole model as the driver dumps it), so none is optional here.
 export interface RobotState {
   seqno: number;
   ts: number;
-  command_mode: string;
-  operational_mode: string;
+  command_mode: CommandMode;
+  operational_mode: OperationalMode;
   flags: RobotFlags;
   joint_position: number[];
   joint_velocity: number[];
+  joint_position_command: number[];
   tcp_pose: Pose;
   speed_ratio: number;
   error_message: string;
+  trajectory: TrajectoryStatus | null; // the one under way (running or paused), null: none
+  tool_open: boolean | null; // null: no tool, or not known yet
+  digital_inputs: boolean[];
+  digital_outputs: boolean[];
 }
 
 /** A 3D mouse's state (runtime/interfaces/input.py): axes in [-1, 1], x y z rx ry rz. */

@@ -1,0 +1,79 @@
+import { LitElement, css, html } from "lit";
+import { t } from "../i18n";
+import { shared } from "../styles";
+
+export type PowerCommand = "enable" | "disable" | "reset_errors";
+
+// The head of the Jog panel: the robot in focus, taking and releasing control, who has it,
+// and powering the robot (enable, disable, reset an error). Emits control-toggle and
+// power {command}; the panel acts.
+export class OpJogHeader extends LitElement {
+  static properties = {
+    robot: { type: String },
+    mine: { type: Boolean },
+    holder: { type: String },
+    controlledBy: { type: String },
+    enabled: { type: Boolean },
+    error: { type: Boolean },
+    canPower: { type: Boolean },
+  };
+  declare robot: string;
+  declare mine: boolean; // this tab has control
+  declare holder: string; // this tab's name as others see it, while it has control
+  declare controlledBy: string; // who has control, "" nobody
+  declare enabled: boolean;
+  declare error: boolean;
+  declare canPower: boolean;
+
+  static styles = [
+    shared,
+    css`
+      :host {
+        display: flex;
+        gap: 10px;
+        flex-wrap: wrap;
+        align-items: center;
+        margin-bottom: 12px;
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    this.robot = "";
+    this.mine = false;
+    this.holder = "";
+    this.controlledBy = "";
+    this.enabled = false;
+    this.error = false;
+    this.canPower = false;
+  }
+
+  private power(command: PowerCommand): void {
+    this.dispatchEvent(new CustomEvent("power", { detail: { command } }));
+  }
+
+  render() {
+    const mine = this.mine;
+    const controlledBy = this.controlledBy;
+    return html`<h2 style="margin:0" data-testid="jog-robot">${this.robot}</h2>
+      <button data-testid="control" class=${mine ? "" : "primary"}
+        @click=${() => this.dispatchEvent(new CustomEvent("control-toggle"))}>
+        ${mine ? t("jog.control.release") : t("jog.control.take")}</button>
+      <span class="chip ${mine ? "ok" : controlledBy ? "warn" : ""}" data-testid="lease">
+        ${mine ? t("jog.control.yours", { holder: this.holder })
+          : controlledBy ? t("jog.control.controlled_by", { holder: controlledBy })
+          : t("jog.control.nobody")}</span>
+      ${this.enabled
+        ? html`<button data-testid="disable" ?disabled=${!this.canPower}
+            @click=${() => this.power("disable")}>${t("jog.disable")}</button>`
+        : html`<button data-testid="enable" ?disabled=${!this.canPower}
+            @click=${() => this.power("enable")}>${t("jog.enable")}</button>`}
+      ${this.error
+        ? html`<button ?disabled=${!this.canPower} @click=${() => this.power("reset_errors")}>
+            ${t("jog.reset_error")}</button>`
+        : ""}`;
+  }
+}
+
+customElements.define("op-jog-header", OpJogHeader);

@@ -1,0 +1,133 @@
+import { LitElement, css, html, nothing } from "lit";
+import { t } from "../i18n";
+import { shared } from "../styles";
+import type { ProgramSummary } from "../program/types";
+
+export type ProgramAction = "new" | "save" | "rename" | "duplicate" | "delete" | "undo" | "redo";
+
+// The Program panel's top bar: which program (a dropdown of the saved ones), unsaved or not,
+// new, save, rename, duplicate, delete, undo and redo. Emits program-open {name} and
+// program-action {action}; the panel acts.
+export class OpProgramBar extends LitElement {
+  static properties = {
+    programs: { attribute: false },
+    name: { type: String },
+    dirty: { type: Boolean },
+    canSave: { type: Boolean },
+    live: { type: Boolean },
+    undo: { type: Boolean },
+    redo: { type: Boolean },
+  };
+  declare programs: ProgramSummary[];
+  declare name: string; // "" until a new program is first saved
+  declare dirty: boolean;
+  declare canSave: boolean;
+  declare live: boolean; // a run of it is under way: no rename, no delete
+  declare undo: boolean;
+  declare redo: boolean;
+
+  static styles = [
+    shared,
+    css`
+      :host {
+        display: flex;
+        flex-wrap: wrap;
+        gap: 8px;
+        align-items: center;
+      }
+      button {
+        padding: 0 16px;
+      }
+      select {
+        min-height: var(--touch);
+        min-width: 180px;
+        max-width: 320px;
+        padding: 0 12px;
+        border-radius: 10px;
+        border: 2px solid var(--line);
+        background: var(--bg);
+        color: var(--text);
+        font: inherit;
+      }
+      .spacer {
+        flex: 1;
+      }
+      .dirty {
+        color: var(--warn);
+        font-size: 15px;
+      }
+      @media (max-width: 700px) {
+        button {
+          padding: 0 12px;
+        }
+        .label {
+          display: none;
+        }
+        select {
+          min-width: 0;
+          flex: 1;
+        }
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    this.programs = [];
+    this.name = "";
+    this.dirty = false;
+    this.canSave = false;
+    this.live = false;
+    this.undo = false;
+    this.redo = false;
+  }
+
+  updated(): void {
+    // After the options render: a value set before its option exists would not hold.
+    const select = this.renderRoot.querySelector<HTMLSelectElement>("[data-testid=program-select]");
+    if (select && select.value !== this.name) select.value = this.name;
+  }
+
+  private emit(action: ProgramAction): void {
+    this.dispatchEvent(new CustomEvent("program-action", { detail: { action } }));
+  }
+
+  render() {
+    return html`<select
+        data-testid="program-select"
+        aria-label=${t("program.program")}
+        @change=${(e: Event) => {
+          const select = e.target as HTMLSelectElement;
+          const wanted = select.value;
+          select.value = this.name; // until the panel has opened it
+          this.dispatchEvent(new CustomEvent("program-open", { detail: { name: wanted } }));
+        }}
+      >
+        ${this.name ? nothing : html`<option value="">${t("program.new_program")}</option>`}
+        ${this.programs.map(
+          (p) => html`<option value=${p.name} ?selected=${p.name === this.name}>${p.name}</option>`,
+        )}
+      </select>
+      ${this.dirty
+        ? html`<span class="dirty" data-testid="unsaved">${t("program.unsaved")}</span>`
+        : nothing}
+      <button data-testid="new" @click=${() => this.emit("new")}>${t("program.new")}</button>
+      <button data-testid="save" class=${this.dirty || !this.name ? "primary" : ""}
+        ?disabled=${!this.canSave} @click=${() => this.emit("save")}>${t("program.save")}</button>
+      <button data-testid="rename" ?disabled=${!this.name || this.live}
+        @click=${() => this.emit("rename")}>${t("program.rename")}</button>
+      <button data-testid="duplicate" ?disabled=${!this.name}
+        @click=${() => this.emit("duplicate")}>${t("program.duplicate")}</button>
+      <button data-testid="delete" class="danger" ?disabled=${!this.name || this.live}
+        @click=${() => this.emit("delete")}>${t("program.delete")}</button>
+      <span class="spacer"></span>
+      <button data-testid="undo" aria-label=${t("program.undo")} ?disabled=${!this.undo}
+        @click=${() => this.emit("undo")}>↶<span class="label"> ${t("program.undo")}</span>
+      </button>
+      <button data-testid="redo" aria-label=${t("program.redo")} ?disabled=${!this.redo}
+        @click=${() => this.emit("redo")}>↷<span class="label"> ${t("program.redo")}</span>
+      </button>`;
+  }
+}
+
+customElements.define("op-program-bar", OpProgramBar);

@@ -1,0 +1,49 @@
+// What the dropdowns of the robot, I/O and waypoint blocks offer: the robots added, the
+// digital inputs and outputs each has, the waypoints taught. Waypoints taught, renamed or
+// deleted anywhere reach them at once over the waypoint feed.
+
+import { api } from "../api";
+import { feed } from "../live";
+import type { DeviceDetails } from "../types";
+import { type WaypointChange, WaypointFeed } from "./waypoint-feed";
+
+export const waypointFeed = new WaypointFeed(
+  (change) => void applyWaypoint(change),
+  () => void refreshChoices().catch(() => undefined),
+);
+
+async function applyWaypoint({ name, present }: WaypointChange): Promise<void> {
+  const { choices } = await import("./catalog");
+  const names = new Set(choices.waypoints);
+  if (present) names.add(name);
+  else names.delete(name);
+  choices.waypoints = [...names];
+}
+
+/** The robot names and what each has, for the dropdowns of the robot and I/O blocks. */
+export async function refreshChoices(): Promise<void> {
+  const { choices } = await import("./catalog");
+  const robots = feed.robots().map((r) => r.local_name);
+  choices.robots = robots;
+  const details = await Promise.all(
+    robots.map((r) =>
+      api<DeviceDetails>("GET", `/api/devices/${encodeURIComponent(r)}`).catch(() => null),
+    ),
+  );
+  const inputs: string[] = [];
+  const outputs: string[] = [];
+  for (const d of details) {
+    const info = d?.info?.info;
+    if (!d || !info) continue;
+    for (let i = 0; i < (info.digital_inputs ?? 0); i++) inputs.push(`${d.local_name}.di${i}`);
+    for (let i = 0; i < (info.digital_outputs ?? 0); i++) outputs.push(`${d.local_name}.do${i}`);
+  }
+  choices.inputs = inputs;
+  choices.outputs = outputs;
+  const lists = await Promise.all(
+    ["joint_waypoint", "pose_waypoint"].map((type) =>
+      api<{ name: string }[]>("GET", `/api/variables?type=${type}`).catch(() => []),
+    ),
+  );
+  choices.waypoints = lists.flat().map((v) => v.name);
+}
