@@ -303,6 +303,10 @@ class DeviceRegistry:
     def _get(self, local_name: str) -> DeviceConnection:
         conn = self.connections.get(local_name)
         if conn is None:
+            if not self.loaded:  # it may well be added: not known yet is not "gone"
+                raise Unavailable(
+                    "the device manager is loading the added devices", code="starting"
+                )
             raise NotFound(f"no device named {local_name!r}", code="device_not_found")
         return conn
 

@@ -40,6 +40,9 @@ export class Control extends EventTarget {
     this.dispatchEvent(new Event("change"));
   }
   private timers = new Map<string, number>();
+  // Counts releases per robot: an answer to a take or renewal sent before a release must
+  // not put the token back (the tablet would hold control it was told it gave up).
+  private releases = new Map<string, number>();
 
   token(robot: string): string | null {
     return sessionStorage.getItem(`op.lease.${robot}`);
@@ -51,12 +54,18 @@ export class Control extends EventTarget {
 
   async take(robot: string): Promise<void> {
     const token = this.token(robot);
+    const asked = this.releases.get(robot) ?? 0;
     const granted = await api<Granted>(
       "POST",
       `/api/devices/${encodeURIComponent(robot)}/lease`,
       { holder: this.holder },
       token ? { "X-Lease-Token": token } : {},
     );
+    if ((this.releases.get(robot) ?? 0) !== asked) {
+      // Released while this was on its way: give the lease back, keep nothing.
+      await this.giveBack(robot, granted.token);
+      return;
+    }
     sessionStorage.setItem(`op.lease.${robot}`, granted.token);
     this.keepAlive(robot);
     this.dispatchEvent(new Event("change"));
@@ -64,12 +73,15 @@ export class Control extends EventTarget {
 
   async release(robot: string): Promise<void> {
     const token = this.token(robot);
+    this.releases.set(robot, (this.releases.get(robot) ?? 0) + 1);
     this.forget(robot);
-    if (token) {
-      await api("DELETE", `/api/devices/${encodeURIComponent(robot)}/lease`, undefined, {
-        "X-Lease-Token": token,
-      }).catch(() => undefined);
-    }
+    if (token) await this.giveBack(robot, token);
+  }
+
+  private async giveBack(robot: string, token: string): Promise<void> {
+    await api("DELETE", `/api/devices/${encodeURIComponent(robot)}/lease`, undefined, {
+      "X-Lease-Token": token,
+    }).catch(() => undefined);
   }
 
   /** The server no longer honours our token (it lapsed, or the robot was removed). */
