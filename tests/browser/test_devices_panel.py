@@ -31,7 +31,9 @@ def test_add_the_detected_robot_by_touch_and_see_it_live(
     errors = PageErrors(page)
     page.goto(f"{runtime.url}/#/devices")
     expect(page.get_by_test_id("runtime-link")).to_have_text("Runtime connected")
-    card = page.get_by_test_id("detected-device").filter(has_text="sim-ur5")
+    # This runtime's own (another runtime on this loopback may announce a "sim-ur5" too).
+    own = runtime.own_device()["uuid"]
+    card = page.locator(f'[data-testid="detected-device"][data-uuid="{own}"]')
     expect(card).to_be_visible(timeout=15_000)
     expect(card).to_contain_text("ur5")
     page.screenshot(path=artifacts / "1-detected.png")

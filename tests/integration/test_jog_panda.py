@@ -38,7 +38,7 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cell]:
     sim = SimRobotProc(home, "jog-panda", model="panda")
     sim.wait_ready()
     try:
-        yield Cell(runtime)
+        yield Cell(runtime, sim.uuid)
     finally:
         sim.stop()
         runtime.stop()

@@ -135,10 +135,12 @@ class RobotView:
 
 
 class Cell:
-    def __init__(self, runtime: Runtime) -> None:
+    def __init__(self, runtime: Runtime, uuid: str | None = None) -> None:
+        """The runtime's own simulated robot (or the device `uuid`) added as "robot"."""
         self.runtime = runtime
-        sim = runtime.own_device()
-        runtime.api("POST", "/devices", json={"uuid": sim["uuid"], "local_name": "robot"})
+        uuid = uuid or runtime.own_device()["uuid"]
+        wait_for(lambda: runtime.is_detected(uuid), 10, what=f"{uuid} detected")
+        runtime.api("POST", "/devices", json={"uuid": uuid, "local_name": "robot"})
         wait_for(lambda: runtime.api("GET", "/devices").json()[0]["status"] == "connected", 10)
         self.token = runtime.api("POST", "/devices/robot/lease", json={"holder": "tests"}).json()[
             "token"
