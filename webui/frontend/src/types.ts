@@ -113,14 +113,26 @@ export interface JointLimits {
   max_jerk: number | null;
 }
 
+export interface Payload {
+  mass: number; // kg
+  center_of_mass: [number, number, number]; // m, in the flange frame
+}
+
 export interface RobotInfo {
   model: string;
   manufacturer: string;
   description: string;
+  urdf: string;
+  base_link: string;
+  flange_link: string;
+  tcp: Pose; // in the flange frame
+  payload: Payload;
+  max_payload: number | null; // kg, the rated payload
   joints: JointLimits[];
+  home: number[];
   capabilities: string[];
-  digital_inputs?: number;
-  digital_outputs?: number;
+  digital_inputs: number;
+  digital_outputs: number;
 }
 
 export interface DeviceDetails extends AddedDevice {
