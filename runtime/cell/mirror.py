@@ -81,12 +81,54 @@ class CellReading:
                 body.set_base(self.bases[name])
 
 
-class WorldMirror:
+class CellWorld:
+    """A world kept in step with the cell on request (`sync`): the connected robots, each with
+    its link, on their bases, and the scene's objects. Robot bodies and obstacle shapes are
+    built off the event loop and swapped in on it: a control cycle never sees half a scene."""
+
     def __init__(self, devices: Devices, storage: StorageClient) -> None:
         self.devices = devices
         self.storage = storage
         self.world = World()
         self.links: dict[str, RobotClient] = {}
+
+    async def sync(self, *, leave_out_failing: bool = False) -> World:
+        """Bring the world up to date; a robot whose link cannot be had is an error, or with
+        `leave_out_failing` left out until the next sync."""
+        cell = await CellReading.read(self.devices.manager, self.storage, self.world.robots)
+        for name in [n for n in self.links if n not in cell.robots]:
+            del self.links[name]
+            self.world.remove_robot(name)
+        for name in cell.robots:
+            try:
+                await self._ensure(name)
+            except OpenPendantError as exc:
+                if not leave_out_failing:
+                    raise
+                log.info("%s left out of the world for now: %s", name, exc.message)
+        await cell.place_bases(self.world, self.storage)
+        if cell.scene != self.world.objects:
+            obstacles = await asyncio.to_thread(build_obstacles, cell.scene)
+            self.world.set_objects(cell.scene, obstacles)
+        return self.world
+
+    async def _ensure(self, name: str) -> None:
+        link = self.links.get(name)
+        if link is None:
+            link = self.links[name] = await self.devices.robot(name)
+        info = link.info
+        known = self.world.robots.get(name)
+        if known is None or known.kinematics.info != info:
+            body = await asyncio.to_thread(RobotBody, name, Kinematics(info))
+            self.world.insert_robot(body)
+
+
+class WorldMirror(CellWorld):
+    """The cell's world refreshed every REFRESH s in the background, for control loops that
+    cannot wait for a sync; every robot's joints come from its live state stream."""
+
+    def __init__(self, devices: Devices, storage: StorageClient) -> None:
+        super().__init__(devices, storage)
         self.refreshed = asyncio.Event()
         self._task: asyncio.Task[None] | None = None
 
@@ -102,37 +144,11 @@ class WorldMirror:
     async def _follow(self) -> None:
         while True:
             try:
-                await self.refresh()
+                await self.sync(leave_out_failing=True)
                 self.refreshed.set()
             except (OpenPendantError, OSError, ValueError) as exc:
                 log.info("world mirror not refreshed: %s", exc)
             await asyncio.sleep(REFRESH)
-
-    async def refresh(self) -> None:
-        cell = await CellReading.read(self.devices.manager, self.storage, self.world.robots)
-        for name in [n for n in self.links if n not in cell.robots]:
-            del self.links[name]
-            self.world.remove_robot(name)
-        for name in cell.robots:
-            try:
-                await self._ensure(name)
-            except OpenPendantError as exc:
-                log.info("world mirror: %s left out for now: %s", name, exc.message)
-        await cell.place_bases(self.world, self.storage)
-        if cell.scene != self.world.objects:
-            # Built off the loop, swapped in on it: a control cycle never sees half a scene.
-            obstacles = await asyncio.to_thread(build_obstacles, cell.scene)
-            self.world.set_objects(cell.scene, obstacles)
-
-    async def _ensure(self, name: str) -> None:
-        link = self.links.get(name)
-        if link is None:
-            link = self.links[name] = await self.devices.robot(name)
-        info = link.info
-        known = self.world.robots.get(name)
-        if known is None or known.kinematics.info != info:
-            body = await asyncio.to_thread(RobotBody, name, Kinematics(info))
-            self.world.insert_robot(body)
 
     def place_others(self, robot: str, lookahead: float = LOOKAHEAD) -> None:
         """Every other robot where it will be a cycle from now: its latest reported joints

@@ -9,7 +9,7 @@ from typing import Literal
 from pydantic import BaseModel, Field
 
 from runtime.interfaces.common import Strict
-from runtime.interfaces.device import DeviceDriver, DeviceIdentity
+from runtime.interfaces.device import DeviceIdentity, KindDriver
 from runtime.interfaces.endpoints import endpoint
 
 Encoding = Literal["jpeg", "png"]
@@ -77,13 +77,8 @@ class Camera(ABC):
         """A new frame, taken after the request arrived."""
 
 
-class CameraDriver(DeviceDriver, Camera):
-    def __init__(self, identity: DeviceIdentity, info: CameraInfo) -> None:
-        super().__init__(identity)
-        self.info = info
-
-    def describe(self) -> CameraDescription:
-        return CameraDescription(identity=self.identity, info=self.info)
+class CameraDriver(KindDriver[CameraInfo], Camera):
+    description = CameraDescription
 
     @abstractmethod
     def state(self) -> CameraState: ...

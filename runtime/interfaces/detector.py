@@ -9,7 +9,7 @@ from abc import ABC, abstractmethod
 from pydantic import BaseModel, Field
 
 from runtime.interfaces.common import Pose, Strict
-from runtime.interfaces.device import DeviceDriver, DeviceIdentity
+from runtime.interfaces.device import DeviceIdentity, KindDriver
 from runtime.interfaces.endpoints import endpoint
 
 
@@ -71,13 +71,8 @@ class Detector(ABC):
         """Detect in a new image."""
 
 
-class DetectorDriver(DeviceDriver, Detector):
-    def __init__(self, identity: DeviceIdentity, info: DetectorInfo) -> None:
-        super().__init__(identity)
-        self.info = info
-
-    def describe(self) -> DetectorDescription:
-        return DetectorDescription(identity=self.identity, info=self.info)
+class DetectorDriver(KindDriver[DetectorInfo], Detector):
+    description = DetectorDescription
 
     @abstractmethod
     def state(self) -> DetectorState: ...

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from typing import ClassVar, Generic, TypeVar
 
 from pydantic import BaseModel, Field
 
@@ -41,3 +42,20 @@ class DeviceDriver(ABC):
 
     async def shutdown(self) -> None:
         """Leave the device safe and release it."""
+
+
+Info = TypeVar("Info", bound=BaseModel)
+
+
+class KindDriver(DeviceDriver, Generic[Info]):
+    """A driver of a kind whose GET /info is {identity, info}: `info` the kind's static
+    information (a model), `description` the model of the whole."""
+
+    description: ClassVar[type[BaseModel]]
+
+    def __init__(self, identity: DeviceIdentity, info: Info) -> None:
+        super().__init__(identity)
+        self.info = info
+
+    def describe(self) -> BaseModel:
+        return self.description(identity=self.identity, info=self.info)

@@ -8,7 +8,7 @@ from abc import ABC, abstractmethod
 from pydantic import BaseModel, Field
 
 from runtime.interfaces.common import Strict
-from runtime.interfaces.device import DeviceDriver, DeviceIdentity
+from runtime.interfaces.device import DeviceIdentity, KindDriver
 from runtime.interfaces.endpoints import endpoint
 
 
@@ -70,13 +70,8 @@ class Gripper(ABC):
     async def stop(self) -> GripperState: ...
 
 
-class GripperDriver(DeviceDriver, Gripper):
-    def __init__(self, identity: DeviceIdentity, info: GripperInfo) -> None:
-        super().__init__(identity)
-        self.info = info
-
-    def describe(self) -> GripperDescription:
-        return GripperDescription(identity=self.identity, info=self.info)
+class GripperDriver(KindDriver[GripperInfo], Gripper):
+    description = GripperDescription
 
     @abstractmethod
     def state(self) -> GripperState: ...

@@ -6,7 +6,7 @@ from abc import ABC, abstractmethod
 
 from pydantic import BaseModel, Field
 
-from runtime.interfaces.device import DeviceDriver, DeviceIdentity
+from runtime.interfaces.device import DeviceIdentity, KindDriver
 
 AXES = ("x", "y", "z", "rx", "ry", "rz")
 
@@ -41,15 +41,8 @@ class InputDevice(ABC):  # noqa: B024 (no commands: its state is all it has)
     """An input device has no commands: six axes and its buttons, streamed."""
 
 
-class InputDriver(DeviceDriver, InputDevice):
-    def __init__(self, identity: DeviceIdentity, info: InputInfo) -> None:
-        if identity.kind != "input":
-            raise ValueError("an input driver needs an input identity")
-        super().__init__(identity)
-        self.info = info
-
-    def describe(self) -> InputDescription:
-        return InputDescription(identity=self.identity, info=self.info)
+class InputDriver(KindDriver[InputInfo], InputDevice):
+    description = InputDescription
 
     @abstractmethod
     def state(self) -> InputState: ...

@@ -10,7 +10,7 @@ from typing import Literal
 from pydantic import BaseModel, Field
 
 from runtime.interfaces.common import Strict
-from runtime.interfaces.device import DeviceDriver, DeviceIdentity
+from runtime.interfaces.device import DeviceIdentity, KindDriver
 from runtime.interfaces.endpoints import endpoint
 
 SIGNAL_NAME = r"^[a-z][a-z0-9_]{0,31}$"
@@ -86,13 +86,8 @@ class IOBlock(ABC):
         """Write an output, then read it back: the answer is what the device holds."""
 
 
-class IODriver(DeviceDriver, IOBlock):
-    def __init__(self, identity: DeviceIdentity, info: IOInfo) -> None:
-        super().__init__(identity)
-        self.info = info
-
-    def describe(self) -> IODescription:
-        return IODescription(identity=self.identity, info=self.info)
+class IODriver(KindDriver[IOInfo], IOBlock):
+    description = IODescription
 
     @abstractmethod
     def state(self) -> IOState: ...

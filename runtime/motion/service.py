@@ -181,7 +181,7 @@ class Moves:
         target = await self._lookup(request.target, robot)
         link = await self.robots.link(robot)
         if robot not in self.mirror.world.robots:
-            await self.mirror.refresh()  # a robot added a moment ago
+            await self.mirror.sync(leave_out_failing=True)  # a robot added a moment ago
         body = self.mirror.world.robot(robot)
         point = resolve(target, body.world_base, JointLimitChecker(link.info))
         kinematics = body.kinematics

@@ -8,7 +8,7 @@ from abc import ABC, abstractmethod
 from pydantic import BaseModel, Field
 
 from runtime.interfaces.common import Strict
-from runtime.interfaces.device import DeviceDriver, DeviceIdentity
+from runtime.interfaces.device import DeviceIdentity, KindDriver
 from runtime.interfaces.endpoints import endpoint
 
 
@@ -49,13 +49,8 @@ class Conveyor(ABC):
     async def stop(self) -> ConveyorState: ...
 
 
-class ConveyorDriver(DeviceDriver, Conveyor):
-    def __init__(self, identity: DeviceIdentity, info: ConveyorInfo) -> None:
-        super().__init__(identity)
-        self.info = info
-
-    def describe(self) -> ConveyorDescription:
-        return ConveyorDescription(identity=self.identity, info=self.info)
+class ConveyorDriver(KindDriver[ConveyorInfo], Conveyor):
+    description = ConveyorDescription
 
     @abstractmethod
     def state(self) -> ConveyorState: ...
