@@ -78,18 +78,13 @@ class MovePlanner:
         if kind is MoveKind.joint:
             goal = self._joints(points[0], start)
             vertices = np.array([start, goal])
-            samples = sample_joint_polyline(vertices, [])
-            collision = checker.path(samples)
+            collision = checker.path(vertices)  # the straight joint line
             if collision is not None and request.avoid_obstacles:
-                vertices = plan_around(
-                    checker, start, goal, self.kinematics.lower, self.kinematics.upper
-                )
+                timed = self._around(checker, start, goal, request)
                 around, collision = True, None
             if collision is not None:
-                return self._refused(collision, samples)
-            if around:
-                timed = self._polyline(vertices, request)
-            else:
+                return self._refused(collision, sample_joint_polyline(vertices, []))
+            if not around:
                 timed = self._joint_segments(vertices, request)
         else:
             samples = self._tcp_or_joint_path(request, start, points)
@@ -97,10 +92,11 @@ class MovePlanner:
             if collision is not None:
                 return self._refused(collision, samples)
             timed = self._time(samples, request, self._stops_at_corners(request, points))
-        # The trajectory interpolates between its points: check what will actually run.
-        collision = checker.path(timed.positions)
-        if collision is not None:
-            return self._refused(collision, timed.positions)
+        if not around:  # a path around was checked as it runs, where it was planned
+            # The trajectory interpolates between its points: check what will actually run.
+            collision = checker.path(timed.positions)
+            if collision is not None:
+                return self._refused(collision, timed.positions)
         report = PlanReport(
             ok=True,
             duration=timed.duration,
@@ -154,6 +150,25 @@ class MovePlanner:
         """Whether the path stops at some waypoint on the way (one without a blend)."""
         return request.kind is MoveKind.path and any(p.blend <= 0.0 for p in points[:-1])
 
+    def _around(
+        self, checker: PathChecker, start: FloatArray, goal: FloatArray, request: MoveRequest
+    ) -> TimedPath:
+        """A path planned around the obstacles, timed: the planner tries again while the
+        path check finds a collision on what would run."""
+        timed: list[TimedPath] = []
+
+        def verify(vertices: FloatArray) -> Collision | None:
+            candidate = self._joint_segments(vertices, request)
+            collision = checker.path(candidate.positions)
+            if collision is None:
+                timed.append(candidate)
+            return collision
+
+        plan_around(
+            checker, start, goal, self.kinematics.lower, self.kinematics.upper, verify=verify
+        )
+        return timed[-1]
+
     # Timing -----------------------------------------------------------------------------------
 
     def _time(self, samples: FloatArray, request: MoveRequest, stops: bool) -> TimedPath:
@@ -173,17 +188,9 @@ class MovePlanner:
             )
         return timed
 
-    def _polyline(self, vertices: FloatArray, request: MoveRequest) -> TimedPath:
-        """Straight joint lines from vertex to vertex, stopping at each: exactly the path
-        that was checked."""
-        timed = at_rest(vertices[0])
-        for a, b in itertools.pairwise(vertices):
-            timed = timed.then(
-                self._time(sample_joint_polyline(np.array([a, b]), []), request, stops=False)
-            )
-        return timed
-
     def _joint_segments(self, vertices: FloatArray, request: MoveRequest) -> TimedPath:
+        """Joint moves from vertex to vertex, stopping at each (ruckig, phase-synchronized:
+        each the straight joint line that was checked)."""
         timed = at_rest(vertices[0])
         for a, b in itertools.pairwise(vertices):
             move = plan_joint_move(

@@ -14,6 +14,8 @@ import pinocchio as pin
 from runtime.interfaces.limits import FloatArray
 from runtime.robotics.meshes import convex_hull
 
+Faces = list[tuple[int, int, int]]
+
 
 @dataclass
 class Shape:
@@ -26,34 +28,56 @@ class Shape:
     radius: float  # bounding sphere about `center` (in the shape's own frame)
     center: FloatArray
     drawing: dict[str, Any]
+    kind: str = "hull"  # box, cylinder, sphere or hull
+    size: tuple[float, ...] = ()  # box edges; cylinder radius and length; sphere radius
+    hull: tuple[FloatArray, Faces] | None = None  # vertices and faces, for a hull
     obj: fcl.CollisionObject = field(init=False)
     world_center: FloatArray = field(init=False)
+    rotation: FloatArray = field(init=False)  # of the shape in the world
+    translation: FloatArray = field(init=False)
 
     def __post_init__(self) -> None:
         self.obj = fcl.CollisionObject(self.geometry, fcl.Transform())
         self.world_center = self.center.copy()
+        self.rotation, self.translation = np.eye(3), np.zeros(3)
+        self.placements = 0  # how often it was placed: what is worked out from a placement
+        self._synced = True  # can tell whether it still holds
 
     def place(self, parent: pin.SE3) -> None:
         world = parent * self.local
-        self.obj.setTransform(fcl.Transform(world.rotation, world.translation))
+        self.rotation, self.translation = world.rotation, world.translation
         self.world_center = world.act(self.center)
+        self.placements += 1
+        # Handing a placement to FCL costs more than the rest of placing a shape: it is done
+        # when a distance query needs it, and most pairs are settled by their bounds.
+        self._synced = False
+
+    def sync(self) -> None:
+        """The FCL object at the last placement."""
+        if not self._synced:
+            self.obj.setTransform(fcl.Transform(self.rotation, self.translation))
+            self._synced = True
 
 
 def box(name: str, size: list[float], local: pin.SE3) -> Shape:
     half = np.asarray(size) / 2
     drawing = {"shape": "box", "size": list(size)}
-    return Shape(name, fcl.Box(*size), local, float(np.linalg.norm(half)), np.zeros(3), drawing)
+    radius = float(np.linalg.norm(half))
+    return Shape(
+        name, fcl.Box(*size), local, radius, np.zeros(3), drawing, "box", tuple(map(float, size))
+    )
 
 
 def cylinder(name: str, radius: float, length: float, local: pin.SE3) -> Shape:
     bound = float(np.hypot(radius, length / 2))
     drawing = {"shape": "cylinder", "size": [radius, length]}
-    return Shape(name, fcl.Cylinder(radius, length), local, bound, np.zeros(3), drawing)
+    geometry = fcl.Cylinder(radius, length)
+    return Shape(name, geometry, local, bound, np.zeros(3), drawing, "cylinder", (radius, length))
 
 
 def sphere(name: str, radius: float, local: pin.SE3) -> Shape:
     drawing = {"shape": "sphere", "size": [radius]}
-    return Shape(name, fcl.Sphere(radius), local, radius, np.zeros(3), drawing)
+    return Shape(name, fcl.Sphere(radius), local, radius, np.zeros(3), drawing, "sphere", (radius,))
 
 
 def mesh(name: str, path: Path, scale: tuple[float, float, float], local: pin.SE3) -> Shape:
@@ -63,7 +87,7 @@ def mesh(name: str, path: Path, scale: tuple[float, float, float], local: pin.SE
     center = (vertices.min(axis=0) + vertices.max(axis=0)) / 2
     radius = float(np.max(np.linalg.norm(vertices - center, axis=1)))
     drawing = {"shape": "hull", "vertices": vertices.round(5).tolist(), "faces": faces}
-    return Shape(name, geometry, local, radius, center, drawing)
+    return Shape(name, geometry, local, radius, center, drawing, hull=(vertices, faces))
 
 
 @dataclass(frozen=True)
@@ -81,6 +105,8 @@ _REQUEST = fcl.DistanceRequest(enable_nearest_points=True, enable_signed_distanc
 
 
 def proximity(a: Shape, b: Shape) -> Proximity:
+    a.sync()
+    b.sync()
     result = fcl.DistanceResult()
     distance = fcl.distance(a.obj, b.obj, _REQUEST, result)
     p, q = result.nearest_points

@@ -17,6 +17,7 @@ from runtime.paths import resolve_package_uri
 from runtime.robotics import geometry
 from runtime.robotics.geometry import Shape
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.reach import Reach
 
 
 @dataclass
@@ -64,6 +65,8 @@ class RobotBody:
         self.model = kinematics.model
         self.data = self.model.createData()
         self.parts: list[BodyPart] = []
+        self._reach = Reach(self.model)
+        self._part_bounds: FloatArray | None = None
         self.carried: list[BodyPart] = []
         path = urdf or resolve_package_uri(kinematics.info.urdf)
         for link in ET.parse(path).getroot().iter("link"):
@@ -118,6 +121,7 @@ class RobotBody:
             )
             for s in shapes
         ]
+        self._part_bounds = None
         self.place(self.q)
 
     def set_base(self, world_base: pin.SE3) -> None:
@@ -156,13 +160,21 @@ class RobotBody:
     def reach_bounds(self) -> FloatArray:
         """For each joint, a bound on the distance from its axis to any point it moves: a
         joint step δq moves no body point further than Σ bound_j |δq_j|."""
-        bounds = np.zeros(len(self.kinematics.order))
-        for k, j in enumerate(self._joints()):
-            for part in self.moving:
-                chain = self._chain_length(j, part.joint)
-                if chain is not None:
-                    bounds[k] = max(bounds[k], chain + self._reach(part))
+        bounds: FloatArray = self.part_reach_bounds().max(axis=0, initial=0.0)
         return bounds
+
+    def part_reach_bounds(self) -> FloatArray:
+        """For each moving part (rows, as in `moving`) and each joint, a bound on the
+        distance from the joint's axis to any point of the part: a joint step δq moves no
+        point of part p further than Σ bound_pj |δq_j|. Worked out once per carried load."""
+        if self._part_bounds is None:
+            moving = self.moving
+            bounds = np.zeros((len(moving), len(self.kinematics.order)))
+            for k, j in enumerate(self._joints()):
+                for p, part in enumerate(moving):
+                    bounds[p, k] = self._reach.moved(j, part) or 0.0
+            self._part_bounds = bounds
+        return self._part_bounds.copy()
 
     @cached_property
     def self_pair_bounds(self) -> FloatArray:
@@ -173,12 +185,12 @@ class RobotBody:
         bounds = np.zeros((len(self.self_pairs), len(self.kinematics.order)))
         for k, j in enumerate(self._joints()):
             for p, (a, b) in enumerate(self.self_pairs):
-                to_a, to_b = self._chain_length(j, a.joint), self._chain_length(j, b.joint)
+                to_a, to_b = self._reach.moved(j, a), self._reach.moved(j, b)
                 if (to_a is None) == (to_b is None):
                     continue
-                moved, chain = (a, to_a) if to_a is not None else (b, to_b)
-                assert chain is not None
-                bounds[p, k] = chain + self._reach(moved)
+                moved, still = (to_a, b) if to_a is not None else (to_b, a)
+                assert moved is not None
+                bounds[p, k] = min(moved, self._reach.still(j, still))
         return bounds
 
     def _joints(self) -> list[int]:
@@ -186,19 +198,3 @@ class RobotBody:
         model = self.model
         joint_of_q = {model.joints[j].idx_q: j for j in range(1, model.njoints)}
         return [joint_of_q[i] for i in self.kinematics.order]
-
-    def _reach(self, part: BodyPart) -> float:
-        """How far any point of the part lies from its joint's origin."""
-        placement = self.model.frames[part.frame].placement * part.shape.local
-        return float(np.linalg.norm(placement.act(part.shape.center))) + part.shape.radius
-
-    def _chain_length(self, ancestor: int, joint: int) -> float | None:
-        """Sum of the joint offsets from `ancestor` down to `joint`, or None when `joint`
-        does not descend from it."""
-        length = 0.0
-        while joint != ancestor:
-            if joint == 0:
-                return None
-            length += float(np.linalg.norm(self.model.jointPlacements[joint].translation))
-            joint = int(self.model.parents[joint])
-        return length

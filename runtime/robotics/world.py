@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 import pinocchio as pin
 
 from runtime.interfaces.limits import FloatArray
@@ -15,9 +16,12 @@ from runtime.interfaces.scene import SceneObject
 from runtime.kit.errors import NotFound
 from runtime.paths import resolve_package_uri
 from runtime.robotics import geometry
+from runtime.robotics.broadphase import FixedShapes, sphere_gaps
 from runtime.robotics.geometry import Proximity, Shape, proximity
 from runtime.robotics.kinematics import Kinematics, pose_to_se3
 from runtime.robotics.robot_body import BodyPart, RobotBody
+
+IntArray = npt.NDArray[np.intp]
 
 # Self pairs whose bounding spheres come this near get their exact distance (m): elsewhere the
 # spheres' gap is a good enough lower bound.
@@ -62,6 +66,7 @@ class World:
         self.robots: dict[str, RobotBody] = {}
         self.objects: dict[str, SceneObject] = {}
         self.obstacles: list[Shape] = []
+        self._fixed = FixedShapes([])
 
     # Contents -------------------------------------------------------------------------------
 
@@ -143,11 +148,40 @@ class World:
                 best = Contact(parts[i], near)
         return best
 
-    def self_clearances(self, robot: str) -> tuple[Contact | None, FloatArray]:
-        """At the robot's current placement: the distance of each of its self pairs (exact
-        where their bounding spheres come within NEAR_SELF, else the spheres' gap, a lower
-        bound), and the pair in contact, if any."""
+    def part_clearances(
+        self,
+        robot: str,
+        q: FloatArray | None = None,
+        within: float = np.inf,
+        which: IntArray | None = None,
+    ) -> FloatArray:
+        """For each of the robot's moving parts (or those indexed by `which`), placed at `q`
+        when given: a lower bound of its distance to anything else, exact when that is under
+        `within`, else at least `within`."""
+        parts, others, gaps = self._pairs(robot, q, which)
+        if not others:
+            return np.full(len(parts), np.inf)
+        clear: FloatArray = gaps.min(axis=1)
+        for i in np.nonzero(clear < within)[0]:
+            # Exact distances in the order of their bounds, until no other can be nearer.
+            best = np.inf
+            for j in np.argsort(gaps[i]):
+                if gaps[i, j] >= min(best, within):
+                    best = min(best, gaps[i, j])
+                    break
+                best = min(best, proximity(parts[i].shape, others[j]).distance)
+            clear[i] = best
+        return clear
+
+    def self_clearances(
+        self, robot: str, which: IntArray | None = None
+    ) -> tuple[Contact | None, FloatArray]:
+        """At the robot's current placement: the distance of each of its self pairs (or of
+        those indexed by `which`): exact where their bounding spheres come within NEAR_SELF,
+        else the spheres' gap, a lower bound; and the pair in contact, if any."""
         pairs = self.robot(robot).self_pairs
+        if which is not None:
+            pairs = [pairs[i] for i in which]
         if not pairs:
             return None, np.zeros(0)
         a = np.array([x.shape.world_center for x, _ in pairs])
@@ -166,25 +200,32 @@ class World:
         return touching, distances
 
     def _pairs(
-        self, robot: str, q: FloatArray | None
+        self, robot: str, q: FloatArray | None, which: IntArray | None = None
     ) -> tuple[list[BodyPart], list[Shape], FloatArray]:
-        """The robot's moving parts (placed at `q` when given), every other body, and the
-        lower bound of each pair's distance (an empty array when either list is empty)."""
+        """The robot's moving parts (those indexed by `which`, placed at `q` when given),
+        every other body, and the lower bound of each pair's distance."""
         body = self.robot(robot)
         if q is not None:
             body.place(q)
         parts = body.moving
-        others = self._others(robot)
+        if which is not None:
+            parts = [parts[i] for i in which]
+        others = self._others(robot)  # obstacles first
         if not parts or not others:
             return parts, others, np.zeros((len(parts), len(others)))
-        return parts, others, self._sphere_gaps(parts, others)
+        return parts, others, self._lower_bounds(parts, others[len(self.obstacles) :])
 
-    @staticmethod
-    def _sphere_gaps(parts: list[BodyPart], others: list[Shape]) -> FloatArray:
-        a = np.array([p.shape.world_center for p in parts])
-        b = np.array([s.world_center for s in others])
-        ra = np.array([p.shape.radius for p in parts])
-        rb = np.array([s.radius for s in others])
-        centers = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
-        gaps: FloatArray = centers - ra[:, None] - rb[None, :]
+    def _lower_bounds(self, parts: list[BodyPart], robots: list[Shape]) -> FloatArray:
+        """Lower bounds of the distance of each part to each obstacle, then to each of
+        the other robots' shapes (the columns of `_pairs`)."""
+        if not self._fixed.current(self.obstacles):
+            self._fixed = FixedShapes(self.obstacles)
+        centers = np.array([p.shape.world_center for p in parts])
+        radii = np.array([p.shape.radius for p in parts])
+        gaps = self._fixed.lower_bounds(centers, radii)
+        if robots:
+            others = np.array([s.world_center for s in robots])
+            gaps = np.hstack(
+                (gaps, sphere_gaps(centers, radii, others, np.array([s.radius for s in robots])))
+            )
         return gaps

@@ -219,16 +219,18 @@ def test_a_move_around_the_posts_never_touches_them(ready: Cell) -> None:
 
 
 def test_a_stop_while_a_move_is_planned_means_it_never_starts(ready: Cell) -> None:
-    """Stop wins even over a move still being planned (around the posts: seconds)."""
+    """Stop wins even over a move still being planned: a path through many waypoints, each
+    line sampled, checked and timed (seconds; planning around the posts has become too
+    quick to stop on the way)."""
     move(ready, {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0})
-    put_posts(ready.runtime)
     after = ready.robot.last_command_seq()
+    waypoints = [{"joints": RIGHT if k % 2 == 0 else LEFT} for k in range(30)]
     with ThreadPoolExecutor(1) as pool:
         pending = pool.submit(
             ready.runtime.api,
             "POST",
             "/motion/robots/robot/moves",
-            json={"kind": "joint", "target": {"joints": RIGHT}},
+            json={"kind": "path", "linear": False, "waypoints": waypoints},
             headers=ready.headers(),
         )
         time.sleep(0.2)

@@ -12,6 +12,7 @@ from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from websockets.sync.client import connect
 
@@ -27,7 +28,8 @@ from runtime.bench.harness.blocks import (
 )
 from runtime.bench.harness.jog import Cell
 from runtime.bench.harness.processes import STILL, Runtime, wait_for
-from tests.support.posts import LEFT, RIGHT, clear_posts, put_posts
+from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.robot_info import load_robot_info
 from tests.support.programs import HOME, PICK_AND_PLACE_WAYPOINTS, PLACE, pick_and_place, teach
 
 FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]
@@ -320,27 +322,42 @@ def test_stop_over_the_program_socket_halts_the_robot(ready: Cell) -> None:
     assert np.abs(ready.robot.q() - q).max() < STILL
 
 
+def long_line() -> tuple[list[float], str]:
+    """Joints at one end of a straight 0.8 m line in front of the robot, tool down, and a
+    linear move to its other end: planning it (a joint solution every mm, checked, then
+    timed) takes long enough to stop the run on the way (planning around the posts has
+    become too quick for that)."""
+    kinematics = Kinematics(load_robot_info("ur5"))
+    reference = np.array([0.0, -1.57, 1.57, -1.57, -1.57, 0.0])
+    down = kinematics.tcp(reference).rotation.copy()
+    start = pin.SE3(down, np.array([-0.5, -0.4, 0.25]))
+    joints = kinematics.inverse(start, reference)
+    roll, pitch, yaw = np.degrees(pin.rpy.matrixToRpy(down))
+    return [float(v) for v in joints], f"pose(-500, 400, 250, {roll:.6f}, {pitch:.6f}, {yaw:.6f})"
+
+
 def test_stop_while_a_move_is_planned_means_it_never_starts(ready: Cell) -> None:
-    ready.place(LEFT)
-    put_posts(ready.runtime)
-    try:
-        degrees = [round(math.degrees(v), 6) for v in RIGHT]
-        save_python(ready, "around_posts", f"move_joint({degrees!r})\nprint('never')")
-        before = ready.robot.last_command_seq()
-        run(ready, "around_posts")
-        time.sleep(0.3)  # the move is being planned around the posts (seconds)
-        assert "trajectory" not in [c["type"] for c in ready.robot.commands(before)]
-        stopped = ready.runtime.api("POST", "/programs/around_posts/stop").json()
-        assert stopped["state"] == "stopped", (stopped["error"], stopped["output"])
-        # The planner holds the world until it is done: a preview after it means it ended.
-        preview = {"kind": "joint", "target": {"joints": LEFT}}
-        ready.runtime.api("POST", "/motion/robots/robot/plan", json=preview).raise_for_status()
-        time.sleep(0.3)
-        assert "trajectory" not in [c["type"] for c in ready.robot.commands(before)]
-        assert np.allclose(ready.robot.q(), LEFT, atol=1e-6)
-        assert all(o["text"] != "never" for o in status(ready, "around_posts")["output"])
-    finally:
-        clear_posts(ready.runtime)
+    start, end = long_line()
+    ready.place(start)
+    save_python(ready, "long_line", f"print('moving')\nmove_linear({end})\nprint('never')")
+    before = ready.robot.last_command_seq()
+    run(ready, "long_line")
+    wait_for(
+        lambda: any(o["text"] == "moving" for o in status(ready, "long_line")["output"]),
+        10,
+        interval=0.01,
+        what="the move to be asked for",
+    )
+    assert "trajectory" not in [c["type"] for c in ready.robot.commands(before)]
+    stopped = ready.runtime.api("POST", "/programs/long_line/stop").json()
+    assert stopped["state"] == "stopped", (stopped["error"], stopped["output"])
+    # The planner holds the world until it is done: a preview after it means it ended.
+    preview = {"kind": "joint", "target": {"joints": start}}
+    ready.runtime.api("POST", "/motion/robots/robot/plan", json=preview).raise_for_status()
+    time.sleep(0.3)
+    assert "trajectory" not in [c["type"] for c in ready.robot.commands(before)]
+    assert np.allclose(ready.robot.q(), start, atol=1e-6)
+    assert all(o["text"] != "never" for o in status(ready, "long_line")["output"])
 
 
 BAD_TARGETS = {

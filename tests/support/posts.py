@@ -1,5 +1,5 @@
 """Two posts beside a UR5 on a table: a joint move from LEFT to RIGHT hits them unless it is
-planned around them, which takes the planner seconds (long enough to stop it meanwhile)."""
+planned around them."""
 
 from __future__ import annotations
 
