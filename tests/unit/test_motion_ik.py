@@ -12,14 +12,14 @@ from runtime.robotics.robot_info import load_robot_info
 
 
 @pytest.mark.parametrize("model", ["ur5", "panda"])
-def test_round_trip_on_a_thousand_random_reachable_poses(model: str) -> None:
+def test_round_trip_on_random_reachable_poses(model: str) -> None:
     info = load_robot_info(model)
     kinematics = Kinematics(info)
     rng = np.random.default_rng(11)
     seed = np.array(info.home)
     lower = np.maximum(kinematics.lower, -np.pi)
     upper = np.minimum(kinematics.upper, np.pi)
-    for _ in range(1000):
+    for _ in range(300):
         target = kinematics.tcp(rng.uniform(lower, upper)).copy()
         solution = kinematics.inverse(target, seed)
         reached = kinematics.tcp(solution)
