@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -228,15 +229,10 @@ def test_two_runtimes_on_one_network_do_not_share_a_robot(tmp_path: Path) -> Non
     try:
         first.wait_ready()
         second.wait_ready()
-        wait_for(
-            lambda: len(first.api("GET", "/devices/detected").json()) == 2,
-            10,
-            what="both simulated robots seen",
-        )
         own = []
         for runtime in (first, second):
-            detected = runtime.api("GET", "/devices/detected").json()
-            assert len({d["uuid"] for d in detected}) == 2
+            # Each hears both announcements, in its own time.
+            detected = wait_for(partial(both_seen, runtime), 10, what="both robots seen")
             port = runtime_sim_port(runtime)
             mine = next(d for d in detected if d["url"].endswith(f":{port}"))
             added = runtime.api("POST", "/devices", json={"uuid": mine["uuid"], "local_name": "r"})
@@ -251,6 +247,11 @@ def test_two_runtimes_on_one_network_do_not_share_a_robot(tmp_path: Path) -> Non
     finally:
         first.stop()
         second.stop()
+
+
+def both_seen(runtime: Runtime) -> list[dict[str, Any]] | None:
+    detected: list[dict[str, Any]] = runtime.api("GET", "/devices/detected").json()
+    return detected if len({d["uuid"] for d in detected}) == 2 else None
 
 
 def runtime_sim_port(runtime: Runtime) -> int:
