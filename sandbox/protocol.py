@@ -13,6 +13,8 @@ from typing import Any
 
 MAX_LINE_BYTES = 2 * 1024 * 1024
 MAX_OUTPUT_CHARS = 2000  # one printed line, as it reaches the output console
+# The worker's environment names the plugins' sandbox functions: {name: "module:attribute"}.
+FUNCTIONS_ENV = "OPENPENDANT_SANDBOX_FUNCTIONS"
 
 
 class ProtocolError(Exception):

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import importlib
 import json
 import os
 import resource
@@ -19,14 +20,12 @@ import traceback
 from dataclasses import dataclass, field
 from typing import Any, BinaryIO
 
-from plugins.api import resolve
-from plugins.registry import registry
 from sandbox.builtins import safe_builtins
 from sandbox.guards import guard_globals
 from sandbox.library import REGISTRY
 from sandbox.library.base import ProgramError, bind
 from sandbox.policy import PROGRAM_FILENAME, ProgramCompileError, compile_program
-from sandbox.protocol import MAX_OUTPUT_CHARS, ProtocolError, decode, encode
+from sandbox.protocol import FUNCTIONS_ENV, MAX_OUTPUT_CHARS, ProtocolError, decode, encode
 
 CLONE_NEWNET = 0x40000000
 NOBODY = 65534
@@ -247,14 +246,22 @@ class Printer:
 def plugin_functions() -> dict[str, Any]:
     """The sandbox functions every plugin's blocks declare (the built-in blocks' are the
     library's own), imported before the program is read; one that cannot be imported is left
-    out, and a program calling it fails with a NameError at its block."""
+    out, and a program calling it fails with a NameError at its block. The runtime names
+    them in the environment; a worker started without it reads the plugins itself."""
+    named = os.environ.get(FUNCTIONS_ENV)
+    if named is not None:
+        references: dict[str, str] = json.loads(named)
+    else:
+        from plugins.registry import registry
+
+        references = {n: r for b in registry().blocks.values() for n, r in b.functions.items()}
     found: dict[str, Any] = {}
-    for block in registry().blocks.values():
-        for name, reference in block.functions.items():
-            try:
-                found[name] = resolve(reference)
-            except Exception as exc:  # one plugin's fault is not the run's
-                print(f"sandbox function {name} ({reference}) left out: {exc}", file=sys.stderr)
+    for name, reference in references.items():
+        module, _, attribute = reference.partition(":")
+        try:
+            found[name] = getattr(importlib.import_module(module), attribute)
+        except Exception as exc:  # one plugin's fault is not the run's
+            print(f"sandbox function {name} ({reference}) left out: {exc}", file=sys.stderr)
     return found
 
 

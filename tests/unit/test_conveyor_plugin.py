@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import importlib
 import inspect
+import re
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -104,3 +105,21 @@ def test_the_simulated_belt_brings_parts_to_the_sensor_and_holds_them(
     for _ in range(50):
         belt.step(0.02)
     assert belt.state().speed == 0.0
+
+
+def test_the_plugins_words_are_complete_in_every_language(conveyor: ModuleType) -> None:
+    """Like the UI's own catalogues: a translation has every key of the English, no more."""
+    plugin = conveyor.PLUGIN
+    english = set(plugin.words["en"])
+    for language, words in plugin.words.items():
+        assert set(words) == english, language
+    for block in plugin.blocks:
+        for language, words in block.words.items():
+            assert {"message0", "tooltip"} <= set(words), (block.type, language)
+            # The same %1, %2… as the English message, in any order.
+            placeholders = set(re.findall(r"%\d", block.definition["message0"]))
+            assert set(re.findall(r"%\d", words["message0"])) == placeholders
+    for category in plugin.categories:
+        assert set(category.name) == set(plugin.words)
+    for panel in plugin.panels:
+        assert set(panel.title) == set(plugin.words)
