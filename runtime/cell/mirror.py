@@ -115,7 +115,10 @@ class CellWorld:
     async def _ensure(self, name: str) -> None:
         link = self.links.get(name)
         if link is None:
-            link = self.links[name] = await self.devices.robot(name)
+            # Listed as a connected robot by the reading this sync began with: asking the
+            # device manager again, robot by robot, every sync, would load it most when its
+            # links are under strain.
+            link = self.links[name] = await self.devices.robot(name, listed=True)
         info = link.info
         known = self.world.robots.get(name)
         if known is None or known.kinematics.info != info:

@@ -68,9 +68,11 @@ class Devices:
             raise Unavailable(f"{name} is {device['status']}", code=code)
         return device
 
-    async def robot(self, name: str) -> RobotClient:
-        """An added robot's client, once its state is streaming."""
-        await self.entry(name, "robot")
+    async def robot(self, name: str, *, listed: bool = False) -> RobotClient:
+        """An added robot's client, once its state is streaming. `listed`: the caller has
+        just read it in the device manager's list as a connected robot (no need to ask)."""
+        if not listed:
+            await self.entry(name, "robot")
         return await self._client(name, RobotClient)
 
     async def input(self, name: str) -> InputClient:
