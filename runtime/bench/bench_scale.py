@@ -59,8 +59,8 @@ def add_robots(runtime: Runtime, sims: list[SimRobotProc], first: int) -> None:
         added.raise_for_status()
     wait_for(
         lambda: all(d["status"] == "connected" for d in runtime.api("GET", "/devices").json()),
-        30,
-        what="every robot connected",
+        60,
+        what="every robot connected at once",
     )
 
 
@@ -110,6 +110,7 @@ def run() -> list[Figure]:
     runtime = Runtime(home, extra=["--no-sim"])
     sims: list[SimRobotProc] = []
     curve: list[dict[str, Any]] = []
+    stopped = ""
     try:
         runtime.wait_ready()
         for count in counts:
@@ -117,7 +118,13 @@ def run() -> list[Figure]:
             sims += [SimRobotProc(home, f"scale-{k}", nice=10) for k in range(first, count)]
             for sim in sims[first:]:
                 sim.wait_ready()
-            add_robots(runtime, sims, first)
+            try:
+                add_robots(runtime, sims, first)
+            except TimeoutError as exc:
+                # This host cannot keep that many links fresh: the curve ends where it got.
+                stopped = f"at {count} robots: {exc}"
+                print(f"  {count} robots: {stopped}", file=sys.stderr, flush=True)
+                break
             time.sleep(1.0)
             curve.append(measure(runtime, count, seconds, home))
             print(f"  {count} robots: {curve[-1]}", file=sys.stderr, flush=True)
@@ -127,6 +134,8 @@ def run() -> list[Figure]:
         runtime.stop()
     top = curve[-1]
     details = {**top, "clients": CLIENTS, "seconds": seconds, "simulators": "nice 10"}
+    if stopped:
+        details["stopped"] = stopped
     met = [p["robots"] for p in curve if meets(p)]
     return [
         Figure(
@@ -134,7 +143,7 @@ def run() -> list[Figure]:
             top["min_rate_hz"],
             "Hz",
             "≥ 50 Hz",
-            top["min_rate_hz"] >= 50,
+            not stopped and top["min_rate_hz"] >= 50,
             details,
         ),
         Figure("scale_20_robots_age_p50", top["age_p50_ms"], "ms"),
@@ -143,7 +152,7 @@ def run() -> list[Figure]:
             top["age_p99_ms"],
             "ms",
             "≤ 50 ms",
-            top["age_p99_ms"] <= 50,
+            not stopped and top["age_p99_ms"] <= 50,
         ),
         Figure(
             "scale_robots_curve",
