@@ -11,6 +11,7 @@ from __future__ import annotations
 import ast
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from functools import cache
 from typing import Any
 
 from blockly_blocks.names import NameTable
@@ -251,14 +252,13 @@ def generate(workspace_json: Any) -> Generated:
     return Generated(python, workspace.count, block_lines, generator.problems)
 
 
+@cache
 def _load_generators() -> None:
     """Blockly's standard blocks' generators (standard.py registers them on import) and every
     plugin's blocks' (each `Block.generator`: a value block's returns an expression, a
     statement block's its lines)."""
     from blockly_blocks import standard  # noqa: F401
 
-    if _plugins_loaded:
-        return
     plugins = registry()
     for block in plugins.blocks.values():
         try:
@@ -269,7 +269,3 @@ def _load_generators() -> None:
             continue
         table: dict[str, Any] = VALUES if "output" in block.definition else STATEMENTS
         table[block.type] = function
-    _plugins_loaded.append(True)
-
-
-_plugins_loaded: list[bool] = []

@@ -61,6 +61,9 @@ class Registry:
     panels: dict[str, Panel] = field(default_factory=dict)
     # Which plugin declared each block, panel, driver, …: for messages and the System panel.
     owner: dict[tuple[str, str], str] = field(default_factory=dict)
+    # Names blocks and services share (one sandbox function or program call may serve many
+    # blocks, each declaring it with the same reference), with what each one names.
+    references: dict[tuple[str, str], str] = field(default_factory=dict)
 
     def add(self, loaded: Loaded) -> None:
         """Add one plugin, all or nothing: a clash with what is there refuses the plugin."""
@@ -82,10 +85,33 @@ class Registry:
                 holder = self.owner.get((what, key), plugin.name)
                 raise ValueError(f"the {what} {key!r} is declared by {holder} already")
             seen.add((what, key))
+        shared = self._shared_names(plugin)
         for what, table, key, value in contributions:
             table[key] = value
             self.owner[(what, key)] = plugin.name
+        for named, reference in shared.items():
+            self.references.setdefault(named, reference)
+            self.owner.setdefault(named, plugin.name)
         self.loaded.append(loaded)
+
+    def _shared_names(self, plugin: Plugin) -> dict[tuple[str, str], str]:
+        """The plugin's sandbox functions, program calls and URL prefixes, checked: a name
+        another declaration gives a different meaning would silently replace it."""
+        named = [("sandbox function", n, r) for b in plugin.blocks for n, r in b.functions.items()]
+        named += [("program call", n, r) for b in plugin.blocks for n, r in b.handlers.items()]
+        named += [("URL prefix", p, s.name) for s in plugin.services for p in s.prefixes]
+        found: dict[tuple[str, str], str] = {}
+        for what, name, reference in named:
+            if what == "sandbox function" and (not name.isidentifier() or name.startswith("_")):
+                raise ValueError(
+                    f"{name!r} cannot be a {what} (names starting with _ are the sandbox's)"
+                )
+            held = found.get((what, name), self.references.get((what, name)))
+            if held is not None and held != reference:
+                holder = self.owner.get((what, name), plugin.name)
+                raise ValueError(f"the {what} {name!r} is declared by {holder} already")
+            found[(what, name)] = reference
+        return found
 
     def fail(self, plugin: str, source: str, error: str) -> None:
         log.warning("plugin %s (%s) left out: %s", plugin, source, error)

@@ -26,9 +26,17 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _service(args: argparse.Namespace) -> int:
-    from runtime.kit.settings import settings_from_env
-    from runtime.services import run_service
+    import sys
 
+    from runtime.kit.settings import settings_from_env
+    from runtime.services import all_services, run_service
+
+    if args.name not in all_services():
+        known = ", ".join(sorted(all_services()))
+        print(
+            f"openpendant service: no service {args.name!r} (installed: {known})", file=sys.stderr
+        )
+        return 2
     settings = settings_from_env()
     if args.data_dir is not None:
         settings = settings.model_copy(update={"data_dir": args.data_dir})

@@ -270,10 +270,10 @@ PLUGIN_FUNCTIONS = plugin_functions()
 
 def program_globals(worker: Worker) -> dict[str, Any]:
     names: dict[str, Any] = {"__builtins__": safe_builtins(), "__name__": "program"}
+    names.update(PLUGIN_FUNCTIONS)
+    names.update(REGISTRY)  # the library's own names are never a plugin's to replace
     names.update(guard_globals())
     names["_print_"] = worker.print_factory
-    names.update(REGISTRY)
-    names.update(PLUGIN_FUNCTIONS)
     return names
 
 

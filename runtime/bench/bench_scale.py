@@ -3,7 +3,7 @@ at the UI, state age p99 ≤ 50 ms):
 
 Simulated robots at their normal rate (500 Hz control, 100 Hz state), niced as if on other
 hosts, are added to one runtime: 1, then 5, 10 and 20. At each count, 10 UI clients hold the
-device feed as the browser does (tests/bench/ui_clients.py, their own process) for a while:
+device feed as the browser does (runtime/bench/ui_clients.py, their own process) for a while:
 the slowest robot's state rate at a client, and the age of every state on arrival (driver
 timestamp to client; one machine, one clock). CPU and RSS of every runtime process go in the
 details."""
@@ -11,6 +11,7 @@ details."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -132,6 +133,9 @@ def run() -> list[Figure]:
         for sim in sims:
             sim.stop()
         runtime.stop()
+    if not curve:  # not even the first count could be kept fresh
+        nothing = {"robots": 0, "min_rate_hz": 0.0, "age_p50_ms": math.nan, "age_p99_ms": math.nan}
+        curve.append(nothing)
     top = curve[-1]
     details = {**top, "clients": CLIENTS, "seconds": seconds, "simulators": "nice 10"}
     if stopped:

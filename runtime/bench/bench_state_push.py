@@ -1,7 +1,7 @@
 """Robot state pushed to UI clients: ≥ 50 Hz per robot with 10 clients, lag ≤ 20 ms.
 
 Ten clients hold the feed as the UI does (/api/devices/ws?batch=1 through the webui, each
-frame acknowledged at the next 60 Hz display frame; tests/bench/ui_clients.py) while two
+frame acknowledged at the next 60 Hz display frame; runtime/bench/ui_clients.py) while two
 simulated robots are added. Lag is the client's receive time minus the state's own time
 stamp (taken by the driver when it sampled the state; same machine, same clock)."""
 

@@ -56,14 +56,6 @@ class DeviceClient(Generic[S]):
             )
         return source
 
-    @property
-    def alive(self) -> bool:
-        try:
-            self.hub.state_text(self.view)
-        except OpenPendantError:
-            return False
-        return True
-
     async def ready(self, timeout: float = READY_TIMEOUT) -> DeviceClient[S]:
         """Waits for a fresh state; raises why there is none."""
         with contextlib.suppress(TimeoutError):

@@ -39,6 +39,9 @@ class Devices:
         await self.hub.start()
 
     async def close(self) -> None:
+        for task in list(self._renewing):
+            task.cancel()
+        await asyncio.gather(*self._renewing, return_exceptions=True)
         await self.hub.close()
         await self.manager.aclose()
 

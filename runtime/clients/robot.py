@@ -46,7 +46,7 @@ class Halt:
     tag: str | None = None
 
 
-Streamed = JogJointCommand | VelocityCommand | PositionCommand | Halt
+Streamed = JogJointCommand | VelocityCommand | PositionCommand | CommandModeRequest | Halt
 
 
 class RobotClient(DeviceClient[RobotState], Robot):
@@ -96,11 +96,8 @@ class RobotClient(DeviceClient[RobotState], Robot):
         gen = self.generation if generation is None else generation
         if self._mode == (mode, gen) and self.current(gen).command_mode is mode:
             return
-        await self.hub.send(self.name, gen, {"type": "command_mode", "mode": mode.value})
+        await self.stream(CommandModeRequest(mode=mode), gen)
         self._mode = (mode, gen)
-
-    def forget_mode(self) -> None:
-        self._mode = None
 
     async def jog_joint(self, command: JogJointCommand) -> None:
         await self.stream(command)

@@ -7,6 +7,8 @@ checked moves)."""
 
 from __future__ import annotations
 
+import asyncio
+import logging
 from typing import Any
 
 from pydantic import Field, ValidationError
@@ -17,7 +19,9 @@ from runtime.device_manager.registry import DeviceRegistry
 from runtime.interfaces.common import Strict
 from runtime.interfaces.endpoints import endpoints
 from runtime.kit.app import describe_validation_errors
-from runtime.kit.errors import Conflict, InvalidValue, NotFound
+from runtime.kit.errors import Conflict, InvalidValue, NotFound, Unavailable
+
+log = logging.getLogger(__name__)
 
 # Stop always wins: anyone may stop a device, control or not.
 ANYONE = ("stop",)
@@ -45,7 +49,12 @@ async def call_device(
             f"{local_name} is moved through jogging and planned moves, not by calls",
             code="not_callable",
         )
-    ep = endpoints(resolve(kind.interface)).get(method)
+    try:
+        ep = endpoints(resolve(kind.interface)).get(method)
+    except Exception as exc:  # a plugin that cannot load: its devices cannot be called
+        raise Unavailable(
+            f"the {kind.name} interface cannot be loaded: {exc}", code="plugin_failed"
+        ) from exc
     if ep is None:
         raise NotFound(f"a {kind.name} has no method {method[:40]!r}", code="unknown_method")
     if len(request.args) != len(ep.params):
@@ -61,4 +70,35 @@ async def call_device(
         raise InvalidValue(f"{method} takes no body")
     if ep.is_command and ep.name not in ANYONE:
         devices.check_lease(local_name, token)
-    return await conn.call(ep.method, ep.url(*request.args), payload, conn.generation)
+    try:
+        path = ep.url(*request.args)
+    except ValueError as exc:
+        raise InvalidValue(str(exc), code="invalid_request") from exc
+    return await conn.call(ep.method, path, payload, conn.generation)
+
+
+async def stop_all(devices: DeviceRegistry) -> list[str]:
+    """The pendant's STOP for every device that is not a robot: each one whose kind declares
+    `stop` is sent it at once, connected or not (the attempt is logged when it fails). Robots
+    halt through jog and their link sessions."""
+    names: list[str] = []
+    calls = []
+    for name, conn in list(devices.connections.items()):
+        kind = plugins().kinds.get(conn.record.kind)
+        if kind is None or kind.session:
+            continue
+        try:
+            ep = endpoints(resolve(kind.interface)).get("stop")
+        except Exception as exc:  # a broken plugin's kind: reported on /health already
+            log.warning("cannot stop %s: its kind cannot be loaded: %s", name, exc)
+            continue
+        if ep is None or ep.params or ep.body is not None:
+            continue
+        names.append(name)
+        calls.append(conn.call(ep.method, ep.url(), None, conn.generation))
+    for name, result in zip(
+        names, await asyncio.gather(*calls, return_exceptions=True), strict=True
+    ):
+        if isinstance(result, BaseException):
+            log.warning("stop of %s failed: %s", name, result)
+    return names

@@ -10,7 +10,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, FastAPI, Header, Response, WebSocket
 from fastapi.responses import JSONResponse
 
-from runtime.device_manager.calls import CallRequest, call_device
+from runtime.device_manager.calls import CallRequest, call_device, stop_all
 from runtime.device_manager.leases import LeaseGranted, LeaseInfo, LeaseRequest
 from runtime.device_manager.models import (
     AddDeviceRequest,
@@ -102,6 +102,11 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
         """The robot's TCP and payload (needs control; the robot halts). Stored as
         `tools.<robot>` and applied again whenever the robot connects."""
         return await registry.set_tool(local_name, body, token)
+
+    @router.post("/_stop")
+    async def stop_devices() -> dict[str, list[str]]:
+        """STOP for every device that is not a robot (grippers, a plugin's devices…): anyone may."""
+        return {"stopped": await stop_all(registry)}
 
     @router.post("/{local_name}/call/{method}")
     async def call(

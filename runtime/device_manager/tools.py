@@ -8,7 +8,8 @@ from typing import Any
 
 import httpx
 
-from runtime.interfaces.robot import ToolSetup
+from runtime.interfaces.endpoints import endpoints
+from runtime.interfaces.robot import Robot, ToolSetup
 from runtime.kit.errors import NotFound, OpenPendantError
 from runtime.variable_storage.client import StorageClient
 
@@ -30,8 +31,10 @@ async def stored_tool(storage: StorageClient, robot: str) -> dict[str, Any] | No
 
 
 async def send_tool_setup(http: httpx.AsyncClient, setup: dict[str, Any]) -> dict[str, Any]:
-    """PUT /tool_setup to the driver; its new description (as GET /info gives it)."""
-    response = await http.put("/tool_setup", json=setup, timeout=CALL_TIMEOUT)
+    """The robot interface's `set_tool_setup` on the driver's connection; its new description
+    (as GET /info gives it)."""
+    ep = endpoints(Robot)["set_tool_setup"]
+    response = await http.request(ep.method, ep.url(), json=setup, timeout=CALL_TIMEOUT)
     try:
         body = response.json()
     except ValueError:

@@ -34,9 +34,15 @@ class NoOptions(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
-def device_uuid(driver: str, name: str) -> str:
-    """Stable across restarts, like a serial number, so the device is recognised again."""
-    return str(uuids.uuid5(NAMESPACE, f"{driver}/{name}"))
+def device_uuid(driver: str, name: str, model: str | None = None) -> str:
+    """Stable across restarts, like a serial number, so the device is recognised again (with
+    a `model` option, the uuid the simulated robot had before drivers were plugins)."""
+    return str(uuids.uuid5(NAMESPACE, f"{driver}/{model}/{name}" if model else f"{driver}/{name}"))
+
+
+def model_of(options: BaseModel) -> str | None:
+    model = getattr(options, "model", None)
+    return model if isinstance(model, str) and model else None
 
 
 def options_model(spec: Driver) -> type[BaseModel]:
@@ -113,7 +119,7 @@ def run_driver(name: str, argv: list[str] | None = None) -> int:
     device_name = args["name"] or (default() if callable(default) else name)
     try:
         driver = resolve(spec.factory)(
-            device_name, args["uuid"] or device_uuid(name, device_name), options
+            device_name, args["uuid"] or device_uuid(name, device_name, model_of(options)), options
         )
     except OpenPendantError as exc:
         print(f"openpendant driver {name}: {exc.message}", file=sys.stderr)

@@ -10,6 +10,7 @@ import typing
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal, TypeVar
+from urllib.parse import quote
 
 from pydantic import BaseModel
 
@@ -39,9 +40,14 @@ class Endpoint:
         return self.method != "GET"
 
     def url(self, *params: Any) -> str:
-        """The path with its parameters filled in (for a client)."""
+        """The path with its parameters filled in (for a client), each one a single path
+        segment however it is spelled ("a/../b" cannot reach another route)."""
+        if len(params) != len(self.params):
+            raise ValueError(f"{self.name} takes {len(self.params)} path parameters")
+        if any(str(p) in ("", ".", "..") for p in params):
+            raise ValueError(f"{self.name}: a path parameter cannot be empty, '.' or '..'")
         values = iter(params)
-        return PATH_PARAM.sub(lambda _: str(next(values)), self.path)
+        return PATH_PARAM.sub(lambda _: quote(str(next(values)), safe=""), self.path)
 
     def describe(self, args: tuple[Any, ...], result: Any = None) -> tuple[str, str | None]:
         """(label, tag) of an accepted call, for the driver's command log: the body's `tag`,

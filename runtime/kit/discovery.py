@@ -30,10 +30,11 @@ from zeroconf._dns import DNSQuestion
 from zeroconf._protocol.outgoing import DNSOutgoing
 from zeroconf.asyncio import AsyncServiceBrowser, AsyncServiceInfo, AsyncZeroconf
 
+from runtime.kit.api_version import API_VERSION
+
 log = logging.getLogger(__name__)
 
 SERVICE_TYPE = "_openpendant._tcp.local."
-API_VERSION = "1"
 SO_RCVBUFFORCE = getattr(socket, "SO_RCVBUFFORCE", 33)
 # A device kind, as its plugin names it (robot, camera, detector, io, gripper, input, …).
 KIND_PATTERN = re.compile(r"^[a-z][a-z0-9_]{0,15}$")

@@ -8,7 +8,7 @@ import os
 from pathlib import Path
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 from pydantic_settings import (
     BaseSettings,
     PydanticBaseSettingsSource,
@@ -85,6 +85,29 @@ class RuntimeSettings(BaseSettings):
     lease_seconds: float = Field(default=15.0, gt=0, le=3600)
     # Hold-to-run: the jog service halts a robot when heartbeats stop for this long.
     deadman_seconds: float = Field(default=0.1, ge=0.02, le=0.5)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _sim_robots(cls, data: Any) -> Any:
+        """Configs written before the `devices:` list name their simulated robots in
+        `sim_robots:` ({model, name}); each is read as a sim-robot entry (same uuid)."""
+        if not isinstance(data, dict) or "sim_robots" not in data:
+            return data
+        data = dict(data)
+        old = data.pop("sim_robots")
+        if "devices" in data:
+            raise ValueError("give `devices` or the older `sim_robots`, not both")
+        if not isinstance(old, list) or not all(isinstance(r, dict) for r in old):
+            raise ValueError("sim_robots must be a list of {model, name}")
+        data["devices"] = [
+            {
+                "driver": "sim-robot",
+                "name": r.get("name", "sim-ur5"),
+                "options": {"model": r.get("model", "ur5")},
+            }
+            for r in old
+        ]
+        return data
 
     @classmethod
     def settings_customise_sources(

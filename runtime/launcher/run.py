@@ -20,7 +20,7 @@ from plugins.api import resolve
 from plugins.registry import registry
 from runtime import __version__
 from runtime.kit.serve import listening_socket
-from runtime.kit.settings import RuntimeSettings, settings_for_child
+from runtime.kit.settings import DeviceSpec, RuntimeSettings, settings_for_child
 from runtime.launcher.supervisor import Child, Main, Supervisor, process_env
 from runtime.services import URLS_ENV, WEBUI, all_services, services
 
@@ -102,10 +102,14 @@ def runtime_id(settings: RuntimeSettings) -> str:
         return made
 
 
-def device_uuid(installation: str, driver: str, name: str) -> str:
+def device_uuid(installation: str, spec: DeviceSpec) -> str:
     """A device the launcher starts is this installation's: two runtimes on one network each
-    simulating their "sim-ur5" do not share a uuid, so neither adds the other's robot."""
-    return str(uuid.uuid5(SIM_NAMESPACE, f"{installation}/{driver}/{name}"))
+    simulating their "sim-ur5" do not share a uuid, so neither adds the other's robot. A
+    device with a `model` option is named by it, as the simulated robots of the earlier
+    `sim_robots:` list were, so robots added then are still recognised."""
+    model = spec.options.get("model")
+    middle = model if isinstance(model, str) and model else spec.driver
+    return str(uuid.uuid5(SIM_NAMESPACE, f"{installation}/{middle}/{spec.name}"))
 
 
 def _device_children(
@@ -135,7 +139,7 @@ def _device_children(
                     "--name",
                     spec.name,
                     "--uuid",
-                    device_uuid(installation, spec.driver, spec.name),
+                    device_uuid(installation, spec),
                     "--host",
                     settings.host if settings.host != "localhost" else "127.0.0.1",
                     "--port",

@@ -119,15 +119,15 @@ def fork_child(
         sys.argv = ["runtime.cli", *argv]
         code = main(argv)
     except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
+        code = 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 1
     except BaseException:
         traceback.print_exc()
     finally:
+        # Never back into the launcher's own code: the child ends here, whatever happened.
         for stream in (sys.stdout, sys.stderr):
-            try:
+            with contextlib.suppress(BaseException):
                 stream.flush()
-            finally:
-                os._exit(code)
+        os._exit(code)
     raise AssertionError("unreachable")
 
 

@@ -37,7 +37,8 @@ Handler = Callable[["RunHost", dict[str, Any]], Awaitable[Any]]
 
 @cache
 def handlers() -> dict[str, Handler | str]:
-    """Every block's runtime calls, by name: the reference until first used."""
+    """Every block's runtime calls, by name: a function, or its "module:attribute" reference
+    (resolved on each call, so a plugin that cannot load fails only its own blocks)."""
     found: dict[str, Handler | str] = {}
     for block in registry().blocks.values():
         found.update(block.handlers)
@@ -65,7 +66,8 @@ class RunHost:
         self.acquired: dict[str, str] = {}
         self.on_lease = on_lease  # a lease was taken: the run's record is written again
         self.closed = False
-        self.commanded: list[str] = []
+        self.commanded: list[str] = []  # every device the run took or used a lease of
+        self.robots: list[str] = []  # ... of which the robots
         self.speed = 0.5
         # Named on each move: the motion service refuses the run's moves once it is stopped,
         # even one whose request is still on its way when the stop arrives.
@@ -87,19 +89,36 @@ class RunHost:
             log.warning("the handler of %s cannot be loaded: %s", fn, exc)
             raise CallRefused(f"{fn} is not available: {exc}", "plugin_failed") from None
         try:
-            return await handler(self, args)
+            result = await handler(self, args)
+        except CallRefused:
+            raise
         except OpenPendantError as exc:
             raise CallRefused(exc.message, exc.code) from None
         except (KeyError, TypeError, ValueError) as exc:
             raise CallRefused(f"malformed request to {fn}: {exc}", "bad_call") from None
+        except Exception as exc:  # a handler's own bug fails its block; the run gets an answer
+            log.exception("the handler of %s failed", fn)
+            raise CallRefused(
+                f"{fn} failed: {type(exc).__name__}: {exc}", "handler_failed"
+            ) from None
+        finally:
+            if self.stopped():
+                # A command that was on its way when the stop came may reach its device after
+                # the stop did: stop what the run commanded once more.
+                await self._stop_others()
+        return result
 
     # Stop, pause, the end -------------------------------------------------------------------
+
+    def stopped(self) -> bool:
+        """Read afresh after each await (a stop may have come meanwhile)."""
+        return self.halted
 
     async def halt(self) -> None:
         """Stop wins: each robot halts at once over its link; the motion service drops the
         move, and any later one of this run; other devices the run commanded are stopped."""
         self.halted = True
-        robots = [name for name in self.commanded if name not in self._others]
+        robots = list(self.robots)
         tag = f"{self.holder} stopped"
         # First one message per robot on the link socket, no answer awaited: within a
         # control cycle of the stop. Then the round trips.
@@ -109,17 +128,23 @@ class RunHost:
             except OpenPendantError as exc:
                 log.warning("could not halt %s over its link: %s", robot, exc.message)
         calls: list[Awaitable[Any]] = [self.motion.stop(r, self.caller) for r in robots]
-        calls += [_stop(client) for client in self._others.values()]
+        calls.append(self._stop_others())
         for result in await asyncio.gather(*calls, return_exceptions=True):
             if isinstance(result, Exception):
                 log.warning("halting: %s", result)
 
+    async def _stop_others(self) -> None:
+        stops = [_stop(client) for client in self._others.values()]
+        for name, result in zip(
+            self._others, await asyncio.gather(*stops, return_exceptions=True), strict=True
+        ):
+            if isinstance(result, Exception):
+                log.warning("could not stop %s: %s", name, result)
+
     async def pause_motion(self, paused: bool) -> None:
         """Pause (a controlled stop along its path) or resume this run's move on each robot
         it commands; a robot with no move of this run has nothing to do."""
-        for robot in self.commanded:
-            if robot in self._others:
-                continue
+        for robot in self.robots:
             try:
                 if paused:
                     await self.motion.pause(robot, self.caller)
@@ -170,14 +195,20 @@ class RunHost:
     async def robot_client(self, robot: str) -> RobotClient:
         """The robot's client, under this run's lease, claimed for the run: if the program
         service dies, the device manager halts the robot."""
+        self._is_robot(robot)
         await self.devices.check_lease(robot, await self.token(robot))
-        return await self._claim(robot)
+        claimed = await self._claim(robot)
+        if self.halted:  # stopped while the robot and its lease were looked up
+            raise CallRefused("the program was stopped", "stopped")
+        return claimed
 
     async def device(self, name: str, kind: str) -> DeviceClient[Any]:
         """Another kind of device to command, under this run's lease; stopped with the run."""
         client = await self.devices.client(name, kind)
         await self.devices.check_lease(name, await self.token(name))
         self._others[name] = client
+        if self.halted:  # stopped while the device and its lease were looked up
+            raise CallRefused("the program was stopped", "stopped")
         return client
 
     async def read_device(self, name: str, kind: str) -> DeviceClient[Any]:
@@ -187,6 +218,7 @@ class RunHost:
     async def run_move(self, request: MoveRequest) -> None:
         """One move of the active robot, to its end; raises why it did not finish."""
         robot = await self.active_robot()
+        self._is_robot(robot)
         token = await self.token(robot)
         fields = request.model_fields_set
         update = {k: self.speed for k in ("speed", "acceleration") if k not in fields}
@@ -205,6 +237,10 @@ class RunHost:
             raise CallRefused(message, status.code or status.state.value)
 
     # Leases and claims ----------------------------------------------------------------------
+
+    def _is_robot(self, name: str) -> None:
+        if name not in self.robots:
+            self.robots.append(name)
 
     def _lease_of(self, device: str) -> str | None:
         return self.given.get(device) or self.acquired.get(device)

@@ -62,7 +62,7 @@ class RenameRequest(Strict):
 
 class RunRequest(Strict):
     breakpoints: list[str] = Field(default_factory=list, max_length=5000)
-    # Control leases the caller already holds, by robot: the program runs under them.
+    # Control leases the caller already holds, by device: the program runs under them.
     leases: dict[str, str] = Field(default_factory=dict, max_length=16)
     robot: str | None = Field(default=None, max_length=32)  # the robot blocks start with
     time_limit: float | None = Field(default=None, gt=0, le=7 * 24 * 3600)

@@ -217,7 +217,7 @@ class Runs:
                 if o.seq > after
             ],
             error=error,
-            robots=list(active.host.commanded),
+            robots=list(active.host.robots),
             isolation=run.isolation,
             started=run.started,
             ended=run.ended,

@@ -121,9 +121,15 @@ def test_an_installed_plugin_adds_a_device_a_panel_and_blocks(
         expect(conveyor.get_by_test_id("conveyor-part")).to_have_attribute(
             "data-present", "true", timeout=10_000
         )
+        # The pendant's STOP stops it too, whatever panel is shown.
+        page.get_by_test_id("safety-stop").tap()
+        expect(conveyor.get_by_test_id("conveyor-speed")).to_have_text("0 mm/s")
+        conveyor.get_by_test_id("conveyor-speed-input").fill("50")
+        conveyor.get_by_test_id("conveyor-run").tap()
+        expect(conveyor.get_by_test_id("conveyor-speed")).to_have_text("50 mm/s")
         conveyor.get_by_test_id("conveyor-stop").tap()
         expect(conveyor.get_by_test_id("conveyor-speed")).to_have_text("0 mm/s")
-        conveyor.get_by_test_id("conveyor-take").tap()  # released: the program takes control
+        # Control stays with this tablet: its program runs under the lease the panel took.
 
         # The waiting part is taken away: the program must bring the next one.
         httpx.post(f"{belt.url}/sim/take").raise_for_status()

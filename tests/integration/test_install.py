@@ -20,6 +20,7 @@ import httpx
 import pytest
 
 from runtime.bench.harness.processes import Proc, child_env, free_port, wait_for
+from runtime.kit.settings import default_devices
 from runtime.launcher.run import device_uuid
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -113,7 +114,7 @@ def test_the_installed_runtime_runs_serves_its_ui_and_detects_its_robot(
         page = httpx.get(f"{base}/")
         assert page.status_code == 200 and "<op-app" in page.text
         installation = (tmp_path / "data" / "runtime-id").read_text().strip()
-        own = device_uuid(installation, "sim-robot", "sim-ur5")
+        own = device_uuid(installation, default_devices()[0])
         wait_for(
             lambda: any(d["uuid"] == own for d in httpx.get(f"{base}/api/devices/detected").json()),
             10,

@@ -183,6 +183,11 @@ def test_a_typed_client_calls_the_declared_endpoint_over_the_link() -> None:
     assert asyncio.run(io.write("do1", SignalWrite(value=True))).value is True
     with pytest.raises(NotFound, match="no do9"):
         asyncio.run(io.write("do9", SignalWrite(value=True)))
+    # A signal name is one path segment, whatever it holds: it reaches no other route.
+    write = endpoints(IOBlock)["write"]
+    assert write.url("a/../b") == "/signals/a%2F..%2Fb"
+    with pytest.raises(ValueError, match=r"'\.\.'"):
+        write.url("..")
 
 
 def test_a_robot_client_streams_commands_in_order_and_refusals_are_typed() -> None:

@@ -5,6 +5,8 @@ only through that service's `client` module."""
 from __future__ import annotations
 
 import ast
+import subprocess
+import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -99,3 +101,20 @@ def test_the_walk_sees_a_forbidden_import(tmp_path: Path) -> None:
     assert "runtime.motion.moves" in seen
     assert service_of("runtime.motion.moves") == "runtime.motion"
     assert "fastapi" in seen
+
+
+def test_the_robotics_core_loads_no_web_framework_or_network_library_even_indirectly() -> None:
+    """What importing every module of the core pulls in, in a fresh interpreter: the
+    import walk above reads only each file's own imports."""
+    core = [m for m, _ in modules(ROOT / "runtime" / "robotics")]
+    script = (
+        "import importlib, sys\n"
+        f"for m in {core!r}: importlib.import_module(m)\n"
+        "print('\\n'.join(sorted(sys.modules)))\n"
+    )
+    loaded = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True, cwd=ROOT
+    ).stdout.split()
+    banned = (*WEB, "zeroconf", "pydantic_settings", *SERVICE_PACKAGES)
+    found = [m for m in loaded if any(m == b or m.startswith(b + ".") for b in banned)]
+    assert found == []

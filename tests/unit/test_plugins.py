@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from plugins.api import Block, DeviceKind, Driver, Panel, Plugin, resolve
-from plugins.registry import CORE, check, load, registry
+from plugins.api import Block, DeviceKind, Driver, Panel, Plugin, Service, resolve
+from plugins.registry import CORE, Loaded, check, load, registry
 
 BUILT_IN = {"core", "drivers", "blocks", "ui"}
 
@@ -97,6 +97,41 @@ def test_a_plugin_that_declares_what_another_has_is_refused_whole(fake_plugins: 
     assert [f.plugin for f in plugins.failures] == ["b"]
     assert "robot_home" in plugins.failures[0].error
     assert "brand-new" not in plugins.drivers  # nothing of a refused plugin is kept
+
+
+@pytest.mark.parametrize(
+    ("block", "service", "fault"),
+    [
+        # A sandbox function the core's blocks give another meaning.
+        (Block("x_move", "robot", {}, "a:b", functions={"move_joint": "x:y"}), None, "move_joint"),
+        # A program call the core answers with another handler.
+        (Block("x_move", "robot", {}, "a:b", handlers={"robot.move": "x:y"}), None, "robot.move"),
+        # One of the sandbox's own guard names.
+        (Block("x_get", "robot", {}, "a:b", functions={"_getattr_": "x:y"}), None, "_getattr_"),
+        # A URL prefix the device manager serves.
+        (None, Service("takeover", "x:y", prefixes=("devices",)), "devices"),
+    ],
+)
+def test_a_plugin_cannot_take_over_a_name_the_core_answers(
+    block: Block | None, service: Service | None, fault: str
+) -> None:
+    core = load(
+        [entry("core", "runtime.plugin:PLUGIN"), entry("b", "blockly_blocks.plugin:PLUGIN")]
+    )
+    plugin = Plugin(
+        name="takeover",
+        blocks=(block,) if block else (),
+        services=(service,) if service else (),
+    )
+    with pytest.raises(ValueError, match=fault):
+        core.add(Loaded(plugin, "takeover", "takeover", "0.1", builtin=False))
+    # The same function or call declared again with the same meaning is one more user of it.
+    again = Block(
+        "x_move", "robot", {}, "a:b", handlers={"robot.move": "runtime.program.handlers:move"}
+    )
+    core.add(
+        Loaded(Plugin(name="reuser", blocks=(again,)), "reuser", "reuser", "0.1", builtin=False)
+    )
 
 
 @pytest.mark.parametrize(

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import uuid
 from pathlib import Path
 
 import pytest
 from pydantic import ValidationError
 
+from runtime.drivers.run import device_uuid as driver_uuid
 from runtime.kit.settings import (
     RuntimeSettings,
     load_settings,
@@ -14,6 +16,7 @@ from runtime.kit.settings import (
     settings_for_child,
     settings_from_env,
 )
+from runtime.launcher.run import device_uuid as launcher_uuid
 
 
 def test_precedence(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -63,3 +66,25 @@ def test_the_example_site_config_is_valid() -> None:
     settings = load_settings(example)
     assert settings.port == 8080
     assert settings.devices[0].options == {"model": "ur5"}
+
+
+def test_a_config_from_before_the_devices_list_still_loads_and_keeps_its_robots(
+    tmp_path: Path,
+) -> None:
+    """`sim_robots:` (before drivers were plugins) is read as sim-robot entries, and each
+    robot keeps the uuid it had, so robots added then are still recognised."""
+    config = tmp_path / "site.yaml"
+    config.write_text("sim_robots:\n  - {model: panda, name: arm-2}\n")
+    settings = load_settings(config)
+    assert [(d.driver, d.name, d.options) for d in settings.devices] == [
+        ("sim-robot", "arm-2", {"model": "panda"})
+    ]
+    # The uuids the launcher and a standalone simulator gave before.
+    before = uuid.uuid5(uuid.UUID("3d0f54a8-5b0e-4a8e-9c5e-0f8d4b6a2c11"), "inst/panda/arm-2")
+    assert launcher_uuid("inst", settings.devices[0]) == str(before)
+    alone = uuid.uuid5(uuid.UUID("6f1d9a52-3c39-4b61-9d0e-5c2a1f6b7e10"), "sim-robot/ur5/sim-ur5")
+    assert driver_uuid("sim-robot", "sim-ur5", "ur5") == str(alone)
+    both = tmp_path / "both.yaml"
+    both.write_text("sim_robots: []\ndevices: []\n")
+    with pytest.raises(ValidationError, match="not both"):
+        load_settings(both)

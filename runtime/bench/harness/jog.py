@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import itertools
 import json
+import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import httpx
@@ -79,6 +82,25 @@ class JogClient:
             self.drain(period)
         self.send({"type": "release", "press": press})
         return press
+
+    @contextmanager
+    def held(self, press: str, period: float = 0.02) -> Iterator[None]:
+        """Heartbeats for `press` from a thread of their own while the caller does other
+        things (asks the robot, cuts a wire): a finger that stays on the glass, however
+        long this test's own steps take."""
+        done = threading.Event()
+
+        def beat() -> None:
+            while not done.wait(period):
+                self.send({"type": "heartbeat", "press": press})
+
+        thread = threading.Thread(target=beat, name=f"heartbeat {press}", daemon=True)
+        thread.start()
+        try:
+            yield
+        finally:
+            done.set()
+            thread.join()
 
     def move_to(self, waypoint: str, speed: float = 1.0, timeout: float = 20.0) -> dict[str, Any]:
         press = f"t{next(_presses)}"

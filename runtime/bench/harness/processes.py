@@ -18,6 +18,7 @@ from typing import Any, TypeVar
 
 import httpx
 
+from runtime.kit.settings import DeviceSpec, default_devices
 from runtime.launcher.run import device_uuid
 
 T = TypeVar("T")
@@ -177,11 +178,13 @@ class Runtime(Proc):
                         found.append(f"{log.name}: {entry.get('msg')} {entry.get('exc', '')}")
         return found
 
-    def own_device(self, name: str = "sim-ur5", driver: str = "sim-robot") -> dict[str, Any]:
-        """One of the devices this runtime started, once detected (other runtimes on the same
-        loopback announce theirs too)."""
+    def own_device(self, spec: DeviceSpec | None = None) -> dict[str, Any]:
+        """One of the devices this runtime started (by default its simulated UR5), once
+        detected (other runtimes on the same loopback announce theirs too)."""
         installation = (self.data_dir / "runtime-id").read_text().strip()
-        uuid = device_uuid(installation, driver, name)
+        spec = spec or default_devices()[0]
+        name = spec.name
+        uuid = device_uuid(installation, spec)
         return wait_for(
             lambda: next(
                 (d for d in self.api("GET", "/devices/detected").json() if d["uuid"] == uuid),

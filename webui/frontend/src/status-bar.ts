@@ -169,13 +169,15 @@ export class OpStatusBar extends LitElement {
     }
   }
 
-  /** Stop always wins: every robot halts and every program stops, whatever is in focus. */
+  /** Stop always wins: every robot halts, every program stops and every other device that
+   * can stop (a plugin's device) is stopped, whatever is in focus. */
   private async stop(): Promise<void> {
     window.dispatchEvent(new Event("op-stop")); // panels let go of what they hold
     const robots = feed.robots().map((r) => r.local_name);
     await Promise.allSettled([
       ...robots.map((r) => api("POST", `/api/jog/robots/${encodeURIComponent(r)}/halt`)),
       api("POST", "/api/programs/_stop"),
+      api("POST", "/api/devices/_stop"),
     ]);
   }
 

@@ -193,10 +193,11 @@ export class OpSystemPanel extends LitElement {
 
   private async refresh() {
     try {
+      // The plugins' report failing hides neither health nor logs.
       const [health, logs] = await Promise.all([
         api<Health>("GET", "/api/health"),
         api<LogEntry[]>("GET", `/api/logs?level=${this.logLevel}&limit=100`),
-        plugins.load(),
+        plugins.load().catch(() => undefined),
       ]);
       this.health = health;
       this.logs = logs;

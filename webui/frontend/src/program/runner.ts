@@ -73,13 +73,13 @@ export class ProgramRunner implements ReactiveController {
   }
 
   /** Runs the saved program on the robot in focus (until a "use robot" block), with the
-   * leases this tab holds. */
+   * leases this tab holds (robots, and any other device a panel took control of). */
   async start(): Promise<void> {
     const robot = focus.robot;
     const leases: Record<string, string> = {};
-    for (const r of feed.robots()) {
-      const token = control.token(r.local_name);
-      if (token) leases[r.local_name] = token;
+    for (const device of feed.devices) {
+      const token = control.token(device.local_name);
+      if (token) leases[device.local_name] = token;
     }
     const status = await api<RunStatus>("POST", path(this.program(), "run"), {
       breakpoints: this.editor()?.liveBreakpoints() ?? [],
