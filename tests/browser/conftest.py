@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import shutil
-import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -11,6 +9,7 @@ from typing import Any
 import numpy as np
 import pytest
 from playwright.sync_api import (
+    Browser,
     BrowserContext,
     CDPSession,
     ConsoleMessage,
@@ -54,31 +53,32 @@ def playwright() -> Iterator[Playwright]:
         yield p
 
 
-def open_context(playwright: Playwright, viewport: ViewportSize) -> BrowserContext:
-    profile = tempfile.mkdtemp(prefix="op-chromium-")
-    context = playwright.chromium.launch_persistent_context(
-        profile,
-        executable_path=CHROMIUM,
-        headless=True,
-        args=CHROMIUM_ARGS,
-        viewport=viewport,
-        has_touch=True,
-        is_mobile=viewport["width"] < 600,
+@pytest.fixture(scope="module")
+def browser(playwright: Playwright) -> Iterator[Browser]:
+    """One Chromium per module; every test gets fresh contexts of its own (Playwright's
+    launch gives it a fresh temporary profile)."""
+    launched = playwright.chromium.launch(
+        executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS
     )
-    context.on("close", lambda _: shutil.rmtree(profile, ignore_errors=True))
-    return context
+    yield launched
+    launched.close()
+
+
+def open_context(browser: Browser, viewport: ViewportSize) -> BrowserContext:
+    """A context of its own: no cookies, storage or cache shared with any other."""
+    return browser.new_context(viewport=viewport, has_touch=True, is_mobile=viewport["width"] < 600)
 
 
 @pytest.fixture
-def tablet(playwright: Playwright) -> Iterator[BrowserContext]:
-    context = open_context(playwright, TABLET)
+def tablet(browser: Browser) -> Iterator[BrowserContext]:
+    context = open_context(browser, TABLET)
     yield context
     context.close()
 
 
 @pytest.fixture
-def phone(playwright: Playwright) -> Iterator[BrowserContext]:
-    context = open_context(playwright, PHONE)
+def phone(browser: Browser) -> Iterator[BrowserContext]:
+    context = open_context(browser, PHONE)
     yield context
     context.close()
 

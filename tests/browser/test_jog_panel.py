@@ -20,6 +20,7 @@ from tests.browser.conftest import (
     robot_at_rest,
     robot_joints,
 )
+from tests.browser.test_shop_floor import take_control_and_enable
 from tests.support.png import decode
 
 
@@ -120,9 +121,7 @@ def test_sliding_off_a_held_button_stops_the_robot(
 ) -> None:
     page = tablet.new_page()
     page.goto(f"{runtime.url}/#/jog")
-    page.get_by_test_id("control").tap()
-    expect(page.get_by_test_id("lease")).to_contain_text("You have control")
-    expect(page.get_by_test_id("disable")).to_be_visible()  # still enabled from before
+    take_control_and_enable(page)
     finger = Finger(page)
     button = page.locator("[data-testid=jog-row][data-axis='5'] [data-testid=jog-plus]")
     before = robot_joints(runtime)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from playwright.sync_api import BrowserContext, Playwright, Route, expect
+from playwright.sync_api import Browser, BrowserContext, Route, expect
 
 from runtime.bench.harness.processes import Runtime, child_env, wait_for
 from tests.browser.conftest import (
@@ -24,12 +24,12 @@ BACK_WITHIN = 5.0  # s after the runtime answers again: what a technician would 
 
 
 def test_the_jog_page_is_usable_again_after_the_runtime_restarts(
-    playwright: Playwright, tmp_path: Path
+    browser: Browser, tmp_path: Path
 ) -> None:
     env = child_env(tmp_path, OPENPENDANT_DEADMAN_SECONDS=str(BROWSER_DEADMAN))
     first = Runtime(tmp_path, env=env)
     first.wait_ready()
-    context = open_context(playwright, TABLET)
+    context = open_context(browser, TABLET)
     second: Runtime | None = None
     try:
         add_robot(first)
