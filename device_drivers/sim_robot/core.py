@@ -23,7 +23,7 @@ from runtime.interfaces.robot import (
     TrajectoryState,
     TrajectoryStatus,
 )
-from runtime.kit.errors import NotFound, RobotError
+from runtime.kit.errors import InvalidValue, NotFound, RobotError
 from runtime.robotics.kinematics import Kinematics
 
 CYCLE = 0.002
@@ -151,6 +151,19 @@ class SimCore:
             self.halt("E-stop")
         else:
             self.estop = False
+
+    def place(self, position: FloatArray) -> None:
+        """Simulation only: the arm is at `position`, at rest, at once, as a test's set-up
+        puts it there. Only while it stands still, and within its limits."""
+        q = np.asarray(position, dtype=float)
+        if q.shape != self.tracker.position.shape or not np.all(np.isfinite(q)):
+            raise InvalidValue(f"a position needs {len(self.tracker.position)} finite values")
+        if np.any(q < self.tracker.lower) or np.any(q > self.tracker.upper):
+            raise RobotError("that position is outside the joint limits", code="joint_limit")
+        if self.tracker.moving or self.trajectory is not None:
+            raise RobotError("the robot is moving; stop it first", code="moving")
+        self.halt("placed")
+        self.tracker.place(q)
 
     def fault(self, message: str) -> None:
         self.error = True

@@ -189,6 +189,10 @@ class SimRobot(RobotDriver):
                 raise RobotError(f"no digital input {index}", code="unknown_io")
             self.core.digital_inputs[index] = value
 
+    def place(self, position: list[float]) -> None:
+        with self.lock:
+            self.core.place(np.asarray(position, dtype=float))
+
     def set_estop(self, engaged: bool) -> None:
         with self.lock:
             self.core.set_estop(engaged)

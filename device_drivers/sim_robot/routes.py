@@ -29,6 +29,10 @@ class OperationalModeRequest(Strict):
     mode: OperationalMode
 
 
+class PlaceRequest(Strict):
+    joints: list[float] = Field(min_length=1, max_length=16)
+
+
 def sim_router(robot: SimRobot) -> APIRouter:
     router = APIRouter(prefix="/sim")
 
@@ -45,6 +49,13 @@ def sim_router(robot: SimRobot) -> APIRouter:
     @router.put("/operational_mode")
     async def operational_mode(body: OperationalModeRequest) -> RobotState:
         robot.set_operational_mode(body.mode)
+        return robot.state()
+
+    @router.put("/joints")
+    async def place(body: PlaceRequest) -> RobotState:
+        """Put the standing arm at these joints at once: a test's set-up in no time, where
+        a robot would have to be moved there."""
+        robot.place(body.joints)
         return robot.state()
 
     @router.put("/digital_inputs/{index}")

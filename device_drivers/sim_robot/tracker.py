@@ -86,6 +86,16 @@ class JointTracker:
             and np.max(np.abs(self.velocity)) < SETTLED_VELOCITY
         )
 
+    def place(self, position: FloatArray) -> None:
+        """At `position`, at rest, at once (a simulator's set-up, not a motion)."""
+        n = len(self.position)
+        self.position = np.array(position, dtype=float)
+        self.velocity = np.zeros(n)
+        self.acceleration = np.zeros(n)
+        self._in.current_position = self.position.tolist()
+        self._in.current_velocity = [0.0] * n
+        self._in.current_acceleration = [0.0] * n
+
     def hold(self) -> None:
         """Come to a stop (halt), then stay there: every joint slows down in step, as fast
         as the slowest one allows, so the robot brakes along its path. Braking each joint

@@ -42,7 +42,7 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cell]:
 def ready(cell: Cell) -> Cell:
     cell.ready()
     clear_posts(cell.runtime)
-    move(cell, {"kind": "joint", "target": {"joints": INFO.home}, "speed": 1.0})
+    cell.place(INFO.home)
     return cell
 
 

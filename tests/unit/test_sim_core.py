@@ -23,7 +23,7 @@ from runtime.interfaces.robot import (
     TrajectoryState,
     TrajectoryWaypoint,
 )
-from runtime.kit.errors import RobotError
+from runtime.kit.errors import InvalidValue, RobotError
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
 
@@ -404,3 +404,24 @@ def test_pausing_without_a_trajectory_is_refused(core: SimCore) -> None:
     with pytest.raises(RobotError) as refused:
         core.pause_trajectory(True)
     assert refused.value.code == "not_running"
+
+
+def test_placing_the_arm_puts_it_there_at_rest_and_only_while_it_stands(core: SimCore) -> None:
+    """The simulator's set-up shortcut: refused while the arm moves, outside the limits
+    or with a value that is not a number; done, the arm stays put."""
+    clock = Clock(core)
+    core.set_mode(CommandMode.jog)
+    v = np.array([0.5, 0, 0, 0, 0, 0])
+    clock.run(0.2, lambda now: core.stream(CommandMode.jog, v, None, 0.05, now))
+    target = np.array([0.3, -1.2, 1.1, -1.4, -1.57, 0.2])
+    with pytest.raises(RobotError, match="moving"):
+        core.place(target)
+    clock.run(0.6)  # the jog's commands lapse: it halts
+    with pytest.raises(RobotError, match="limits"):
+        core.place(np.array([9.0, 0, 0, 0, 0, 0]))
+    with pytest.raises(InvalidValue):
+        core.place(np.array([math.nan, 0, 0, 0, 0, 0]))
+    core.place(target)
+    clock.run(0.2)
+    assert np.allclose(core.tracker.position, target, atol=1e-12)
+    assert np.allclose(core.tracker.velocity, 0.0)

@@ -184,23 +184,15 @@ class Cell:
         assert response.status_code == 200, response.text
 
     def place(self, joints: list[float] | np.ndarray[Any, Any]) -> None:
-        """A joint move there through the motion service: set-up, not the jog under test
-        (a hold-to-run move would halt whenever this test host stalls)."""
-        request = {
-            "kind": "joint",
-            "target": {"joints": list(map(float, joints))},
-            "speed": 1.0,
-            "acceleration": 1.0,
-        }
-        response = self.runtime.api(
-            "POST", "/motion/robots/robot/moves", json=request, headers=self.headers()
-        )
-        assert response.status_code == 202, response.text
-        status = response.json()
-        deadline = time.monotonic() + 60
-        while status["state"] in ("planning", "running") and time.monotonic() < deadline:
-            status = self.runtime.api(
-                "GET", f"/motion/moves/{status['id']}", params={"wait": 5}
-            ).json()
-        assert status["state"] == "finished", f"could not move to {list(joints)}: {status}"
+        """The arm put there at once by its simulator (set-up, not the motion under test),
+        then the runtime's view of it waited for."""
         self.robot.wait_stopped()
+        response = self.robot.http.put("/sim/joints", json={"joints": list(map(float, joints))})
+        assert response.status_code == 200, response.text
+        target = np.array(joints, dtype=float)
+
+        def seen() -> bool:
+            state = self.runtime.api("GET", "/devices/robot/state").json()
+            return bool(np.abs(np.array(state["joint_position"]) - target).max() < 1e-9)
+
+        wait_for(seen, 5, what="the runtime seeing the robot placed")
