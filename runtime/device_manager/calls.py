@@ -13,11 +13,11 @@ from typing import Any
 
 from pydantic import Field, ValidationError
 
-from plugins.api import resolve
+from plugins.api import DeviceKind, resolve
 from plugins.registry import registry as plugins
 from runtime.device_manager.registry import DeviceRegistry
 from runtime.interfaces.common import Strict
-from runtime.interfaces.endpoints import endpoints
+from runtime.interfaces.endpoints import Endpoint, endpoints
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import Conflict, InvalidValue, NotFound, Unavailable
 
@@ -30,6 +30,16 @@ ANYONE = ("stop",)
 class CallRequest(Strict):
     args: list[str | int] = Field(default_factory=list, max_length=8)
     body: dict[str, Any] | None = None
+
+
+def declared(kind: DeviceKind) -> dict[str, Endpoint]:
+    """The methods a kind's interface declares; a plugin that cannot load has none to call."""
+    try:
+        return endpoints(resolve(kind.interface))
+    except Exception as exc:
+        raise Unavailable(
+            f"the {kind.name} interface cannot be loaded: {exc}", code="plugin_failed"
+        ) from exc
 
 
 async def call_device(
@@ -49,12 +59,7 @@ async def call_device(
             f"{local_name} is moved through jogging and planned moves, not by calls",
             code="not_callable",
         )
-    try:
-        ep = endpoints(resolve(kind.interface)).get(method)
-    except Exception as exc:  # a plugin that cannot load: its devices cannot be called
-        raise Unavailable(
-            f"the {kind.name} interface cannot be loaded: {exc}", code="plugin_failed"
-        ) from exc
+    ep = declared(kind).get(method)
     if ep is None:
         raise NotFound(f"a {kind.name} has no method {method[:40]!r}", code="unknown_method")
     if len(request.args) != len(ep.params):
@@ -88,9 +93,9 @@ async def stop_all(devices: DeviceRegistry) -> list[str]:
         if kind is None or kind.session:
             continue
         try:
-            ep = endpoints(resolve(kind.interface)).get("stop")
-        except Exception as exc:  # a broken plugin's kind: reported on /health already
-            log.warning("cannot stop %s: its kind cannot be loaded: %s", name, exc)
+            ep = declared(kind).get("stop")
+        except Unavailable as exc:
+            log.warning("cannot stop %s: %s", name, exc.message)
             continue
         if ep is None or ep.params or ep.body is not None:
             continue

@@ -78,8 +78,7 @@ class RunHost:
         self._renewer: asyncio.Task[None] | None = None
 
     async def call(self, fn: str, args: dict[str, Any]) -> Any:
-        if self.halted:
-            raise CallRefused("the program was stopped", "stopped")
+        self.refuse_if_stopped()
         found = handlers().get(fn)
         if found is None:
             raise CallRefused(f"unknown program function {fn[:40]!r}", "unknown_function")
@@ -102,7 +101,7 @@ class RunHost:
                 f"{fn} failed: {type(exc).__name__}: {exc}", "handler_failed"
             ) from None
         finally:
-            if self.stopped():
+            if self.halted:
                 # A command that was on its way when the stop came may reach its device after
                 # the stop did: stop what the run commanded once more.
                 await self._stop_others()
@@ -110,9 +109,10 @@ class RunHost:
 
     # Stop, pause, the end -------------------------------------------------------------------
 
-    def stopped(self) -> bool:
-        """Read afresh after each await (a stop may have come meanwhile)."""
-        return self.halted
+    def refuse_if_stopped(self) -> None:
+        """Checked again after each await that looks a device up: a stop may have come."""
+        if self.halted:
+            raise CallRefused("the program was stopped", "stopped")
 
     async def halt(self) -> None:
         """Stop wins: each robot halts at once over its link; the motion service drops the
@@ -198,8 +198,7 @@ class RunHost:
         self._is_robot(robot)
         await self.devices.check_lease(robot, await self.token(robot))
         claimed = await self._claim(robot)
-        if self.halted:  # stopped while the robot and its lease were looked up
-            raise CallRefused("the program was stopped", "stopped")
+        self.refuse_if_stopped()  # stopped while the robot and its lease were looked up
         return claimed
 
     async def device(self, name: str, kind: str) -> DeviceClient[Any]:
@@ -207,8 +206,7 @@ class RunHost:
         client = await self.devices.client(name, kind)
         await self.devices.check_lease(name, await self.token(name))
         self._others[name] = client
-        if self.halted:  # stopped while the device and its lease were looked up
-            raise CallRefused("the program was stopped", "stopped")
+        self.refuse_if_stopped()  # stopped while the device and its lease were looked up
         return client
 
     async def read_device(self, name: str, kind: str) -> DeviceClient[Any]:
@@ -223,8 +221,7 @@ class RunHost:
         fields = request.model_fields_set
         update = {k: self.speed for k in ("speed", "acceleration") if k not in fields}
         request = request.model_copy(update=update)
-        if self.halted:  # stopped while the robot and its lease were looked up
-            raise CallRefused("the program was stopped", "stopped")
+        self.refuse_if_stopped()  # stopped while the robot and its lease were looked up
         start = self.motion.start(robot, request, token, self.caller)
         if robot in self._claimed:
             status = await start

@@ -74,12 +74,14 @@ async def run_belt(run: RunHost, args: dict[str, Any]) -> None:
     await client.run()
 
 
-def test_a_stop_during_a_command_leaves_the_device_stopped(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    events: list[str] = []
+@pytest.fixture
+def events(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """What reached the belt, in order; the run's only call runs it."""
     monkeypatch.setattr(host_module, "handlers", lambda: {"run_belt": run_belt})
+    return []
 
+
+def test_a_stop_during_a_command_leaves_the_device_stopped(events: list[str]) -> None:
     async def scenario() -> None:
         belt = Belt(events)
         host = make_host(FakeDevices(belt))
@@ -96,12 +98,7 @@ def test_a_stop_during_a_command_leaves_the_device_stopped(
     asyncio.run(scenario())
 
 
-def test_a_stop_while_the_device_is_looked_up_sends_nothing(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    events: list[str] = []
-    monkeypatch.setattr(host_module, "handlers", lambda: {"run_belt": run_belt})
-
+def test_a_stop_while_the_device_is_looked_up_sends_nothing(events: list[str]) -> None:
     async def scenario() -> None:
         looked_up = asyncio.Event()
         go_on = asyncio.Event()
