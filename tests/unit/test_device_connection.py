@@ -124,6 +124,9 @@ def test_a_session_holds_the_state_stream_and_a_bound_command_stream() -> None:
         async with FakeDevice() as device, connection(device.url) as (conn, _):
             await until(lambda: conn.status == "connected")
             assert device.open == {"state": 1, "command": 1}
+            # Connected once the command socket is open; its first message may still be
+            # on its way to the device.
+            await until(lambda: bool(device.commands))
             assert device.commands[0]["type"] == "session"
             assert device.commands[0]["timeout"] == TIMING.driver_timeout
             conn.send({"type": "halt"}, conn.generation, lambda _: None)
