@@ -20,6 +20,7 @@ from plugins.registry import registry
 from runtime.kit.logs import setup_logging
 from runtime.kit.serve import listening_socket, run_app
 from runtime.kit.settings import RuntimeSettings, settings_from_env
+from runtime.kit.web_guard import WebGuard, WebPolicy
 
 URLS_ENV = "OPENPENDANT_SERVICE_URLS"
 
@@ -52,6 +53,15 @@ def urls_from_env() -> dict[str, str]:
     return {str(k): str(v) for k, v in urls.items()}
 
 
+def web_policy(settings: RuntimeSettings) -> WebPolicy:
+    return WebPolicy(
+        ui_port=settings.port,
+        allowed_hosts=settings.allowed_hosts,
+        max_body=settings.max_request_bytes,
+        jog_port=settings.jog_port or None,
+    )
+
+
 def run_service(
     name: str,
     *,
@@ -71,7 +81,8 @@ def run_service(
     sockets = [sock]
     if public_fd is not None and spec.public_paths:
         public = socket.socket(fileno=public_fd)
-        app = PublicPaths(app, int(public.getsockname()[1]), spec.public_paths)
+        guarded = WebGuard(app, web_policy(settings))
+        app = PublicPaths(app, guarded, int(public.getsockname()[1]), spec.public_paths)
         sockets.append(public)
     run_app(app, *sockets)
 
@@ -80,8 +91,9 @@ class PublicPaths:
     """On the public port only the service's public paths answer; the rest of its API is
     reached through the webui, as every other service's."""
 
-    def __init__(self, app: ASGIApp, port: int, paths: tuple[str, ...]) -> None:
+    def __init__(self, app: ASGIApp, guarded: ASGIApp, port: int, paths: tuple[str, ...]) -> None:
         self.app = app
+        self.guarded = guarded
         self.port = port
         self.paths = set(paths)
 
@@ -94,4 +106,5 @@ class PublicPaths:
             else:
                 await PlainTextResponse("not found", status_code=404)(scope, receive, send)
             return
-        await self.app(scope, receive, send)
+        # What a browser reaches directly is guarded as the UI's port is.
+        await (self.guarded if on_public else self.app)(scope, receive, send)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+from urllib.parse import quote
 
 import httpx
 import websockets
@@ -16,7 +17,8 @@ from runtime.kit.request_start import HEADER as REQUEST_START
 from runtime.kit.request_start import stamp
 from runtime.kit.websocket import until_either_ends
 
-# Hop-by-hop and length headers, and the arrival stamp, are the proxy's own business.
+# Hop-by-hop and length headers, and the arrival stamp, are the proxy's own business; what a
+# client says of proxies before it (X-Forwarded-*, Forwarded) is never passed on as if true.
 _SKIP_REQUEST = {
     REQUEST_START.lower(),
     deadline.HEADER.lower(),
@@ -26,8 +28,44 @@ _SKIP_REQUEST = {
     "transfer-encoding",
     "upgrade",
     "keep-alive",
+    "te",
+    "trailer",
+    "proxy-authorization",
+    "proxy-authenticate",
+    "proxy-connection",
     "accept-encoding",
+    "forwarded",
 }
+
+
+def forwarded_headers(request: Request) -> dict[str, str]:
+    named = {
+        token.strip().lower()
+        for token in request.headers.get("connection", "").split(",")
+        if token.strip()
+    }
+    return {
+        k: v
+        for k, v in request.headers.items()
+        if (key := k.lower()) not in _SKIP_REQUEST
+        and key not in named
+        and not key.startswith("x-forwarded-")
+    }
+
+
+def service_path(path: str) -> str:
+    """The path below a service's prefix, each segment quoted again: a `..` (or an encoded
+    slash that would make one) never climbs out of the prefix to another route."""
+    segments = path.split("/")
+    if any(s in (".", "..") for s in segments) or "\\" in path:
+        raise PathRefused(path)
+    return "/".join(quote(s, safe="!$&'()*+,;=:@~-._") for s in segments)
+
+
+class PathRefused(ValueError):
+    pass
+
+
 _KEEP_RESPONSE = {"content-type", "content-disposition", "cache-control", "etag"}
 
 
@@ -50,8 +88,11 @@ class ServiceProxy:
         if target is None:
             return error_response(404, "not_found", f"no service serves /api/{prefix}")
         service, base = target
-        url = f"{base}/{prefix}" + (f"/{path}" if path else "")
-        headers = {k: v for k, v in request.headers.items() if k.lower() not in _SKIP_REQUEST}
+        try:
+            url = f"{base}/{prefix}" + (f"/{service_path(path)}" if path else "")
+        except PathRefused:
+            return error_response(400, "bad_path", "a path may not contain . or .. segments")
+        headers = forwarded_headers(request)
         # When the request reached the runtime (a client's own value is replaced): services
         # that promise a reaction time count from here, e.g. a program stop.
         headers[REQUEST_START] = received
@@ -80,7 +121,12 @@ class ServiceProxy:
             return
         service, base = target
         query = f"?{ws.url.query}" if ws.url.query else ""
-        url = base.replace("http://", "ws://", 1) + f"/{prefix}/{path}{query}"
+        try:
+            below = service_path(path)
+        except PathRefused:
+            await _close_with_error(ws, "bad_path", "a path may not contain . or .. segments")
+            return
+        url = base.replace("http://", "ws://", 1) + f"/{prefix}/{below}{query}"
         try:
             upstream = await websockets.connect(
                 url, open_timeout=2.0, close_timeout=1.0, max_size=2**24

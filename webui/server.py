@@ -17,8 +17,10 @@ from fastapi.staticfiles import StaticFiles
 from runtime.kit.app import create_app
 from runtime.kit.errors import NotFound
 from runtime.kit.settings import RuntimeSettings
+from runtime.kit.web_guard import WebGuard
 from runtime.paths import package_roots
 from runtime.services import services as declared_services
+from runtime.services import web_policy
 from webui.logs import MAX_ENTRIES, recent_entries
 from webui.plugins import plugins_router
 from webui.proxy import ServiceProxy
@@ -77,6 +79,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             await proxy.aclose()
 
     app = create_app("webui", lifespan=lifespan)
+    app.add_middleware(WebGuard, policy=web_policy(settings))
 
     @app.get("/api/health")
     async def health() -> dict[str, Any]:

@@ -72,6 +72,11 @@ class RuntimeSettings(BaseSettings):
     # The hold-to-run socket's own port (0: any free one; the UI asks /api/jog/settings):
     # heartbeats go straight to the jog service, never queued behind the gateway's HTTP.
     jog_port: int = Field(default=0, ge=0, le=65535)
+    # Names (besides IP addresses, localhost and this computer's hostname[.local]) a browser
+    # may use to reach the UI; any other name in a Host header is refused (DNS rebinding).
+    allowed_hosts: list[str] = Field(default_factory=list)
+    # The largest request body the UI's port accepts (an import of a big variable store).
+    max_request_bytes: int = Field(default=16 * 1024 * 1024, ge=64 * 1024, le=1024**3)
     data_dir: Path = Field(default_factory=default_data_dir)
     log_dir: Path | None = None
     log_level: Literal["debug", "info", "warning", "error"] = "info"

@@ -207,7 +207,10 @@ def run(settings: RuntimeSettings) -> int:
         )
         return 1
     # Kept by the launcher like the others: the port survives a restart of the jog service.
-    settings = settings.model_copy(update={"jog_port": int(jog_public.getsockname()[1])})
+    # The UI's port is the origin its pages come from (the services check it; see web_guard).
+    settings = settings.model_copy(
+        update={"jog_port": int(jog_public.getsockname()[1]), "port": int(public_port)}
+    )
     env = process_env({**settings_for_child(settings), URLS_ENV: json.dumps(urls)})
 
     main = forking()

@@ -15,7 +15,7 @@ from webui.server import build_app
 def test_a_service_that_is_not_running_is_a_503_not_a_hang() -> None:
     dead = f"http://127.0.0.1:{free_port()}"
     app = build_app(RuntimeSettings(sim=False), {"device_manager": dead, "variable_storage": dead})
-    with TestClient(app) as client:
+    with TestClient(app, base_url="http://127.0.0.1:8080") as client:
         response = client.get("/api/devices/detected")
         assert response.status_code == 503
         assert response.json()["error"]["code"] == "service_unavailable"
@@ -27,7 +27,7 @@ def test_a_service_that_is_not_running_is_a_503_not_a_hang() -> None:
 
 def test_a_service_without_an_address_is_reported() -> None:
     app = build_app(RuntimeSettings(sim=False), {})
-    with TestClient(app) as client:
+    with TestClient(app, base_url="http://127.0.0.1:8080") as client:
         assert client.get("/api/devices").status_code == 404
         health = client.get("/api/health").json()
     assert health["services"]["variable_storage"]["status"] == "down"
@@ -35,7 +35,7 @@ def test_a_service_without_an_address_is_reported() -> None:
 
 def test_robot_files_are_served_from_packages_and_nothing_else() -> None:
     app = build_app(RuntimeSettings(sim=False), {})
-    with TestClient(app) as client:
+    with TestClient(app, base_url="http://127.0.0.1:8080") as client:
         urdf = client.get(
             "/api/robot-files/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf"
         )
@@ -71,7 +71,7 @@ def test_the_log_route_gives_recent_entries_by_level_newest_first(tmp_path: Path
     lines = [filler] * 400 + [json.dumps({"ts": 2.0, "level": "warning", "msg": "late"})]
     (logs / "device_manager.log").write_text("\n".join(lines))
     app = build_app(RuntimeSettings(sim=False, log_dir=logs), {})
-    with TestClient(app) as client:
+    with TestClient(app, base_url="http://127.0.0.1:8080") as client:
         warnings = client.get("/api/logs").json()
         everything = client.get("/api/logs?level=info&limit=500").json()
         assert client.get("/api/logs?level=loud").status_code == 422
