@@ -4,13 +4,12 @@ each checked against the sandbox policy before it is kept."""
 
 from __future__ import annotations
 
-import asyncio
 from typing import Any
 
-from blockly_blocks.generator import Generated, generate
-from blockly_blocks.workspace import WorkspaceError, dump_json, parse_json
+from blockly_blocks.workspace import parse_json
 from runtime.interfaces.variables import StoredProgram, Variable
 from runtime.kit.errors import InvalidValue, NotFound
+from runtime.program.compiler import Compiler
 from runtime.program.models import (
     PREFIX,
     TAG,
@@ -21,94 +20,32 @@ from runtime.program.models import (
     check_program_name,
 )
 from runtime.variable_storage.client import StorageClient
-from sandbox.policy import ProgramCompileError, compile_program
-
-
-def workspace_error(exc: WorkspaceError) -> InvalidValue:
-    details = {"block": exc.block} if exc.block else None
-    return InvalidValue(exc.message, code="invalid_workspace", details=details)
-
-
-def compile_error(exc: ProgramCompileError) -> InvalidValue:
-    return InvalidValue(
-        f"the program breaks the sandbox policy: {exc}",
-        code="invalid_program",
-        details={"errors": exc.errors, "line": exc.line},
-    )
-
-
-def problem_infos(generated: Generated) -> list[ProblemInfo]:
-    return [ProblemInfo(block=p.block, message=p.message) for p in generated.problems]
-
-
-def read_request(body: bytes) -> dict[str, Any]:
-    """A save or preview body: {"workspace": <Blockly JSON>} or {"python": "<code>"}."""
-    try:
-        data = parse_json(body)
-    except WorkspaceError as exc:
-        raise workspace_error(exc) from None
-    if not isinstance(data, dict) or ("workspace" in data) == ("python" in data):
-        raise InvalidValue('send {"workspace": <Blockly JSON>} or {"python": "<code>"}')
-    return data
-
-
-def workspace_text(data: dict[str, Any]) -> str:
-    try:
-        return dump_json(data["workspace"])
-    except WorkspaceError as exc:
-        raise workspace_error(exc) from None
-
-
-def generate_checked(raw: bytes | str) -> Generated:
-    """Parse, generate and compile a workspace; any problem is an InvalidValue."""
-    try:
-        generated = generate(raw)
-        compile_program(generated.python)
-    except WorkspaceError as exc:
-        raise workspace_error(exc) from None
-    except ProgramCompileError as exc:
-        raise compile_error(exc) from None
-    return generated
 
 
 class ProgramLibrary:
-    def __init__(self, storage: StorageClient) -> None:
+    def __init__(self, storage: StorageClient, compiler: Compiler) -> None:
         self.storage = storage
+        self.compiler = compiler
 
     async def save(self, name: str, body: bytes) -> Saved:
         """Body: {"workspace": <Blockly JSON>} or {"python": "<code>"}."""
         check_program_name(name)
-        data = read_request(body)
-        if "python" in data:
-            python = data["python"]
-            if not isinstance(python, str):
-                raise InvalidValue("python must be text")
-            try:
-                compile_program(python)
-            except ProgramCompileError as exc:
-                raise compile_error(exc) from None
-            stored = StoredProgram(source="python", python=python)
-            blocks, problems = 0, []
-        else:
-            workspace_json = workspace_text(data)
-            # Generation is CPU work (a 5,000-block workspace takes a while): off the loop.
-            generated = await asyncio.to_thread(generate_checked, workspace_json)
-            stored = StoredProgram(
-                source="blocks", workspace_json=workspace_json, python=generated.python
-            )
-            python, blocks = generated.python, generated.blocks
-            problems = problem_infos(generated)
-        variable = await self.storage.put(PREFIX + name, "program", stored.model_dump(), tags=[TAG])
+        prepared = await self.compiler.prepare_save(body)
+        variable = await self.storage.put(PREFIX + name, "program", prepared.stored, tags=[TAG])
         return Saved(
-            name=name, python=python, version=variable.version, blocks=blocks, problems=problems
+            name=name,
+            python=prepared.python,
+            version=variable.version,
+            blocks=prepared.blocks,
+            problems=prepared.problems,
         )
 
-    async def problems(self, program: Program) -> list[ProblemInfo]:
-        """Why a saved program may not run (none for hand-written Python)."""
-        if program.source != "blocks":
-            return []
-        generated = await asyncio.to_thread(generate_checked, dump_json(program.workspace))
-        return problem_infos(generated)
+    async def runnable(self, name: str) -> tuple[str, list[ProblemInfo]]:
+        """A saved program's Python, and why it may not run (none for hand-written Python)."""
+        stored = StoredProgram.model_validate((await self._variable(name)).value)
+        if stored.source != "blocks" or stored.workspace_json is None:
+            return stored.python, []
+        return stored.python, await self.compiler.problems(stored.workspace_json)
 
     async def get(self, name: str) -> Program:
         return _program(name, await self._variable(name))

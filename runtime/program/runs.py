@@ -59,8 +59,7 @@ class Runs:
         current = self.runs.get(name)
         if current is not None and not current.run.ended_state:
             raise Conflict(f"{name} is running; stop it first", code="busy")
-        program = await self.library.get(name)
-        problems = await self.library.problems(program)
+        python, problems = await self.library.runnable(name)
         if problems:
             first = problems[0].message
             more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
@@ -81,7 +80,7 @@ class Runs:
         limits = RunLimits(wall_seconds=request.time_limit or RunLimits.wall_seconds)
         number = next(self._numbers)
         run = ProgramRun(
-            program.python,
+            python,
             host,
             limits=limits,
             breakpoints=set(request.breakpoints),

@@ -19,13 +19,8 @@ from runtime.kit.request_start import RequestStart, received_at
 from runtime.kit.settings import RuntimeSettings
 from runtime.kit.websocket import Fanout
 from runtime.motion.client import MotionClient
-from runtime.program.library import (
-    ProgramLibrary,
-    generate_checked,
-    problem_infos,
-    read_request,
-    workspace_text,
-)
+from runtime.program.compiler import Compiler, problem_infos
+from runtime.program.library import ProgramLibrary
 from runtime.program.models import (
     BreakpointsRequest,
     Program,
@@ -60,10 +55,7 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
     @router.post("/_generate")
     async def preview(request: Request) -> dict[str, Any]:
         """The Python of {"workspace": <Blockly JSON>}, as saving it would give; nothing kept."""
-        data = read_request(await read_body(request))
-        if "workspace" not in data:
-            raise InvalidValue('send {"workspace": <Blockly JSON>}')
-        generated = await asyncio.to_thread(generate_checked, workspace_text(data))
+        generated = await library.compiler.preview(await read_body(request))
         return {
             "python": generated.python,
             "blocks": generated.blocks,
@@ -154,13 +146,15 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
     devices = Devices(urls["device_manager"], "program", settings.link.stale_after)
     motion = MotionClient(urls["motion"])
-    library = ProgramLibrary(storage)
+    compiler = Compiler()
+    library = ProgramLibrary(storage, compiler)
     fanout = Fanout()
     records = RunRecords(settings.data_dir / "program-runs.json")
     runs = Runs(library, devices, motion, storage, fanout, records)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        await compiler.start()
         await devices.start()
         recovery = asyncio.create_task(runs.recover())
         try:
@@ -171,6 +165,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             await devices.close()
             await motion.aclose()
             await storage.aclose()
+            await compiler.close()
 
     app = create_app("program", lifespan=lifespan)
     app.include_router(program_router(library, runs, fanout))

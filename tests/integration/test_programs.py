@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import threading
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -286,6 +287,37 @@ def test_stop_during_a_long_move_halts_the_robot(ready: Cell) -> None:
     assert np.abs(ready.robot.q() - q).max() < STILL  # nothing resumes after the stop
     assert np.abs(q - np.array(FAR)).max() > 0.1
     assert all(o["text"] != "never" for o in status(ready, "long_move")["output"])
+
+
+def test_a_stop_is_not_held_up_by_the_heaviest_save(ready: Cell) -> None:
+    """The largest program the sandbox policy takes compiles for seconds; a stop sent while
+    it compiles halts the robot long before that save is done (issue 15: it waited for it,
+    and answered a moment before the save did)."""
+    save_python(ready, "moving", f"set_speed(10)\nmove_joint({FAR_DEGREES!r})")
+    run(ready, "moving")
+    wait_for(lambda: not ready.robot.stopped(), 10, what="the robot moving")
+    heavy = "a = [1, 2, 3, 4, 5, 6, 7, 8, 9]\n" * 62_000  # just under 2,000,000 characters
+    saved: list[tuple[int, float]] = []
+
+    def save_heavy() -> None:
+        response = ready.runtime.api("PUT", "/programs/heavy", json={"python": heavy}, timeout=60)
+        saved.append((response.status_code, time.monotonic()))
+
+    saving = threading.Thread(target=save_heavy)
+    saving.start()
+    time.sleep(0.5)  # its 2 MB reach the program service, which then compiles for seconds
+    before = ready.robot.last_command_seq()
+    sent = time.monotonic()
+    stopped = ready.runtime.api("POST", "/programs/moving/stop").json()
+    answered = time.monotonic()  # the answer comes once the halt is sent
+    assert stopped["state"] == "stopped"
+    assert "halt" in [c["type"] for c in ready.robot.commands(before)]
+    ready.robot.wait_stopped(2.0)
+    saving.join(60)
+    status, save_done = saved[0]
+    assert status in (200, 504)  # saved, or given up on by the gateway on a loaded host
+    # Relative, not a timing goal: both run on the same host, and the compile is seconds.
+    assert answered - sent < (save_done - sent) / 2, "the stop waited for the compile"
 
 
 def test_the_pendants_stop_stops_every_running_program(ready: Cell) -> None:
