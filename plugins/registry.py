@@ -27,9 +27,9 @@ log = logging.getLogger(__name__)
 
 GROUP = "openpendant.plugins"
 CORE = "openpendant"  # the distribution whose entry points are the built-ins
-NAME = re.compile(r"^[a-z][a-z0-9_-]{0,31}$")
-KIND = re.compile(r"^[a-z][a-z0-9_]{0,15}$")
-BLOCK_TYPE = re.compile(r"^[a-z][a-z0-9_]{0,63}$")
+NAME = re.compile(r"^[a-z][a-z0-9_-]{0,31}\Z")
+KIND = re.compile(r"^[a-z][a-z0-9_]{0,15}\Z")
+BLOCK_TYPE = re.compile(r"^[a-z][a-z0-9_]{0,63}\Z")
 
 
 @dataclass(frozen=True)

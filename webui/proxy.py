@@ -11,6 +11,7 @@ import websockets
 from fastapi import Request, Response, WebSocket
 from starlette.websockets import WebSocketDisconnect
 
+from runtime.interfaces.common import plain_text
 from runtime.kit import deadline
 from runtime.kit.app import error_response
 from runtime.kit.request_start import HEADER as REQUEST_START
@@ -38,6 +39,9 @@ _SKIP_REQUEST = {
 }
 
 
+BAD_PATH = "a path may not hold . or .. segments, backslashes or control characters"
+
+
 def forwarded_headers(request: Request) -> dict[str, str]:
     named = {
         token.strip().lower()
@@ -59,7 +63,25 @@ def service_path(path: str) -> str:
     segments = path.split("/")
     if any(s in (".", "..") for s in segments) or "\\" in path:
         raise PathRefused(path)
+    try:
+        plain_text(path)
+    except ValueError:
+        raise PathRefused(path) from None
     return "/".join(quote(s, safe="!$&'()*+,;=:@~-._") for s in segments)
+
+
+def below_prefix(full_path: str, prefix: str) -> str:
+    """What follows /api/<prefix>/ in the request's whole path. Routing's own match drops a
+    trailing newline (`$`), so the path is taken from the request, not from the match."""
+    head = f"/api/{prefix}"
+    if not full_path.startswith(head):
+        raise PathRefused(full_path)
+    rest = full_path[len(head) :]
+    if rest and not rest.startswith("/"):
+        raise PathRefused(full_path)
+    plain = rest.removeprefix("/")
+    service_path(plain)
+    return plain
 
 
 class PathRefused(ValueError):
@@ -89,9 +111,10 @@ class ServiceProxy:
             return error_response(404, "not_found", f"no service serves /api/{prefix}")
         service, base = target
         try:
+            path = below_prefix(request.scope["path"], prefix)
             url = f"{base}/{prefix}" + (f"/{service_path(path)}" if path else "")
         except PathRefused:
-            return error_response(400, "bad_path", "a path may not contain . or .. segments")
+            return error_response(400, "bad_path", BAD_PATH)
         headers = forwarded_headers(request)
         # When the request reached the runtime (a client's own value is replaced): services
         # that promise a reaction time count from here, e.g. a program stop.
@@ -122,9 +145,9 @@ class ServiceProxy:
         service, base = target
         query = f"?{ws.url.query}" if ws.url.query else ""
         try:
-            below = service_path(path)
+            below = service_path(below_prefix(ws.scope["path"], prefix))
         except PathRefused:
-            await _close_with_error(ws, "bad_path", "a path may not contain . or .. segments")
+            await _close_with_error(ws, "bad_path", BAD_PATH)
             return
         url = base.replace("http://", "ws://", 1) + f"/{prefix}/{below}{query}"
         try:

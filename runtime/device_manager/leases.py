@@ -13,7 +13,7 @@ from pathlib import Path
 
 from pydantic import BaseModel, Field
 
-from runtime.interfaces.common import Strict
+from runtime.interfaces.common import PlainText, Strict
 from runtime.kit.errors import Conflict, OpenPendantError
 
 log = logging.getLogger(__name__)
@@ -27,7 +27,7 @@ class LeaseRefused(OpenPendantError):
 
 
 class LeaseRequest(Strict):
-    holder: str = Field(min_length=1, max_length=64)
+    holder: PlainText = Field(min_length=1, max_length=64)
 
 
 class LeaseGranted(BaseModel):

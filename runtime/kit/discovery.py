@@ -37,14 +37,14 @@ log = logging.getLogger(__name__)
 SERVICE_TYPE = "_openpendant._tcp.local."
 SO_RCVBUFFORCE = getattr(socket, "SO_RCVBUFFORCE", 33)
 # A device kind, as its plugin names it (robot, camera, detector, io, gripper, input, …).
-KIND_PATTERN = re.compile(r"^[a-z][a-z0-9_]{0,15}$")
+KIND_PATTERN = re.compile(r"^[a-z][a-z0-9_]{0,15}\Z")
 DEFAULT_TTL = 15
 FOLLOW_INTERFACES = 5.0  # s between re-scans of the network interfaces
 RECEIVE_BUFFER = 4 << 20  # bytes: a burst of announcements must not overflow the socket
 RESOLVE_ATTEMPTS = 3
 SWEEP = 1.0  # s between checks that detected devices still answer
 DNS_SRV, DNS_IN, DNS_QUERY = 33, 1, 0x0000  # RFC 1035 / 2782 numbers
-UUID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:-]{0,63}$")
+UUID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:-]{0,63}\Z")
 # Control, format (bidi overrides, zero-width), surrogate, private-use and separator
 # characters: none belongs in a name shown on a pendant.
 _HIDDEN = {"Cc", "Cf", "Cs", "Co", "Zl", "Zp"}

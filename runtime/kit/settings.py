@@ -47,6 +47,14 @@ class LinkSettings(BaseModel):
     driver_timeout: float = Field(default=0.3, ge=0.05, le=5.0)
 
 
+class ProgramSettings(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    # Runs at once: each robot takes one (its lease allows no more), and a few programs that
+    # command no robot may run beside them. A worker may take 256 MiB and an hour of CPU.
+    runs_without_robots: int = Field(default=3, ge=0, le=64)
+
+
 class DeviceSpec(BaseModel):
     """A device the launcher starts and supervises: an installed driver (`openpendant driver
     NAME`) with its options."""
@@ -85,6 +93,7 @@ class RuntimeSettings(BaseSettings):
     devices: list[DeviceSpec] = Field(default_factory=default_devices)
     discovery: DiscoverySettings = Field(default_factory=DiscoverySettings)
     link: LinkSettings = Field(default_factory=LinkSettings)
+    programs: ProgramSettings = Field(default_factory=ProgramSettings)
     state_rate_hz: float = Field(default=100.0, gt=0, le=500)
     variable_history: int = Field(default=20, ge=1, le=1000)
     lease_seconds: float = Field(default=15.0, gt=0, le=3600)

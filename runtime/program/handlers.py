@@ -14,10 +14,11 @@ from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import NotFound
 from runtime.motion.client import MoveKind, MoveRequest, Target
 from runtime.program.host import RunHost
+from runtime.program.stored_values import checked_name, put_value
 from sandbox.supervisor import CallRefused
 
 M = TypeVar("M", bound=BaseModel)
-IO_NAME = re.compile(r"^([a-z][a-z0-9_]{0,31})\.(di|do)(\d{1,2})$")
+IO_NAME = re.compile(r"^([a-z][a-z0-9_]{0,31})\.(di|do)(\d{1,2})\Z")
 WAYPOINT_TYPES = ("joint_waypoint", "pose_waypoint")
 
 
@@ -134,14 +135,14 @@ async def get_io(run: RunHost, args: dict[str, Any]) -> bool:
 
 
 async def get_stored(run: RunHost, args: dict[str, Any]) -> dict[str, Any]:
-    variable = await run.storage.get(str(args["name"]))
+    variable = await run.storage.get(checked_name(args["name"]))
     return {"type": variable.type, "value": variable.value}
 
 
 async def set_stored(run: RunHost, args: dict[str, Any]) -> None:
     value = args["value"]
     kind = args.get("type") or _type_of(value)
-    await run.storage.put(str(args["name"]), kind, value)
+    await put_value(run.storage, run.program, args["name"], str(kind), value)
 
 
 def _type_of(value: Any) -> str:

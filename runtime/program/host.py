@@ -56,8 +56,10 @@ class RunHost:
         robot: str | None,
         leases: dict[str, str],
         on_lease: Callable[[], None] | None = None,
+        program: str = "",
     ) -> None:
         self.holder = holder
+        self.program = program or holder  # whose stored values are counted together
         self.devices = devices
         self.motion = motion
         self.storage = storage

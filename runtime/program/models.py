@@ -10,7 +10,7 @@ from pydantic import BaseModel, Field
 from runtime.interfaces.common import Strict
 from runtime.kit.errors import InvalidValue
 
-NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,63}$")
+NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,63}\Z")
 PREFIX = "program."
 TAG = "program"
 

@@ -43,7 +43,9 @@ class Runs:
         storage: StorageClient,
         fanout: Fanout,
         records: RunRecords | None = None,
+        runs_without_robots: int = 3,
     ) -> None:
+        self.runs_without_robots = runs_without_robots
         self.library = library
         self.devices = devices
         self.motion = motion
@@ -59,6 +61,7 @@ class Runs:
         current = self.runs.get(name)
         if current is not None and not current.run.ended_state:
             raise Conflict(f"{name} is running; stop it first", code="busy")
+        await self._room_for_a_run()
         python, problems = await self.library.runnable(name)
         if problems:
             first = problems[0].message
@@ -76,6 +79,7 @@ class Runs:
             robot=request.robot,
             leases=request.leases,
             on_lease=lambda: self._record(name),
+            program=name,
         )
         limits = RunLimits(wall_seconds=request.time_limit or RunLimits.wall_seconds)
         number = next(self._numbers)
@@ -100,6 +104,18 @@ class Runs:
         self._watchers.add(watcher)
         watcher.add_done_callback(self._watchers.discard)
         return self.status(name)
+
+    async def _room_for_a_run(self) -> None:
+        live = sum(1 for active in self.runs.values() if not active.run.ended_state)
+        listed = sum(1 for d in self.devices.added.values() if d.get("kind") == "robot")
+        if live < listed + self.runs_without_robots:
+            return
+        # The live list may trail a robot added a moment ago: the device manager decides.
+        if live >= len(await self.devices.robot_names()) + self.runs_without_robots:
+            raise Conflict(
+                f"{live} programs are running, as many as may run at once here; stop one first",
+                code="too_many_runs",
+            )
 
     async def _finish(self, active: Active) -> None:
         await active.run.wait()

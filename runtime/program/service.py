@@ -150,7 +150,15 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     library = ProgramLibrary(storage, compiler)
     fanout = Fanout()
     records = RunRecords(settings.data_dir / "program-runs.json")
-    runs = Runs(library, devices, motion, storage, fanout, records)
+    runs = Runs(
+        library,
+        devices,
+        motion,
+        storage,
+        fanout,
+        records,
+        runs_without_robots=settings.programs.runs_without_robots,
+    )
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:

@@ -3,9 +3,15 @@
 from __future__ import annotations
 
 from typing import Any
+from urllib.parse import quote
 
 from runtime.interfaces.variables import Variable
 from runtime.kit.client import ServiceClient
+
+
+def _path(name: str) -> str:
+    """A name is one path segment, whatever it holds (`x/../_export` is not a route)."""
+    return quote(name, safe="")
 
 
 class StorageClient:
@@ -16,7 +22,7 @@ class StorageClient:
         await self.http.aclose()
 
     async def get(self, name: str) -> Variable:
-        return await self.http.request("GET", f"/variables/{name}", model=Variable)
+        return await self.http.request("GET", f"/variables/{_path(name)}", model=Variable)
 
     async def query(
         self, *, tag: str | None = None, type_name: str | None = None
@@ -42,7 +48,9 @@ class StorageClient:
             body["doc"] = doc
         if expected_version is not None:
             body["expected_version"] = expected_version
-        return await self.http.request("PUT", f"/variables/{name}", json=body, model=Variable)
+        return await self.http.request(
+            "PUT", f"/variables/{_path(name)}", json=body, model=Variable
+        )
 
     async def delete(self, name: str) -> Variable:
-        return await self.http.request("DELETE", f"/variables/{name}", model=Variable)
+        return await self.http.request("DELETE", f"/variables/{_path(name)}", model=Variable)

@@ -16,13 +16,12 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from runtime.interfaces.variables import Variable
+from runtime.interfaces.variables import NAME_PATTERN, Variable
 from runtime.kit import deadline
 from runtime.kit.errors import Conflict, InvalidValue, NotFound
 from runtime.variable_storage.types import validate_value
 
-NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_.\-]{0,127}$")
-TAG_PATTERN = re.compile(r"^[A-Za-z0-9_.:\-]{1,64}$")
+TAG_PATTERN = re.compile(r"^[A-Za-z0-9_.:\-]{1,64}\Z")
 SCHEMA_VERSION = 1
 
 SCHEMA = """

@@ -12,6 +12,7 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
+import httpx
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -527,3 +528,74 @@ def test_a_program_with_empty_inputs_or_loose_blocks_is_saved_but_does_not_run(
     assert "the condition is empty" in error["message"]
     assert {p["block"] for p in error["details"]["problems"]} == set(problems)
     assert ready.robot.commands(before) == []
+
+
+def run_to_end(cell: Cell, name: str, source: str) -> dict[str, Any]:
+    save_python(cell, name, source)
+    response = cell.runtime.api("POST", f"/programs/{name}/run", json={})
+    assert response.status_code == 202, response.text
+    return watch(cell, name, ("finished", "error", "stopped"), 30)
+
+
+def test_a_program_cannot_fill_the_store(ready: Cell) -> None:
+    """Issue 15: 30 stores of big values grew the database by 115 MB."""
+    filled = run_to_end(
+        ready,
+        "filler",
+        "for i in range(40):\n    store('blob' + str(i), 'x' * 60000)\n    print(i)\n",
+    )
+    assert filled["state"] == "error"
+    assert filled["error"]["code"] == "storage_full", filled["error"]
+    kept = ready.runtime.api("GET", "/variables", params={"tag": "stored-by:filler"}).json()
+    assert 10 <= len(kept) <= 18  # a mebibyte of them, no more
+    assert sum(len(v["value"]) for v in kept) <= 1024 * 1024
+    big = run_to_end(ready, "big_value", "store('blob', 'x' * 70000)\n")
+    assert big["error"]["code"] == "too_large"
+    # Rewriting its own values never fills the program's share.
+    again = run_to_end(ready, "rewriter", "for i in range(30):\n    store('same', 'y' * 60000)\n")
+    assert again["state"] == "finished", again["error"]
+
+
+def test_a_program_names_only_variables_and_never_the_users_own(ready: Cell) -> None:
+    save_python(ready, "victim", "print('mine')\n")
+    for source, code in (
+        ("print(stored('x/../_export'))", "invalid_name"),  # was: the whole store, exported
+        ("print(stored('a\\nb'))", "invalid_name"),
+        ("store('program.victim', 1)", "reserved_name"),
+        ("store('far', [0, 0, 0, 0, 0, 0])", "reserved_name"),  # a taught waypoint
+    ):
+        ended = run_to_end(ready, "namer", source)
+        assert ended["state"] == "error", source
+        assert ended["error"]["code"] == code, (source, ended["error"])
+    assert ready.runtime.api("GET", "/programs/victim").json()["python"] == "print('mine')\n"
+    assert ready.runtime.api("GET", "/variables/far").json()["type"] == "joint_waypoint"
+
+
+def test_program_names_with_paths_or_control_characters_are_refused(ready: Cell) -> None:
+    for raw in ("..%2f..%2fvariables%2f_export", "a%0a", "%E2%80%AEevil", "a.b"):
+        response = httpx.put(
+            f"{ready.runtime.url}/api/programs/{raw}", json={"python": "x = 1"}, timeout=10
+        )
+        assert response.status_code in (400, 422), raw
+        assert response.json()["error"]["code"] in ("bad_path", "invalid_name"), raw
+    assert "_export" not in [p["name"] for p in ready.runtime.api("GET", "/programs").json()]
+
+
+def test_only_so_many_programs_run_at_once(ready: Cell) -> None:
+    """One per robot (here one) and three that command no robot: the fifth is refused."""
+    save_python(ready, "waiting", "wait(60)\n")
+    names = [f"waiting{i}" for i in range(5)]
+    for name in names:
+        ready.runtime.api("POST", "/programs/waiting/duplicate", json={"to": name})
+    try:
+        for name in names[:4]:
+            response = ready.runtime.api("POST", f"/programs/{name}/run", json={})
+            assert response.status_code == 202, response.text
+        refused = ready.runtime.api("POST", f"/programs/{names[4]}/run", json={})
+        assert refused.status_code == 409
+        assert refused.json()["error"]["code"] == "too_many_runs"
+        ready.runtime.api("POST", f"/programs/{names[0]}/stop")
+        started = ready.runtime.api("POST", f"/programs/{names[4]}/run", json={})
+        assert started.status_code == 202, started.text
+    finally:
+        ready.runtime.api("POST", "/programs/_stop")

@@ -92,7 +92,7 @@ def test_a_foreign_page_opens_no_socket_not_even_with_a_lease_token(cell: Cell) 
             f"{gateway}/api/variables/_events",
         ):
             with pytest.raises(InvalidStatus) as refused:
-                connect(url, origin=ATTACKER, open_timeout=5)  # type: ignore[arg-type]
+                connect(url, additional_headers={"Origin": ATTACKER}, open_timeout=5)
             assert refused.value.response.status_code == 403, url
         # The UI's own pages open the same socket and jog with the same token.
         before = joints(runtime)

@@ -11,12 +11,12 @@ from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
 from runtime.kit.web_guard import WebGuard, WebPolicy, split_host
-from webui.proxy import PathRefused, service_path
+from webui.proxy import PathRefused, below_prefix, service_path
 
 UI = "http://127.0.0.1:8080"
 
 
-def guarded(**policy: Any) -> TestClient:
+def guarded(**policy: Any) -> tuple[TestClient, list[bytes]]:
     app = FastAPI()
     seen: list[bytes] = []
 
@@ -37,13 +37,11 @@ def guarded(**policy: Any) -> TestClient:
         await socket.close()
 
     app.add_middleware(WebGuard, policy=WebPolicy(ui_port=8080, **policy))
-    client = TestClient(app, base_url=UI)
-    client.seen = seen  # type: ignore[attr-defined]
-    return client
+    return TestClient(app, base_url=UI), seen
 
 
 def test_a_name_that_is_not_this_computers_is_refused() -> None:
-    client = guarded(allowed_hosts=["pendant.cell4.example"])
+    client, _ = guarded(allowed_hosts=["pendant.cell4.example"])
     assert client.get("/page").status_code == 200
     assert client.get("/page", headers={"host": "[::1]:8080"}).status_code == 200
     assert client.get("/page", headers={"host": "localhost:8080"}).status_code == 200
@@ -55,7 +53,7 @@ def test_a_name_that_is_not_this_computers_is_refused() -> None:
 
 
 def test_another_sites_page_changes_nothing_and_opens_no_socket() -> None:
-    client = guarded()
+    client, seen = guarded()
     foreign = {"origin": "http://attacker.example", "content-type": "application/json"}
     refused = client.post("/echo", content=b"{}", headers=foreign)
     assert refused.status_code == 403
@@ -63,7 +61,7 @@ def test_another_sites_page_changes_nothing_and_opens_no_socket() -> None:
     for origin in ("null", "http://127.0.0.1:9999", "file://", "http://127.0.0.1"):
         response = client.post("/echo", headers={"origin": origin})
         assert response.status_code == 403, origin
-    assert client.seen == []  # type: ignore[attr-defined]
+    assert seen == []
     own = client.post("/echo", content=b"{}", headers={**foreign, "origin": UI})
     assert own.status_code == 200
     with pytest.raises(WebSocketDisconnect) as closed:  # noqa: SIM117
@@ -77,19 +75,19 @@ def test_another_sites_page_changes_nothing_and_opens_no_socket() -> None:
 
 
 def test_bodies_a_foreign_page_could_send_unasked_are_refused() -> None:
-    client = guarded()
+    client, seen = guarded()
     for media in ("text/plain", "application/x-www-form-urlencoded", "multipart/form-data", ""):
         response = client.post("/echo", content=b"program: x", headers={"content-type": media})
         assert response.status_code == 415, media
         assert "application/json" in response.json()["error"]["message"]
-    assert client.seen == []  # type: ignore[attr-defined]
+    assert seen == []
     for media in ("application/json", "application/json; charset=utf-8", "application/yaml"):
         assert client.post("/echo", content=b"{}", headers={"content-type": media}).is_success
     assert client.post("/echo").status_code == 200  # no body: nothing to mistake
 
 
 def test_bodies_are_bounded_with_or_without_a_length() -> None:
-    client = guarded(max_body=1000)
+    client, seen = guarded(max_body=1000)
     json_type = {"content-type": "application/json"}
     assert client.post("/echo", content=b"1" * 1000, headers=json_type).json() == {"bytes": 1000}
     too_big = client.post("/echo", content=b"1" * 1001, headers=json_type)
@@ -102,11 +100,11 @@ def test_bodies_are_bounded_with_or_without_a_length() -> None:
 
     assert client.post("/echo", content=chunks(10), headers=json_type).json() == {"bytes": 1000}
     assert client.post("/echo", content=chunks(11), headers=json_type).status_code == 413
-    assert [len(b) for b in client.seen] == [1000, 1000]  # type: ignore[attr-defined]
+    assert [len(b) for b in seen] == [1000, 1000]
 
 
 def test_every_answer_forbids_framing_sniffing_and_foreign_scripts() -> None:
-    client = guarded(jog_port=8765)
+    client, _ = guarded(jog_port=8765)
     for response in (
         client.get("/page"),
         client.post("/echo", content=b"x", headers={"content-type": "text/plain"}),
@@ -130,6 +128,14 @@ def test_host_headers_parse_with_ports_and_ipv6() -> None:
 def test_the_proxy_never_climbs_out_of_a_services_prefix() -> None:
     assert service_path("robot/state") == "robot/state"
     assert service_path("a b") == "a%20b"
-    for bad in ("../openapi.json", "x/../../docs", "./x", "a\\..\\b"):
+    for bad in ("../openapi.json", "x/../../docs", "./x", "a\\..\\b", "a\n", "\u202eevil"):
         with pytest.raises(PathRefused):
             service_path(bad)
+
+
+def test_the_path_is_read_whole_not_as_routing_matched_it() -> None:
+    assert below_prefix("/api/programs/a/run", "programs") == "a/run"
+    assert below_prefix("/api/programs", "programs") == ""
+    for full in ("/api/programs/a\n", "/api/programs\n", "/api/programsx/a", "/api/programs/../x"):
+        with pytest.raises(PathRefused):
+            below_prefix(full, "programs")

@@ -7,7 +7,7 @@ import re
 from blockly_blocks.generator import Generator, py_string
 from blockly_blocks.workspace import Block, WorkspaceError
 
-LOCAL_NAME = re.compile(r"^[a-z][a-z0-9_]{0,31}$")
+LOCAL_NAME = re.compile(r"^[a-z][a-z0-9_]{0,31}\Z")
 
 
 def _conveyor(block: Block, g: Generator) -> str:
