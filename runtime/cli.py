@@ -63,6 +63,20 @@ def _bench(args: argparse.Namespace) -> int:
     return main(only=args.only, json_path=args.json)
 
 
+def _token(args: argparse.Namespace) -> int:
+    from runtime.auth.setup import create_token
+    from runtime.kit.errors import OpenPendantError
+    from runtime.kit.settings import load_settings
+
+    data_dir = args.data_dir or load_settings(args.config).data_dir
+    try:
+        print(create_token(data_dir, args.role, args.name))
+    except (OpenPendantError, ValueError) as exc:
+        print(f"openpendant token create: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
 def _drivers(rest: list[str]) -> int:
     if not rest or rest[0].startswith("-"):
         from plugins.registry import registry
@@ -103,6 +117,19 @@ def parser() -> argparse.ArgumentParser:
     service.add_argument("--port", type=int, default=None)
     service.add_argument("--data-dir", type=Path, default=None)
     service.set_defaults(handler=_service)
+
+    token = sub.add_parser("token", help="API tokens for scripts (token create --help)")
+    token_sub = token.add_subparsers(dest="action", required=True)
+    create = token_sub.add_parser(
+        "create", help="print a new API token (run on the runtime computer)"
+    )
+    create.add_argument(
+        "--role", required=True, choices=["viewer", "operator", "programmer", "admin"]
+    )
+    create.add_argument("--name", required=True, help="what the token is for")
+    create.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
+    create.add_argument("--config", type=Path, default=None, help="site config YAML")
+    create.set_defaults(handler=_token)
 
     bench = sub.add_parser("bench", help="run the benchmarks (runtime/bench)")
     bench.add_argument(

@@ -17,8 +17,10 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 
 from plugins.api import Service
 from plugins.registry import registry
+from runtime.auth.roles import Role
 from runtime.kit.logs import setup_logging
 from runtime.kit.serve import listening_socket, run_app
+from runtime.kit.service_guard import InternalOnly, TicketRequired
 from runtime.kit.settings import RuntimeSettings, settings_from_env
 from runtime.kit.web_guard import WebGuard, WebPolicy
 
@@ -79,11 +81,17 @@ def run_service(
     app: ASGIApp = load_factory(spec)(settings, urls_from_env())
     sock = socket.socket(fileno=fd) if fd is not None else listening_socket(host, port or 0)
     sockets = [sock]
+    # The gateway is the door (webui/access.py); every other service answers only it and
+    # its peers.
+    internal = app if name == WEBUI.name else InternalOnly(app)
     if public_fd is not None and spec.public_paths:
         public = socket.socket(fileno=public_fd)
-        guarded = WebGuard(app, web_policy(settings))
-        app = PublicPaths(app, guarded, int(public.getsockname()[1]), spec.public_paths)
+        # What a browser reaches directly: the UI's origin only, with an operator's ticket.
+        guarded = WebGuard(TicketRequired(app, Role.operator), web_policy(settings))
+        app = PublicPaths(internal, guarded, int(public.getsockname()[1]), spec.public_paths)
         sockets.append(public)
+    else:
+        app = internal
     run_app(app, *sockets)
 
 

@@ -9,14 +9,20 @@ from urllib.parse import quote
 import httpx
 import websockets
 from fastapi import Request, Response, WebSocket
+from starlette.requests import HTTPConnection
 from starlette.websockets import WebSocketDisconnect
 
 from runtime.interfaces.common import plain_text
 from runtime.kit import deadline
 from runtime.kit.app import error_response
+from runtime.kit.internal import HEADER as INTERNAL_HEADER
+from runtime.kit.internal import internal_headers
 from runtime.kit.request_start import HEADER as REQUEST_START
 from runtime.kit.request_start import stamp
 from runtime.kit.websocket import until_either_ends
+
+USER_HEADER = "X-OpenPendant-User"
+ROLE_HEADER = "X-OpenPendant-Role"
 
 # Hop-by-hop and length headers, and the arrival stamp, are the proxy's own business; what a
 # client says of proxies before it (X-Forwarded-*, Forwarded) is never passed on as if true.
@@ -36,7 +42,23 @@ _SKIP_REQUEST = {
     "proxy-connection",
     "accept-encoding",
     "forwarded",
+    # The client's credentials stay at the gateway; services learn who from the gateway.
+    "cookie",
+    "authorization",
+    "origin",
+    INTERNAL_HEADER.lower(),
+    USER_HEADER.lower(),
+    ROLE_HEADER.lower(),
 }
+LOOPBACK = "http://127.0.0.1"
+
+
+def identity_headers(connection: HTTPConnection) -> dict[str, str]:
+    """Who the gateway let through (services may name them; they never decide on it)."""
+    identity = connection.scope.get("state", {}).get("identity")
+    if identity is None:
+        return {}
+    return {USER_HEADER: identity.user, ROLE_HEADER: identity.role.name}
 
 
 BAD_PATH = "a path may not hold . or .. segments, backslashes or control characters"
@@ -96,7 +118,10 @@ class ServiceProxy:
         """routes: prefix -> (service name, base url)"""
         self.routes = routes
         # Long work is a resource with a status, never a long request: 10 s means hung.
-        self.http = httpx.AsyncClient(timeout=httpx.Timeout(deadline.GATEWAY_TIMEOUT, connect=2.0))
+        self.http = httpx.AsyncClient(
+            timeout=httpx.Timeout(deadline.GATEWAY_TIMEOUT, connect=2.0),
+            headers=internal_headers(LOOPBACK),
+        )
 
     async def aclose(self) -> None:
         await self.http.aclose()
@@ -115,7 +140,7 @@ class ServiceProxy:
             url = f"{base}/{prefix}" + (f"/{service_path(path)}" if path else "")
         except PathRefused:
             return error_response(400, "bad_path", BAD_PATH)
-        headers = forwarded_headers(request)
+        headers = {**forwarded_headers(request), **identity_headers(request)}
         # When the request reached the runtime (a client's own value is replaced): services
         # that promise a reaction time count from here, e.g. a program stop.
         headers[REQUEST_START] = received
@@ -152,7 +177,11 @@ class ServiceProxy:
         url = base.replace("http://", "ws://", 1) + f"/{prefix}/{below}{query}"
         try:
             upstream = await websockets.connect(
-                url, open_timeout=2.0, close_timeout=1.0, max_size=2**24
+                url,
+                open_timeout=2.0,
+                close_timeout=1.0,
+                max_size=2**24,
+                additional_headers={**internal_headers(LOOPBACK), **identity_headers(ws)},
             )
         except (OSError, websockets.WebSocketException, TimeoutError):
             await _close_with_error(ws, "service_unavailable", f"{service} is not responding")

@@ -14,6 +14,8 @@ from fastapi import FastAPI, Query, Request, Response, WebSocket
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
+from runtime.auth.audit import AuditLog
+from runtime.auth.setup import SETUP_CODE_ENV, auth_store
 from runtime.kit.app import create_app
 from runtime.kit.errors import NotFound
 from runtime.kit.settings import RuntimeSettings
@@ -21,6 +23,8 @@ from runtime.kit.web_guard import WebGuard
 from runtime.paths import package_roots
 from runtime.services import services as declared_services
 from runtime.services import web_policy
+from webui.access import AccessGuard
+from webui.auth_routes import auth_router
 from webui.logs import MAX_ENTRIES, recent_entries
 from webui.plugins import plugins_router
 from webui.proxy import ServiceProxy
@@ -77,9 +81,16 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             yield
         finally:
             await proxy.aclose()
+            store.close()
+            audit.close()
 
     app = create_app("webui", lifespan=lifespan)
+    store = auth_store(settings)
+    audit = AuditLog(settings.data_dir / "audit.sqlite")
+    # Outermost first: the guard of what a browser may send, then who it is.
+    app.add_middleware(AccessGuard, store=store, audit=audit)
     app.add_middleware(WebGuard, policy=web_policy(settings))
+    app.include_router(auth_router(store, audit, os.environ.get(SETUP_CODE_ENV) or None))
 
     @app.get("/api/health")
     async def health() -> dict[str, Any]:

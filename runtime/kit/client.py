@@ -8,6 +8,7 @@ import httpx
 from pydantic import BaseModel
 
 from runtime.kit.errors import OpenPendantError, Unavailable
+from runtime.kit.internal import internal_headers
 
 M = TypeVar("M", bound=BaseModel)
 
@@ -18,7 +19,9 @@ class ServiceClient:
     def __init__(self, base_url: str, *, timeout: float = 5.0, name: str | None = None) -> None:
         self.base_url = base_url.rstrip("/")
         self.name = name or self.base_url
-        self._http = httpx.AsyncClient(base_url=self.base_url, timeout=timeout)
+        self._http = httpx.AsyncClient(
+            base_url=self.base_url, timeout=timeout, headers=internal_headers(self.base_url)
+        )
 
     async def aclose(self) -> None:
         await self._http.aclose()

@@ -47,6 +47,14 @@ class LinkSettings(BaseModel):
     driver_timeout: float = Field(default=0.3, ge=0.05, le=5.0)
 
 
+class AuthSettings(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    # A session ends after this long unused, and after the second figure in any case.
+    session_idle_minutes: float = Field(default=60.0, ge=1, le=24 * 60)
+    session_hours: float = Field(default=12.0, ge=0.1, le=24 * 30)
+
+
 class ProgramSettings(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
@@ -94,6 +102,7 @@ class RuntimeSettings(BaseSettings):
     discovery: DiscoverySettings = Field(default_factory=DiscoverySettings)
     link: LinkSettings = Field(default_factory=LinkSettings)
     programs: ProgramSettings = Field(default_factory=ProgramSettings)
+    auth: AuthSettings = Field(default_factory=AuthSettings)
     state_rate_hz: float = Field(default=100.0, gt=0, le=500)
     variable_history: int = Field(default=20, ge=1, le=1000)
     lease_seconds: float = Field(default=15.0, gt=0, le=3600)

@@ -152,9 +152,9 @@ class WebPolicy:
             return CSP + "; connect-src 'self'"
         if ":" in host:
             host = f"[{host}]"
-        return (
-            CSP + f"; connect-src 'self' ws://{host}:{self.jog_port} wss://{host}:{self.jog_port}"
-        )
+        # Any port of this host: a restarted runtime may give the jog socket another port,
+        # and a page loaded before keeps the policy it came with.
+        return CSP + f"; connect-src 'self' ws://{host}:* wss://{host}:*"
 
 
 def _headers(scope: Scope) -> dict[str, str]:

@@ -7,11 +7,13 @@ import gc
 import json
 import logging
 import os
+import secrets
 import signal
 import socket
 import sys
 import time
 import uuid
+from pathlib import Path
 from types import FrameType
 
 import httpx
@@ -19,6 +21,9 @@ import httpx
 from plugins.api import resolve
 from plugins.registry import registry
 from runtime import __version__
+from runtime.auth.setup import SETUP_CODE_ENV, needs_setup
+from runtime.kit.internal import ENV as INTERNAL_ENV
+from runtime.kit.internal import FILE as INTERNAL_FILE
 from runtime.kit.serve import listening_socket
 from runtime.kit.settings import DeviceSpec, RuntimeSettings, settings_for_child
 from runtime.launcher.supervisor import Child, Main, Supervisor, process_env
@@ -89,6 +94,17 @@ def _service_child(
         pass_fds=tuple(fds),
         main=main,
     )
+
+
+def run_secrets(data_dir: Path) -> tuple[str, str]:
+    """This run's secret between its processes (kept where the owner's tools can read it),
+    and the one-time code that lets another computer set up the first administrator."""
+    internal = secrets.token_urlsafe(32)
+    path = data_dir / INTERNAL_FILE
+    path.touch(mode=0o600)
+    path.chmod(0o600)
+    path.write_text(internal + "\n")
+    return internal, f"{secrets.randbelow(10**4):04d}-{secrets.randbelow(10**4):04d}"
 
 
 def runtime_id(settings: RuntimeSettings) -> str:
@@ -211,7 +227,15 @@ def run(settings: RuntimeSettings) -> int:
     settings = settings.model_copy(
         update={"jog_port": int(jog_public.getsockname()[1]), "port": int(public_port)}
     )
-    env = process_env({**settings_for_child(settings), URLS_ENV: json.dumps(urls)})
+    internal, setup_code = run_secrets(settings.data_dir)
+    env = process_env(
+        {
+            **settings_for_child(settings),
+            URLS_ENV: json.dumps(urls),
+            INTERNAL_ENV: internal,
+            SETUP_CODE_ENV: setup_code,
+        }
+    )
 
     main = forking()
     if main is not None:
@@ -251,7 +275,13 @@ def run(settings: RuntimeSettings) -> int:
         f"  Logs: {settings.logs}\n"
         f"  Data: {settings.data_dir}\n"
         f"  Devices: {devices}\n"
-        "The on-screen STOP is a software stop, not an emergency stop.\n"
+        + (
+            f"  First start: open the UI to create the administrator (from another computer "
+            f"give the set-up code {setup_code}).\n"
+            if needs_setup(settings.data_dir)
+            else ""
+        )
+        + "The on-screen STOP is a software stop, not an emergency stop.\n"
         "Press Ctrl-C to stop.",
         flush=True,
     )

@@ -23,6 +23,7 @@ import websockets
 from websockets.asyncio.client import ClientConnection
 
 from runtime.kit.errors import OpenPendantError, Unavailable
+from runtime.kit.internal import internal_headers
 from runtime.links.freshness import Freshness, state_stamp
 
 log = logging.getLogger(__name__)
@@ -185,7 +186,11 @@ class LinkHub:
         while True:
             try:
                 async with websockets.connect(
-                    self.url, open_timeout=2.0, close_timeout=0.5, max_size=MAX_FRAME
+                    self.url,
+                    open_timeout=2.0,
+                    close_timeout=0.5,
+                    max_size=MAX_FRAME,
+                    additional_headers=internal_headers(self.url),
                 ) as ws:
                     await ws.send(json.dumps({"op": "hello", "service": self.service}))
                     if self._watching:

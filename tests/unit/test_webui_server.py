@@ -7,15 +7,24 @@ from pathlib import Path
 
 from fastapi.testclient import TestClient
 
+from runtime.auth.setup import create_token
 from runtime.bench.harness.processes import free_port
 from runtime.kit.settings import RuntimeSettings
 from webui.server import build_app
 
 
-def test_a_service_that_is_not_running_is_a_503_not_a_hang() -> None:
+def gateway(data: Path, urls: dict[str, str], logs: Path | None = None) -> TestClient:
+    """The webui app, asked by an administrator's API token."""
+    app = build_app(RuntimeSettings(sim=False, data_dir=data, log_dir=logs), urls)
+    token = create_token(data, "admin", "tests")
+    return TestClient(
+        app, base_url="http://127.0.0.1:8080", headers={"Authorization": f"Bearer {token}"}
+    )
+
+
+def test_a_service_that_is_not_running_is_a_503_not_a_hang(tmp_path: Path) -> None:
     dead = f"http://127.0.0.1:{free_port()}"
-    app = build_app(RuntimeSettings(sim=False), {"device_manager": dead, "variable_storage": dead})
-    with TestClient(app, base_url="http://127.0.0.1:8080") as client:
+    with gateway(tmp_path, {"device_manager": dead, "variable_storage": dead}) as client:
         response = client.get("/api/devices/detected")
         assert response.status_code == 503
         assert response.json()["error"]["code"] == "service_unavailable"
@@ -25,17 +34,15 @@ def test_a_service_that_is_not_running_is_a_503_not_a_hang() -> None:
     assert health["services"]["webui"]["status"] == "ok"
 
 
-def test_a_service_without_an_address_is_reported() -> None:
-    app = build_app(RuntimeSettings(sim=False), {})
-    with TestClient(app, base_url="http://127.0.0.1:8080") as client:
+def test_a_service_without_an_address_is_reported(tmp_path: Path) -> None:
+    with gateway(tmp_path, {}) as client:
         assert client.get("/api/devices").status_code == 404
         health = client.get("/api/health").json()
     assert health["services"]["variable_storage"]["status"] == "down"
 
 
-def test_robot_files_are_served_from_packages_and_nothing_else() -> None:
-    app = build_app(RuntimeSettings(sim=False), {})
-    with TestClient(app, base_url="http://127.0.0.1:8080") as client:
+def test_robot_files_are_served_from_packages_and_nothing_else(tmp_path: Path) -> None:
+    with gateway(tmp_path, {}) as client:
         urdf = client.get(
             "/api/robot-files/example-robot-data/robots/ur_description/urdf/ur5_robot.urdf"
         )
@@ -70,8 +77,7 @@ def test_the_log_route_gives_recent_entries_by_level_newest_first(tmp_path: Path
     filler = json.dumps({"ts": 0.5, "level": "warning", "service": "dm", "msg": "x" * 1000})
     lines = [filler] * 400 + [json.dumps({"ts": 2.0, "level": "warning", "msg": "late"})]
     (logs / "device_manager.log").write_text("\n".join(lines))
-    app = build_app(RuntimeSettings(sim=False, log_dir=logs), {})
-    with TestClient(app, base_url="http://127.0.0.1:8080") as client:
+    with gateway(tmp_path, {}, logs) as client:
         warnings = client.get("/api/logs").json()
         everything = client.get("/api/logs?level=info&limit=500").json()
         assert client.get("/api/logs?level=loud").status_code == 422

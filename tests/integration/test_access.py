@@ -1,0 +1,183 @@
+"""Every route of every service's OpenAPI schema, and every WebSocket, against the role table
+(webui/policy.py) on a running runtime: anonymous gets 401 (a socket is refused before it
+is accepted), each role exactly its rights; services answer only the runtime."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from typing import Any
+
+import httpx
+import pytest
+from fastapi import FastAPI
+from websockets.exceptions import InvalidStatus
+from websockets.sync.client import connect
+
+from runtime.auth.roles import Role
+from runtime.bench.harness.processes import Runtime
+from runtime.kit.settings import RuntimeSettings
+from runtime.services import all_services, load_factory
+from webui import policy
+
+ROLES = ("viewer", "operator", "programmer", "admin")
+REFUSALS = {"unauthenticated", "forbidden", "csrf_failed", "internal_only"}
+
+
+@pytest.fixture(scope="module")
+def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
+    proc = Runtime(tmp_path_factory.mktemp("access"), extra=["--no-sim"])
+    proc.wait_ready()
+    yield proc
+    proc.stop()
+
+
+def service_apps() -> dict[str, FastAPI]:
+    settings = RuntimeSettings(sim=False)
+    urls = {name: "http://127.0.0.1:1" for name in all_services()}
+    return {
+        name: load_factory(spec)(settings, urls)
+        for name, spec in all_services().items()
+        if name != "webui"
+    }
+
+
+def sockets(app: FastAPI) -> list[str]:
+    def walk(routes: list[Any]) -> Iterator[Any]:
+        for route in routes:
+            inner = getattr(route, "original_router", None)
+            if inner is not None:
+                yield from walk(inner.routes)
+            else:
+                yield route
+
+    return [r.path for r in walk(app.router.routes) if "WebSocket" in type(r).__name__]
+
+
+def concrete(path: str) -> str:
+    return re.sub(r"\{[^}]+\}", "x", path)
+
+
+def service_routes(runtime: Runtime) -> list[tuple[str, str]]:
+    """(method, path below /api) of every service's live OpenAPI schema."""
+    found = []
+    services = runtime.api("GET", "/health").json()["services"]
+    for name, info in services.items():
+        if name == "webui":
+            continue
+        schema = httpx.get(f"{info['url']}/openapi.json", headers=runtime.internal()).json()
+        for path, operations in schema["paths"].items():
+            if path == "/health":
+                continue
+            found += [(method.upper(), concrete(path)) for method in operations]
+    return found
+
+
+def gateway_routes(runtime: Runtime) -> list[tuple[str, str]]:
+    schema = httpx.get(f"{runtime.url}/openapi.json", headers=runtime.auth()).json()
+    found = []
+    for path, operations in schema["paths"].items():
+        if path.startswith("/api/") and "{prefix}" not in path:
+            found += [(method.upper(), concrete(path[4:])) for method in operations]
+    return found
+
+
+def call(runtime: Runtime, method: str, path: str, role: str | None) -> httpx.Response:
+    body: dict[str, Any] = {"json": {}} if method in ("POST", "PUT", "PATCH", "DELETE") else {}
+    return runtime.api(method, path, role=role, **body)
+
+
+def code_of(response: httpx.Response) -> str:
+    try:
+        return str(response.json()["error"]["code"])
+    except (ValueError, KeyError, TypeError):
+        return ""
+
+
+def test_every_route_answers_each_role_exactly_its_rights(runtime: Runtime) -> None:
+    routes = service_routes(runtime) + gateway_routes(runtime)
+    assert len(routes) > 50
+    unnamed = [r for r in routes if not policy.named(*r) and r[0] not in ("GET", "HEAD")]
+    assert unnamed == [], "every route that changes something needs a line in webui/policy.py"
+    wrong: list[tuple[str, str, str | None, int]] = []
+    for method, path in routes:
+        need = policy.need(method, path)
+        anonymous = call(runtime, method, path, None)
+        if need == policy.PUBLIC:
+            if code_of(anonymous) in REFUSALS:
+                wrong.append((method, path, None, anonymous.status_code))
+            continue
+        if anonymous.status_code != 401:
+            wrong.append((method, path, None, anonymous.status_code))
+        for role in ROLES:
+            answer = call(runtime, method, path, role)
+            allowed = isinstance(need, Role) and Role.named(role) >= need
+            refused = code_of(answer) in REFUSALS
+            if allowed == refused or (not allowed and answer.status_code != 403):
+                wrong.append((method, path, role, answer.status_code))
+    assert wrong == []
+
+
+def test_every_socket_is_closed_before_it_is_accepted_unless_the_role_may_use_it(
+    runtime: Runtime,
+) -> None:
+    paths = sorted({p for app in service_apps().values() for p in sockets(app)})
+    assert {"/jog/ws", "/devices/ws", "/programs/_ws", "/variables/_events"} <= set(paths)
+    for path in paths:
+        need = policy.need("WS", path)
+        with pytest.raises(InvalidStatus):
+            connect(runtime.ws_url(path), open_timeout=5)
+        for role in ROLES:
+            allowed = isinstance(need, Role) and Role.named(role) >= need
+            if allowed:
+                with connect(runtime.ws_url(path), additional_headers=runtime.auth(role)):
+                    pass
+            else:
+                with pytest.raises(InvalidStatus) as refused:
+                    connect(runtime.ws_url(path), additional_headers=runtime.auth(role))
+                assert refused.value.response.status_code in (403, 404), (path, role)
+
+
+def test_the_jog_port_wants_an_operators_ticket(runtime: Runtime) -> None:
+    port = runtime.api("GET", "/jog/settings").json()["socket_port"]
+    url = f"ws://127.0.0.1:{port}/jog/ws"
+    for ticket in ("", "?ticket=forged.0000", "?ticket=" + "x" * 40):
+        with pytest.raises(InvalidStatus):
+            connect(url + ticket, open_timeout=5)
+    assert runtime.api("POST", "/auth/ticket", role="viewer").status_code == 403
+    ticket = runtime.api("POST", "/auth/ticket", role="operator").json()["ticket"]
+    with connect(f"{url}?ticket={ticket}"):
+        pass
+
+
+def test_services_answer_only_the_runtime(runtime: Runtime) -> None:
+    services = runtime.api("GET", "/health").json()["services"]
+    for name, info in services.items():
+        if name == "webui":
+            continue
+        assert httpx.get(f"{info['url']}/health").status_code == 200
+        for path in ("/openapi.json", "/docs"):
+            refused = httpx.get(f"{info['url']}{path}")
+            assert refused.status_code == 403, (name, path)
+            assert code_of(refused) == "internal_only"
+        forged = {"X-OpenPendant-Internal": "guess", "X-OpenPendant-Role": "admin"}
+        assert httpx.get(f"{info['url']}/openapi.json", headers=forged).status_code == 403
+
+
+def test_the_gateways_docs_are_for_administrators(runtime: Runtime) -> None:
+    for path in ("/docs", "/openapi.json"):
+        assert httpx.get(runtime.url + path).status_code == 401
+        assert httpx.get(runtime.url + path, headers=runtime.auth("programmer")).status_code == 403
+        assert httpx.get(runtime.url + path, headers=runtime.auth("admin")).status_code == 200
+
+
+def test_forwarded_headers_grant_nothing(runtime: Runtime) -> None:
+    claims = {
+        "X-Forwarded-For": "127.0.0.1",
+        "X-OpenPendant-Role": "admin",
+        "X-OpenPendant-User": "admin",
+        "X-OpenPendant-Internal": "x",
+    }
+    assert runtime.api("GET", "/devices", role=None, headers=claims).status_code == 401
+    refused = runtime.api("POST", "/devices", role="operator", headers=claims, json={})
+    assert refused.status_code == 403

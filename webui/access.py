@@ -1,0 +1,151 @@
+"""Every request to /api and every socket, authenticated and authorised here, before the
+gateway routes it anywhere: who it is (an API token, or a session cookie with its CSRF
+token for anything that changes something), whether the role may (webui/policy.py), and an
+audit entry for each change."""
+
+from __future__ import annotations
+
+import hmac
+from http.cookies import SimpleCookie
+
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from runtime.auth.audit import AuditLog
+from runtime.auth.roles import Role
+from runtime.auth.store import AuthStore, Identity
+from runtime.kit.service_guard import refuse
+from webui import policy
+from webui.proxy import BAD_PATH, PathRefused, service_path
+
+SESSION_COOKIE = "op_session"
+CSRF_HEADER = "x-csrf-token"
+DOCS = ("/docs", "/redoc", "/openapi.json")
+SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
+
+
+def headers_of(scope: Scope) -> dict[str, str]:
+    return {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope["headers"]}
+
+
+def client_address(scope: Scope) -> str:
+    # The peer of the connection: X-Forwarded-For and the like are a client's say-so.
+    client = scope.get("client")
+    return str(client[0]) if client else ""
+
+
+def cookie_value(headers: dict[str, str], name: str) -> str | None:
+    raw = headers.get("cookie")
+    if not raw:
+        return None
+    jar: SimpleCookie = SimpleCookie()
+    try:
+        jar.load(raw)
+    except Exception:  # a malformed cookie header is no session
+        return None
+    morsel = jar.get(name)
+    return morsel.value if morsel is not None else None
+
+
+def identify(store: AuthStore, headers: dict[str, str]) -> Identity | None:
+    authorization = headers.get("authorization", "")
+    if authorization[:7].lower() == "bearer ":
+        return store.token(authorization[7:].strip())
+    secret = cookie_value(headers, SESSION_COOKIE)
+    return store.session(secret) if secret else None
+
+
+def need_of(scope: Scope) -> policy.Need | None:
+    """None: not the API (the UI's files, /health) — served to anyone."""
+    path: str = scope["path"]
+    method = scope.get("method", "WS") if scope["type"] == "http" else "WS"
+    if path in DOCS or path.startswith("/docs/"):
+        return Role.admin
+    if path == "/api" or path.startswith("/api/"):
+        return policy.need(method, path[4:] or "/")
+    return None
+
+
+class AccessGuard:
+    def __init__(self, app: ASGIApp, store: AuthStore, audit: AuditLog) -> None:
+        self.app = app
+        self.store = store
+        self.audit = audit
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] not in ("http", "websocket"):
+            await self.app(scope, receive, send)
+            return
+        need = need_of(scope)
+        if need is None:
+            await self.app(scope, receive, send)
+            return
+        try:
+            service_path(scope["path"].lstrip("/"))
+        except PathRefused:
+            # Refused before the table is read: `..` must not make a path look like another.
+            await refuse(scope, receive, send, 400, "bad_path", BAD_PATH)
+            return
+        if need == policy.INTERNAL:
+            await refuse(scope, receive, send, 404, "not_found", "no such route")
+            return
+        headers = headers_of(scope)
+        identity = identify(self.store, headers)
+        scope.setdefault("state", {})["identity"] = identity
+        if need != policy.PUBLIC:
+            refusal = self._refusal(scope, headers, identity, need)
+            if refusal is not None:
+                await refuse(scope, receive, send, *refusal)
+                return
+        method = scope.get("method", "WS")
+        watching = scope["type"] == "websocket" and not (
+            isinstance(need, Role) and need >= Role.operator
+        )
+        # The sign-in routes record what they do themselves (with what the request cannot say).
+        own_record = scope["path"].startswith("/api/auth/")
+        if identity is None or method in SAFE_METHODS or watching or own_record:
+            await self.app(scope, receive, send)
+            return
+        await self.app(scope, receive, self._audited(scope, send, identity))
+
+    def _refusal(
+        self, scope: Scope, headers: dict[str, str], who: Identity | None, need: policy.Need
+    ) -> tuple[int, str, str] | None:
+        if who is None:
+            return 401, "unauthenticated", "sign in first"
+        if isinstance(need, Role) and who.role < need:
+            return 403, "forbidden", f"a {who.role.name} may not do this (a {need.name} may)"
+        method = scope.get("method", "WS")
+        if who.via == "session" and scope["type"] == "http" and method not in SAFE_METHODS:
+            sent = headers.get(CSRF_HEADER, "")
+            if not who.csrf or not hmac.compare_digest(sent, who.csrf):
+                return 403, "csrf_failed", "the request lacks this session's CSRF token"
+        return None
+
+    def _audited(self, scope: Scope, send: Send, who: Identity) -> Send:
+        status = 0
+
+        async def sending(message: Message) -> None:
+            nonlocal status
+            if message["type"] == "http.response.start":
+                status = int(message["status"])
+            await send(message)
+            if message["type"] == "http.response.body" and not message.get("more_body"):
+                self.audit.record(
+                    user=who.user,
+                    role=who.role.name,
+                    address=client_address(scope),
+                    action=scope.get("method", "WS"),
+                    target=scope["path"],
+                    status=status,
+                )
+            elif message["type"] == "websocket.accept":
+                self.audit.record(
+                    user=who.user,
+                    role=who.role.name,
+                    address=client_address(scope),
+                    action="OPEN",
+                    target=scope["path"],
+                    status=101,
+                )
+
+        return sending

@@ -1,0 +1,289 @@
+"""/api/auth: the set-up screen's first administrator, signing in and out (password, or an
+operator's PIN on a shared tablet), one's own password, and the administrator's users, API
+tokens and audit log. Changes to users and credentials ask for the password again."""
+
+from __future__ import annotations
+
+import asyncio
+import hmac
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Query, Request, Response
+from pydantic import Field
+
+from runtime.auth.audit import AuditLog
+from runtime.auth.roles import Role
+from runtime.auth.store import AuthStore, Identity, LockedOut, Unauthenticated
+from runtime.interfaces.common import Strict
+from runtime.kit import tickets
+from runtime.kit.errors import InvalidValue, OpenPendantError
+from runtime.kit.settings import is_loopback
+from webui.access import SESSION_COOKIE, client_address
+
+RoleName = Literal["viewer", "operator", "programmer", "admin"]
+Text = Annotated[str, Field(min_length=1, max_length=256)]
+
+
+class Forbidden(OpenPendantError):
+    status = 403
+    code = "forbidden"
+
+
+class Login(Strict):
+    user: Text
+    password: Text
+
+
+class PinLogin(Strict):
+    user: Text
+    pin: Annotated[str, Field(min_length=4, max_length=8)]
+
+
+class Setup(Strict):
+    user: Text
+    password: Text
+    code: str | None = Field(default=None, max_length=64)
+
+
+class PasswordChange(Strict):
+    current: Text
+    new: Text
+
+
+class NewUser(Strict):
+    name: Text
+    role: RoleName
+    password: Text
+    confirm_password: Text  # the administrator's own
+
+
+class UserChange(Strict):
+    role: RoleName | None = None
+    password: Text | None = None
+    pin: Annotated[str, Field(max_length=8)] | None = None  # "" removes it
+    confirm_password: Text
+
+
+class Confirmation(Strict):
+    confirm_password: Text
+
+
+class NewToken(Strict):
+    name: Annotated[str, Field(min_length=1, max_length=64)]
+    role: RoleName
+    confirm_password: Text
+
+
+def identity(request: Request) -> Identity:
+    who: Identity | None = request.scope.get("state", {}).get("identity")
+    if who is None:
+        raise Unauthenticated("sign in first")
+    return who
+
+
+def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> APIRouter:
+    router = APIRouter(prefix="/api/auth")
+
+    def record(
+        request: Request,
+        user: str,
+        role: str,
+        action: str,
+        status: int,
+        detail: dict[str, Any] | None = None,
+    ) -> None:
+        audit.record(
+            user=user,
+            role=role,
+            address=client_address(request.scope),
+            action=action,
+            target=request.url.path,
+            status=status,
+            detail=detail,
+        )
+
+    def signed_in(request: Request, response: Response, user: str, role: Role) -> dict[str, Any]:
+        secret, csrf = store.open_session(user)
+        response.set_cookie(
+            SESSION_COOKIE,
+            secret,
+            httponly=True,
+            samesite="strict",
+            secure=request.url.scheme == "https",
+            path="/",
+        )
+        return {"user": user, "role": role.name, "csrf": csrf}
+
+    async def check(request: Request, user: str, secret: str, *, pin: bool = False) -> Role:
+        try:
+            role = await asyncio.to_thread(store.verify, user, secret, pin=pin)
+        except (Unauthenticated, LockedOut) as exc:
+            record(request, user, "", "LOGIN", exc.status, {"why": exc.code, "pin": pin})
+            raise
+        return role
+
+    async def reauthenticated(request: Request, password: str) -> Identity:
+        who = identity(request)
+        if who.via != "session":
+            raise Forbidden("changes to users and credentials are made signed in, not by token")
+        await check(request, who.user, password)
+        return who
+
+    @router.get("/status")
+    async def status(request: Request) -> dict[str, Any]:
+        """What the sign-in screen shows: set-up still to do, and whether from here."""
+        who = request.scope.get("state", {}).get("identity")
+        return {
+            "set_up": store.user_count() > 0,
+            "setup_needs_code": not is_loopback(client_address(request.scope)),
+            "signed_in": who is not None,
+        }
+
+    @router.post("/setup")
+    async def setup(body: Setup, request: Request, response: Response) -> dict[str, Any]:
+        """The first administrator: from the runtime computer itself, or with the one-time
+        code the runtime printed where it was started."""
+        local = is_loopback(client_address(request.scope))
+        code_ok = setup_code is not None and hmac.compare_digest(body.code or "", setup_code)
+        if not (local or code_ok):
+            raise Forbidden(
+                "set up from the runtime computer, or give the code it printed at start",
+                code="setup_code_needed",
+            )
+        await asyncio.to_thread(store.create_user, body.user, body.password, Role.admin, first=True)
+        record(request, body.user, "admin", "SETUP", 200)
+        return signed_in(request, response, body.user, Role.admin)
+
+    @router.post("/login")
+    async def login(body: Login, request: Request, response: Response) -> dict[str, Any]:
+        role = await check(request, body.user, body.password)
+        record(request, body.user, role.name, "LOGIN", 200)
+        return signed_in(request, response, body.user, role)
+
+    @router.post("/pin")
+    async def pin_login(body: PinLogin, request: Request, response: Response) -> dict[str, Any]:
+        """An operator's quick switch on a shared tablet; never more than an operator."""
+        role = await check(request, body.user, body.pin, pin=True)
+        if role > Role.operator:
+            raise Forbidden("a PIN signs in operators and viewers only; use your password")
+        record(request, body.user, role.name, "LOGIN", 200, {"pin": True})
+        return signed_in(request, response, body.user, role)
+
+    @router.post("/logout", status_code=204)
+    async def logout(request: Request, response: Response) -> Response:
+        who = identity(request)
+        if who.session is not None:
+            store.close_session(who.session)
+        record(request, who.user, who.role.name, "LOGOUT", 204)
+        response = Response(status_code=204)
+        response.delete_cookie(SESSION_COOKIE, path="/")
+        return response
+
+    @router.get("/me")
+    async def me(request: Request) -> dict[str, Any]:
+        who = identity(request)
+        return {"user": who.user, "role": who.role.name, "csrf": who.csrf, "via": who.via}
+
+    @router.post("/me/password")
+    async def change_password(
+        body: PasswordChange, request: Request, response: Response
+    ) -> dict[str, Any]:
+        """Every session of the user ends; this one goes on with a new session."""
+        who = await reauthenticated(request, body.current)
+        await asyncio.to_thread(store.set_password, who.user, body.new)
+        record(request, who.user, who.role.name, "PASSWORD", 200)
+        return signed_in(request, response, who.user, who.role)
+
+    @router.post("/ticket")
+    async def ticket(request: Request) -> dict[str, Any]:
+        """A ticket to open the jog socket on its own port (valid for a minute)."""
+        who = identity(request)
+        return {"ticket": tickets.issue(who.user, int(who.role)), "lifetime": tickets.LIFETIME}
+
+    @router.get("/users")
+    async def users() -> list[dict[str, Any]]:
+        return [u.__dict__ for u in store.users()]
+
+    @router.post("/users", status_code=201)
+    async def add_user(body: NewUser, request: Request) -> dict[str, Any]:
+        who = await reauthenticated(request, body.confirm_password)
+        role = Role.named(body.role)
+        await asyncio.to_thread(store.create_user, body.name, body.password, role)
+        detail = {"name": body.name, "role": role.name}
+        record(request, who.user, who.role.name, "ADD_USER", 201, detail)
+        return {"name": body.name, "role": role.name}
+
+    @router.put("/users/{name}")
+    async def change_user(name: str, body: UserChange, request: Request) -> dict[str, Any]:
+        who = await reauthenticated(request, body.confirm_password)
+        before = store.role_of(name)
+        if body.role is not None:
+            store.set_role(name, Role.named(body.role))
+        if body.password is not None:
+            await asyncio.to_thread(store.set_password, name, body.password)
+        if body.pin is not None:
+            await asyncio.to_thread(store.set_pin, name, body.pin or None)
+        after = store.role_of(name)
+        record(
+            request,
+            who.user,
+            who.role.name,
+            "CHANGE_USER",
+            200,
+            {
+                "name": name,
+                "before": {"role": before.name},
+                "after": {"role": after.name},
+                "password": body.password is not None,
+                "pin": body.pin is not None,
+            },
+        )
+        return {"name": name, "role": after.name}
+
+    @router.delete("/users/{name}", status_code=204)
+    async def delete_user(name: str, body: Confirmation, request: Request) -> Response:
+        who = await reauthenticated(request, body.confirm_password)
+        if name == who.user:
+            raise InvalidValue("you cannot remove yourself", code="self")
+        store.delete_user(name)
+        record(request, who.user, who.role.name, "DELETE_USER", 204, {"name": name})
+        return Response(status_code=204)
+
+    @router.get("/tokens")
+    async def tokens() -> list[dict[str, Any]]:
+        return [t.__dict__ for t in store.tokens()]
+
+    @router.post("/tokens", status_code=201)
+    async def add_token(body: NewToken, request: Request) -> dict[str, Any]:
+        """The token is shown in this answer only."""
+        who = await reauthenticated(request, body.confirm_password)
+        secret = store.create_token(body.name, Role.named(body.role))
+        detail = {"name": body.name, "role": body.role}
+        record(request, who.user, who.role.name, "ADD_TOKEN", 201, detail)
+        return {"token": secret, "name": body.name, "role": body.role}
+
+    @router.delete("/tokens/{token_id}", status_code=204)
+    async def revoke_token(token_id: str, body: Confirmation, request: Request) -> Response:
+        who = await reauthenticated(request, body.confirm_password)
+        store.revoke_token(token_id)
+        record(request, who.user, who.role.name, "REVOKE_TOKEN", 204, {"token": token_id})
+        return Response(status_code=204)
+
+    @router.get("/audit")
+    async def audit_entries(
+        before: int | None = None, limit: int = Query(100, ge=1, le=1000)
+    ) -> list[dict[str, Any]]:
+        return [
+            e.__dict__ for e in await asyncio.to_thread(audit.entries, before=before, limit=limit)
+        ]
+
+    @router.get("/audit/export")
+    async def audit_export() -> Response:
+        text = await asyncio.to_thread(audit.export_lines)
+        return Response(
+            text,
+            media_type="application/x-ndjson",
+            headers={"Content-Disposition": 'attachment; filename="openpendant-audit.jsonl"'},
+        )
+
+    return router
