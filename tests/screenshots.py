@@ -19,7 +19,7 @@ from runtime.bench.harness.processes import Runtime, child_env
 from tests.browser.conftest import CHROMIUM, CHROMIUM_ARGS, PHONE, TABLET, add_robot
 from tests.support.programs import PICK_AND_PLACE_WAYPOINTS, pick_and_place, teach
 
-PANELS = ("jog", "program", "scene", "devices", "system")
+PANELS = ("jog", "program", "scene", "devices", "system", "users")
 DEVICES = {"tablet": TABLET, "phone": PHONE}
 THEMES = ("dark", "light")
 OUT = Path(__file__).resolve().parent.parent / "docs" / "screenshots"
@@ -52,6 +52,8 @@ def settle(page: Page, panel: str) -> None:
         expect(page.locator(".blocklyBlockCanvas > g").first).to_be_visible(timeout=30_000)
     if panel == "system":
         expect(page.get_by_test_id("service").first).to_be_visible(timeout=10_000)
+    if panel == "users":
+        expect(page.get_by_test_id("audit-entry").first).to_be_visible(timeout=10_000)
     page.wait_for_timeout(500)  # the last frame drawn
 
 
@@ -74,6 +76,15 @@ def shoot(
                     is_mobile=viewport["width"] < 600,
                 )
                 try:
+                    context.add_cookies(
+                        [
+                            {
+                                "name": "op_session",
+                                "value": runtime.session_cookie("admin"),
+                                "url": runtime.url,
+                            }
+                        ]
+                    )
                     context.add_init_script(
                         f"localStorage.setItem('op.theme', '{theme}');"
                         "localStorage.setItem('op.holder', 'Cell 1 pendant');"

@@ -80,7 +80,7 @@ def run() -> list[Figure]:
         load = subprocess.Popen(
             [sys.executable, "-m", "runtime.bench.load", runtime.url, str(seconds), str(CLIENTS)],
             stdout=subprocess.PIPE,
-            env=child_env(home),
+            env=child_env(home, OPENPENDANT_TOKEN=runtime.token("viewer")),
             preexec_fn=lambda: os.nice(10),
         )
         try:

@@ -82,7 +82,9 @@ def run_to_end(cell: Cell, name: str, start: bool = True) -> dict[str, Any]:
 
 def client(cell: Cell) -> httpx.Client:
     """A kept connection: a new client per request costs tens of ms of its own (TLS set-up)."""
-    return httpx.Client(base_url=f"{cell.runtime.url}/api", timeout=10.0)
+    return httpx.Client(
+        base_url=f"{cell.runtime.url}/api", timeout=10.0, headers=cell.runtime.auth("operator")
+    )
 
 
 def first_motion(cell: Cell, trials: int) -> list[float]:
@@ -121,7 +123,9 @@ def stop_to_halt(cell: Cell, trials: int) -> dict[str, list[float]]:
         "http_from_client": [],
     }
     http = client(cell)
-    with connect(cell.runtime.url.replace("http", "ws") + "/api/programs/_ws") as socket:
+    with connect(
+        cell.runtime.ws_url("/programs/_ws"), additional_headers=cell.runtime.auth("operator")
+    ) as socket:
         for k in range(trials):
             run_to_end(cell, "back")
             after = cell.robot.last_command_seq()

@@ -74,7 +74,7 @@ def measure(runtime: Runtime, robots: int, seconds: float, home: Path) -> dict[s
         [sys.executable, "-m", "runtime.bench.ui_clients", url, str(CLIENTS), str(seconds)],
         capture_output=True,
         text=True,
-        env=child_env(home),
+        env=child_env(home, OPENPENDANT_TOKEN=runtime.token("viewer")),
         check=True,
     )
     elapsed = time.monotonic() - started

@@ -45,7 +45,7 @@ def run() -> list[Figure]:
             [sys.executable, "-m", "runtime.bench.ui_clients", url, str(CLIENTS), str(seconds)],
             capture_output=True,
             text=True,
-            env=child_env(home),
+            env=child_env(home, OPENPENDANT_TOKEN=runtime.token("viewer")),
             check=True,
         )
         results = json.loads(clients.stdout)

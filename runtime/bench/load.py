@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 import sys
 import time
 
@@ -46,7 +47,11 @@ async def client(http: httpx.AsyncClient, end: float, k: int, times: list[float]
 async def main(url: str, seconds: float, clients: int) -> None:
     limits = httpx.Limits(max_connections=clients, max_keepalive_connections=clients)
     times: list[float] = []
-    async with httpx.AsyncClient(base_url=url, limits=limits, timeout=30.0) as http:
+    token = os.environ.get("OPENPENDANT_TOKEN")
+    headers = {"Authorization": f"Bearer {token}"} if token else {}
+    async with httpx.AsyncClient(
+        base_url=url, limits=limits, timeout=30.0, headers=headers
+    ) as http:
         end = time.monotonic() + seconds
         errors = await asyncio.gather(*(client(http, end, k, times) for k in range(clients)))
     print(

@@ -69,16 +69,33 @@ def open_context(browser: Browser, viewport: ViewportSize) -> BrowserContext:
     return browser.new_context(viewport=viewport, has_touch=True, is_mobile=viewport["width"] < 600)
 
 
+def sign_in(context: BrowserContext, runtime: Runtime, role: str = "admin") -> None:
+    """The context holds a signed-in session of a `role` user of `runtime` (the sign-in
+    screen itself is tested in test_access.py)."""
+    cookie = runtime.session_cookie(role)
+    context.add_cookies([{"name": "op_session", "value": cookie, "url": runtime.url}])
+
+
+def signed_in_context(
+    browser: Browser, viewport: ViewportSize, request: pytest.FixtureRequest
+) -> BrowserContext:
+    context = open_context(browser, viewport)
+    if "runtime" in request.fixturenames:
+        sign_in(context, request.getfixturevalue("runtime"))
+    return context
+
+
 @pytest.fixture
-def tablet(browser: Browser) -> Iterator[BrowserContext]:
-    context = open_context(browser, TABLET)
+def tablet(browser: Browser, request: pytest.FixtureRequest) -> Iterator[BrowserContext]:
+    """A tablet's browser, signed in as an administrator of the test's `runtime` (if any)."""
+    context = signed_in_context(browser, TABLET, request)
     yield context
     context.close()
 
 
 @pytest.fixture
-def phone(browser: Browser) -> Iterator[BrowserContext]:
-    context = open_context(browser, PHONE)
+def phone(browser: Browser, request: pytest.FixtureRequest) -> Iterator[BrowserContext]:
+    context = signed_in_context(browser, PHONE, request)
     yield context
     context.close()
 

@@ -10,7 +10,7 @@ import httpx
 from playwright.sync_api import BrowserContext, expect
 
 from runtime.bench.harness.processes import Runtime, SimRobotProc
-from tests.browser.conftest import PageErrors, add_robot, fits_the_screen
+from tests.browser.conftest import PageErrors, add_robot, fits_the_screen, sign_in
 
 
 def jog_first_joint(url: str, seconds: float) -> None:
@@ -54,7 +54,7 @@ def test_add_the_detected_robot_by_touch_and_see_it_live(
 
     # Live: the robot moves (commanded by another client) and the numbers follow.
     first = joints.nth(0).inner_text()
-    sim_url = httpx.get(f"{runtime.url}/api/devices/robot").json()["url"]
+    sim_url = runtime.api("GET", "/devices/robot").json()["url"]
     jog_first_joint(sim_url, 0.6)
     expect(joints.nth(0)).not_to_have_text(first)
     page.screenshot(path=artifacts / "3-added-live.png")
@@ -149,6 +149,7 @@ def test_losing_the_runtime_is_shown(tablet: BrowserContext, tmp_path: Path) -> 
     runtime = Runtime(tmp_path, extra=["--no-sim"])
     try:
         runtime.wait_ready()
+        sign_in(tablet, runtime)
         page = tablet.new_page()
         page.goto(f"{runtime.url}/#/devices")
         link = page.get_by_test_id("runtime-link")

@@ -17,7 +17,7 @@ from playwright.sync_api import BrowserContext, expect
 
 from runtime.bench.harness.blocks import block, number, stack, text, workspace
 from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
-from tests.browser.conftest import BROWSER_DEADMAN, BROWSER_LINK_TIMEOUT, PageErrors
+from tests.browser.conftest import BROWSER_DEADMAN, BROWSER_LINK_TIMEOUT, PageErrors, sign_in
 
 ROOT = Path(__file__).resolve().parents[2]
 PLUGIN = ROOT / "plugins" / "conveyor"
@@ -94,6 +94,7 @@ def test_an_installed_plugin_adds_a_device_a_panel_and_blocks(
     assert "sim-conveyor" in drivers
     runtime = start_runtime(home)
     try:
+        sign_in(tablet, runtime)
         page = tablet.new_page()
         errors = PageErrors(page)
 
@@ -195,6 +196,7 @@ def test_uninstalled_it_is_gone_and_a_broken_plugin_leaves_the_rest_running(
         # The belt still announces itself, but nothing installed knows conveyors now.
         assert all(d["kind"] != "conveyor" for d in runtime.api("GET", "/devices/detected").json())
 
+        sign_in(tablet, runtime)
         page = tablet.new_page()
         errors = PageErrors(page)
         page.goto(f"{runtime.url}/#/system")

@@ -17,6 +17,7 @@ from tests.browser.conftest import (
     add_robot,
     open_context,
     robot_joints,
+    sign_in,
 )
 from tests.browser.test_shop_floor import hold, take_control_and_enable
 
@@ -30,6 +31,7 @@ def test_the_jog_page_is_usable_again_after_the_runtime_restarts(
     first = Runtime(tmp_path, env=env)
     first.wait_ready()
     context = open_context(browser, TABLET)
+    sign_in(context, first)  # kept by the runtime's data: the restarted one knows it too
     second: Runtime | None = None
     try:
         add_robot(first)

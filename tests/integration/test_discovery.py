@@ -233,7 +233,8 @@ def test_malformed_link_socket_messages_are_refused_and_the_socket_stays(
     """The device manager's link socket (for services) answers bad messages with a refusal
     and keeps serving."""
     base = runtime.api("GET", "/health").json()["services"]["device_manager"]["url"]
-    with connect(base.replace("http://", "ws://") + "/devices/_links") as ws:
+    link = base.replace("http://", "ws://") + "/devices/_links"
+    with connect(link, additional_headers=runtime.internal()) as ws:
         bad = [
             "not json",
             "[1, 2]",

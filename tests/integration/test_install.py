@@ -110,13 +110,29 @@ def test_the_installed_runtime_runs_serves_its_ui_and_detects_its_robot(
     try:
         runtime.wait_line(lambda line: "OpenPendant UI:" in line, 60)
         base = f"http://127.0.0.1:{port}"
-        assert httpx.get(f"{base}/api/health").json()["status"] == "ok"
+        assert httpx.get(f"{base}/api/health").status_code == 401  # signed in, or nothing
+        # A script's token, made on the runtime computer as the README says.
+        token = subprocess.run(
+            [
+                str(installed / "bin" / "openpendant"),
+                *("token", "create", "--role", "viewer", "--name", "install-check"),
+                *("--data-dir", str(tmp_path / "data")),
+            ],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        auth = {"Authorization": f"Bearer {token}"}
+        assert httpx.get(f"{base}/api/health", headers=auth).json()["status"] == "ok"
         page = httpx.get(f"{base}/")
         assert page.status_code == 200 and "<op-app" in page.text
         installation = (tmp_path / "data" / "runtime-id").read_text().strip()
         own = device_uuid(installation, default_devices()[0])
         wait_for(
-            lambda: any(d["uuid"] == own for d in httpx.get(f"{base}/api/devices/detected").json()),
+            lambda: any(
+                d["uuid"] == own
+                for d in httpx.get(f"{base}/api/devices/detected", headers=auth).json()
+            ),
             10,
             what="the installed runtime's own simulated robot detected",
         )

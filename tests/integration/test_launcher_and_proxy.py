@@ -120,8 +120,12 @@ def test_the_jog_socket_has_a_port_of_its_own_that_serves_nothing_else(
     assert port and port != runtime.port
     for path in ("/jog/settings", "/health", "/jog/robots/robot/halt", "/docs"):
         assert httpx.get(f"http://127.0.0.1:{port}{path}").status_code == 404, path
-    for url in (f"ws://127.0.0.1:{port}/jog/ws", runtime.url.replace("http", "ws") + "/api/jog/ws"):
-        with connect(url) as ws:
+    ticket = runtime.api("POST", "/auth/ticket", role="operator").json()["ticket"]
+    for url, headers in (
+        (f"ws://127.0.0.1:{port}/jog/ws?ticket={ticket}", {}),
+        (runtime.ws_url("/jog/ws"), runtime.auth("operator")),
+    ):
+        with connect(url, additional_headers=headers) as ws:
             ws.send(json.dumps({"type": "nonsense"}))
             assert json.loads(ws.recv(timeout=5))["error"]["code"] == "bad_message"
 
@@ -130,7 +134,7 @@ def test_unknown_api_prefix_is_a_json_404(runtime: Runtime) -> None:
     response = runtime.api("GET", "/nonsense/thing")
     assert response.status_code == 404
     assert response.json()["error"]["code"] == "not_found"
-    with connect(runtime.url.replace("http", "ws") + "/api/nonsense/ws") as ws:
+    with connect(runtime.ws_url("/nonsense/ws"), additional_headers=runtime.auth()) as ws:
         message = json.loads(ws.recv(timeout=5))
     assert message["error"]["code"] == "not_found"
 

@@ -43,9 +43,11 @@ class HostRuntime(Runtime):
 
     namespace = ""
 
-    def api(self, method: str, path: str, **kwargs: Any) -> httpx.Response:
+    def api(
+        self, method: str, path: str, role: str | None = "admin", **kwargs: Any
+    ) -> httpx.Response:
         with inside(self.namespace):
-            return super().api(method, path, **kwargs)
+            return super().api(method, path, role, **kwargs)
 
 
 class BoardRobot:

@@ -338,7 +338,7 @@ def test_the_pendants_stop_stops_every_running_program(ready: Cell) -> None:
 def test_stop_over_the_program_socket_halts_the_robot(ready: Cell) -> None:
     save_python(ready, "socket_stop", f"set_speed(10)\nmove_joint({FAR_DEGREES!r})")
     url = ready.runtime.url.replace("http", "ws") + "/api/programs/_ws"
-    with connect(url) as socket:
+    with connect(url, additional_headers=ready.runtime.auth("viewer")) as socket:
         socket.send(json.dumps({"type": "stop"}))
         answers = iter(lambda: json.loads(socket.recv(timeout=5)), None)
         refusal = next(a for a in answers if a.get("type") == "error")  # after the statuses
@@ -574,7 +574,10 @@ def test_a_program_names_only_variables_and_never_the_users_own(ready: Cell) -> 
 def test_program_names_with_paths_or_control_characters_are_refused(ready: Cell) -> None:
     for raw in ("..%2f..%2fvariables%2f_export", "a%0a", "%E2%80%AEevil", "a.b"):
         response = httpx.put(
-            f"{ready.runtime.url}/api/programs/{raw}", json={"python": "x = 1"}, timeout=10
+            f"{ready.runtime.url}/api/programs/{raw}",
+            json={"python": "x = 1"},
+            headers=ready.runtime.auth("programmer"),
+            timeout=10,
         )
         assert response.status_code in (400, 422), raw
         assert response.json()["error"]["code"] in ("bad_path", "invalid_name"), raw

@@ -87,7 +87,7 @@ def test_discover_add_stream_and_survive_restarts(home: Path) -> None:
         first = state_seqno(runtime, "robot2")
         wait_for(lambda: state_seqno(runtime, "robot2") > first + 10, 5, what="state moving")
         ws_url = runtime.url.replace("http", "ws") + "/api/devices/ws"
-        with connect(ws_url) as ws:
+        with connect(ws_url, additional_headers=runtime.auth("viewer")) as ws:
             kinds: set[str] = set()
             states: list[int] = []
             while len(states) < 20:

@@ -131,7 +131,7 @@ def test_the_gateway_bounds_bodies_and_paths_and_sets_its_headers(runtime: Runti
         headers={"content-type": "application/json"},
     )
     assert huge.status_code == 413
-    climbed = httpx.get(runtime.url + "/api/programs/..%2fopenapi.json")
+    climbed = httpx.get(runtime.url + "/api/programs/..%2fopenapi.json", headers=runtime.auth())
     assert climbed.status_code == 400
     page = httpx.get(runtime.url + "/")
     assert page.headers["x-content-type-options"] == "nosniff"

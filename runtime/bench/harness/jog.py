@@ -33,11 +33,15 @@ class JogClient:
         self.runtime = runtime
         self.robot = robot
         self.token = token
-        url = runtime.url.replace("http", "ws") + "/api/jog/ws"
+        url = runtime.ws_url("/jog/ws")
+        headers = runtime.auth("operator")
         port = runtime.api("GET", "/jog/settings").json()["socket_port"]
         if port and not via_gateway:
-            url = f"ws://127.0.0.1:{port}/jog/ws"
-        self._socket = connect(url)
+            # Straight to the jog service's port, with a ticket, as the UI opens it.
+            ticket = runtime.api("POST", "/auth/ticket", role="operator").json()["ticket"]
+            url = f"ws://127.0.0.1:{port}/jog/ws?ticket={ticket}"
+            headers = {}
+        self._socket = connect(url, additional_headers=headers)
         self.ws: ClientConnection = self._socket.__enter__()
         self.messages: list[dict[str, Any]] = []
 

@@ -18,6 +18,11 @@ from typing import Any, TypeVar
 
 import httpx
 
+from runtime.auth.roles import Role
+from runtime.auth.setup import auth_path, create_token
+from runtime.auth.store import AuthStore
+from runtime.kit.internal import FILE as INTERNAL_FILE
+from runtime.kit.internal import HEADER as INTERNAL_HEADER
 from runtime.kit.settings import DeviceSpec, default_devices
 from runtime.launcher.run import device_uuid
 
@@ -159,6 +164,7 @@ class Runtime(Proc):
         super().__init__(argv, env or child_env(home), home / "logs" / f"runtime-{self.port}.log")
         self.url = ""
         self.started_in = 0.0
+        self._tokens: dict[str, str] = {}
 
     def wait_ready(self, timeout: float = 60.0) -> str:
         t0 = time.monotonic()
@@ -166,6 +172,44 @@ class Runtime(Proc):
         self.started_in = time.monotonic() - t0
         self.url = line.split("OpenPendant UI:", 1)[1].strip().rstrip("/")
         return self.url
+
+    def token(self, role: str = "admin") -> str:
+        """An API token of `role`, made as `openpendant token create` makes one."""
+        if role not in self._tokens:
+            self._tokens[role] = create_token(self.data_dir, role, f"tests-{role}")
+        return self._tokens[role]
+
+    def auth(self, role: str = "admin") -> dict[str, str]:
+        return {"Authorization": f"Bearer {self.token(role)}"}
+
+    def user(self, role: str = "admin") -> tuple[str, str]:
+        """A user of `role` (made in the runtime's user store, as an administrator would)."""
+        name, password = f"{role}-user", f"{role}-password-0"
+        store = AuthStore(auth_path(self.data_dir))
+        try:
+            if name not in [u.name for u in store.users()]:
+                store.create_user(name, password, Role.named(role))
+        finally:
+            store.close()
+        return name, password
+
+    def session_cookie(self, role: str = "admin") -> str:
+        """A signed-in session of a `role` user: the cookie a browser would hold."""
+        name, password = self.user(role)
+        response = httpx.post(
+            f"{self.url}/api/auth/login", json={"user": name, "password": password}, timeout=10
+        )
+        response.raise_for_status()
+        return str(response.cookies["op_session"])
+
+    def internal(self) -> dict[str, str]:
+        """What a service's own port wants (the run's secret, kept in the data directory)."""
+        token = (self.data_dir / INTERNAL_FILE).read_text().strip()
+        return {INTERNAL_HEADER: token}
+
+    def ws_url(self, path: str) -> str:
+        """A socket of the gateway (path below /api)."""
+        return self.url.replace("http", "ws", 1) + "/api" + path
 
     def service_errors(self) -> list[str]:
         """Error-level entries in the service logs: a clean run has none."""
@@ -197,8 +241,13 @@ class Runtime(Proc):
     def is_detected(self, uuid: str) -> bool:
         return any(d["uuid"] == uuid for d in self.api("GET", "/devices/detected").json())
 
-    def api(self, method: str, path: str, **kwargs: Any) -> httpx.Response:
+    def api(
+        self, method: str, path: str, role: str | None = "admin", **kwargs: Any
+    ) -> httpx.Response:
+        """A request to the gateway, signed in with a token of `role` (None: anonymous)."""
         kwargs.setdefault("timeout", 10.0)
+        if role is not None:
+            kwargs["headers"] = {**self.auth(role), **(kwargs.get("headers") or {})}
         return httpx.request(method, f"{self.url}/api{path}", **kwargs)
 
 

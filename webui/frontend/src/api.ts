@@ -1,6 +1,7 @@
 // JSON over HTTP to the runtime, with its error body turned into an ApiError.
 
 import { t } from "./i18n";
+import { session } from "./session";
 
 export class ApiError extends Error {
   constructor(
@@ -19,15 +20,21 @@ export async function api<T>(
   headers: Record<string, string> = {},
 ): Promise<T> {
   let response: Response;
+  const sent: Record<string, string> = { ...headers };
+  if (body !== undefined) sent["content-type"] = "application/json";
+  // A request that changes something shows the session's CSRF token (see webui/access.py).
+  if (method !== "GET" && method !== "HEAD" && session.csrf) sent["x-csrf-token"] = session.csrf;
   try {
     response = await fetch(path, {
       method,
-      headers: body === undefined ? headers : { "content-type": "application/json", ...headers },
+      headers: sent,
       body: body === undefined ? undefined : JSON.stringify(body),
+      credentials: "same-origin",
     });
   } catch {
     throw new ApiError(t("app.unreachable"), "unreachable", 0);
   }
+  if (response.status === 401 && !path.startsWith("/api/auth/")) session.lost();
   const text = await response.text();
   const data: unknown = text ? safeParse(text) : null;
   if (!response.ok) {

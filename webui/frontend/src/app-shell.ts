@@ -1,8 +1,11 @@
 import { LitElement, css, html } from "lit";
 import { t } from "./i18n";
+import { api } from "./api";
 import { feed } from "./live";
-import { panels } from "./panels/registry";
+import { ADMIN_PANELS, panels } from "./panels/registry";
 import { plugins } from "./plugins";
+import { type Me, session } from "./session";
+import "./sign-in";
 import { shared } from "./styles";
 import "./status-bar";
 
@@ -103,18 +106,42 @@ export class OpApp extends LitElement {
 
   private onPlugins = () => this.requestUpdate();
   private retry = 0;
+  private started = false;
+  private checked = false;
+
+  private onSession = () => {
+    if (session.me !== null && !this.started) {
+      // What needs a signed-in user starts once there is one.
+      this.started = true;
+      this.loadPlugins();
+      feed.start();
+    }
+    this.requestUpdate();
+  };
 
   connectedCallback(): void {
     super.connectedCallback();
     window.addEventListener("hashchange", this.onHash);
     plugins.addEventListener("change", this.onPlugins);
-    this.loadPlugins();
-    feed.start();
+    session.addEventListener("change", this.onSession);
+    void this.resume();
+  }
+
+  /** A session this browser already has (its cookie) signs it in without a screen. */
+  private async resume(): Promise<void> {
+    try {
+      session.set(await api<Me>("GET", "/api/auth/me"));
+    } catch {
+      session.set(null);
+    }
+    this.checked = true;
+    this.requestUpdate();
   }
 
   disconnectedCallback(): void {
     window.removeEventListener("hashchange", this.onHash);
     plugins.removeEventListener("change", this.onPlugins);
+    session.removeEventListener("change", this.onSession);
     window.clearTimeout(this.retry);
     super.disconnectedCallback();
   }
@@ -127,8 +154,12 @@ export class OpApp extends LitElement {
   }
 
   render() {
-    const shown = panels();
-    const active = shown.find((p) => p.id === this.panel) ?? shown[0];
+    if (session.me === null) {
+      return this.checked ? html`<op-sign-in></op-sign-in>` : html``;
+    }
+    const all = panels();
+    const active = all.find((p) => p.id === this.panel) ?? all[0];
+    const shown = all.filter((p) => !ADMIN_PANELS.has(p.id) || session.can("admin"));
     return html`
       <op-status-bar></op-status-bar>
       <div class="body">

@@ -24,17 +24,21 @@ let counter = 0;
 let direct: string | null = null;
 
 // Hold-to-run goes straight to the jog service's own port when it has one: heartbeats must
-// never wait behind the gateway's HTTP traffic. Through the gateway otherwise.
+// never wait behind the gateway's HTTP traffic. Through the gateway otherwise. The jog port
+// is opened with a short-lived ticket the gateway gives the signed-in user.
 async function jogSocketUrl(): Promise<string> {
-  if (direct) return direct;
   try {
-    const settings = await api<{ socket_port: number | null }>("GET", "/api/jog/settings");
-    if (settings.socket_port) {
-      direct = socketUrl("/jog/ws", settings.socket_port);
-      return direct;
+    if (!direct) {
+      const settings = await api<{ socket_port: number | null }>("GET", "/api/jog/settings");
+      if (settings.socket_port) direct = socketUrl("/jog/ws", settings.socket_port);
+    }
+    if (direct) {
+      const { ticket } = await api<{ ticket: string }>("POST", "/api/auth/ticket");
+      return `${direct}?ticket=${encodeURIComponent(ticket)}`;
     }
   } catch {
-    // the runtime is not answering yet: the connection attempt will fail and retry
+    // the runtime is not answering yet, or this user may not jog: the gateway's socket
+    // says which
   }
   return socketUrl("/api/jog/ws");
 }

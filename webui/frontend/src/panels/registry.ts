@@ -11,6 +11,7 @@ import "./plugin-panel";
 import "./program-panel";
 import "./scene-panel";
 import "./system-panel";
+import "./users-panel";
 
 export interface Panel {
   id: string;
@@ -51,7 +52,16 @@ const builtIn: Record<string, Panel> = {
     icon: icons.system,
     render: () => html`<op-system-panel></op-system-panel>`,
   },
+  users: {
+    id: "users",
+    title: () => t("app.panel.users"),
+    icon: icons.users,
+    render: () => html`<op-users-panel></op-users-panel>`,
+  },
 };
+
+/** Panels only some roles see in the navigation (their page still says why not to others). */
+export const ADMIN_PANELS = new Set(["users"]);
 
 function pluginPanel(info: PanelInfo): Panel {
   return {

@@ -3,6 +3,7 @@ import { api, errorText } from "../api";
 import { HOLDER_MAX, control } from "../control";
 import { LANGUAGES, type Language, type StringKey, language, setLanguage, t } from "../i18n";
 import { type Theme, currentTheme, setTheme } from "../theme";
+import { session } from "../session";
 import { shared } from "../styles";
 import { type PluginInfo, plugins } from "../plugins";
 import type { Health } from "../types";
@@ -194,9 +195,12 @@ export class OpSystemPanel extends LitElement {
   private async refresh() {
     try {
       // The plugins' report failing hides neither health nor logs.
+      // The runtime's logs are for programmers and administrators.
       const [health, logs] = await Promise.all([
         api<Health>("GET", "/api/health"),
-        api<LogEntry[]>("GET", `/api/logs?level=${this.logLevel}&limit=100`),
+        session.can("programmer")
+          ? api<LogEntry[]>("GET", `/api/logs?level=${this.logLevel}&limit=100`)
+          : Promise.resolve(null),
         plugins.load().catch(() => undefined),
       ]);
       this.health = health;
@@ -213,7 +217,29 @@ export class OpSystemPanel extends LitElement {
     void this.refresh();
   }
 
+  private account() {
+    const me = session.me;
+    if (me === null) return "";
+    return html`<section class="card account">
+      <p data-testid="signed-in-as">
+        ${t("auth.signed_in_as", { user: me.user, role: t(`auth.role.${me.role}`) })}
+      </p>
+      <button data-testid="sign-out" @click=${() => void this.signOut()}>${t("auth.sign_out")}</button>
+    </section>`;
+  }
+
+  private async signOut(): Promise<void> {
+    try {
+      await api("POST", "/api/auth/logout");
+    } catch (err) {
+      this.error = errorText(err);
+    }
+    location.hash = "";
+    session.set(null);
+  }
+
   private log() {
+    if (!session.can("programmer")) return "";
     const levels: ["warning" | "info", StringKey][] = [
       ["warning", "system.log.warnings"],
       ["info", "system.log.everything"],
@@ -278,6 +304,7 @@ export class OpSystemPanel extends LitElement {
   render() {
     const services = Object.entries(this.health?.services ?? {});
     return html`
+      ${this.account()}
       ${this.pendant()}
       <h2>${t("system.services")}</h2>
       ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}

@@ -1,0 +1,126 @@
+"""Signing in on a tablet by touch: the first start's set-up of the administrator, an
+operator refused the administrator's page, hostile text shown as text, signing out."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from playwright.sync_api import Browser, Page, expect
+
+from runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
+from tests.browser.conftest import TABLET, PageErrors, open_context
+
+HOSTILE = '<img src=x onerror="window.__pwned=1">'
+
+
+def sign_in_by_touch(page: Page, user: str, password: str) -> None:
+    form = page.get_by_test_id("sign-in")
+    expect(form).to_be_visible()
+    page.get_by_test_id("sign-in-user").tap()
+    page.get_by_test_id("sign-in-user").fill(user)
+    page.get_by_test_id("sign-in-password").tap()
+    page.get_by_test_id("sign-in-password").fill(password)
+    page.get_by_test_id("sign-in-submit").tap()
+
+
+def sign_out_by_touch(page: Page) -> None:
+    page.get_by_test_id("nav-system").tap()
+    page.get_by_test_id("sign-out").tap()
+    expect(page.get_by_test_id("sign-in")).to_be_visible()
+
+
+def test_the_first_start_sets_up_the_administrator_by_touch(
+    runtime: Runtime, browser: Browser
+) -> None:
+    """Before anyone signs in (no user exists yet in this module's runtime)."""
+    context = open_context(browser, TABLET)
+    try:
+        page = context.new_page()
+        errors = PageErrors(page)
+        page.goto(runtime.url)
+        expect(page.get_by_test_id("sign-in")).to_contain_text("Set up OpenPendant")
+        # From loopback no set-up code is asked for; the passwords must agree.
+        expect(page.get_by_test_id("sign-in-code")).to_have_count(0)
+        page.get_by_test_id("sign-in-user").fill("ada")
+        page.get_by_test_id("sign-in-password").fill("correct horse battery")
+        page.get_by_test_id("sign-in-repeat").fill("correct horse batterx")
+        page.get_by_test_id("sign-in-submit").tap()
+        expect(page.get_by_test_id("sign-in-error")).to_contain_text("differ")
+        page.get_by_test_id("sign-in-repeat").fill("correct horse battery")
+        page.get_by_test_id("sign-in-submit").tap()
+        expect(page.get_by_test_id("nav-users")).to_be_visible()
+        page.get_by_test_id("nav-users").tap()
+        expect(page.locator("[data-testid=user][data-name=ada]")).to_be_visible()
+        sign_out_by_touch(page)
+        expect(page.get_by_test_id("sign-in")).to_contain_text("Sign in")
+        assert runtime.api("GET", "/auth/status", role=None).json()["set_up"] is True
+        assert errors.errors == [] or all("401" in e for e in errors.errors)
+    finally:
+        context.close()
+
+
+def test_an_operator_is_refused_the_administrators_page(runtime: Runtime, browser: Browser) -> None:
+    name, password = runtime.user("operator")
+    context = open_context(browser, TABLET)
+    try:
+        page = context.new_page()
+        page.goto(runtime.url)
+        sign_in_by_touch(page, name, "not the password")
+        expect(page.get_by_test_id("sign-in-error")).to_contain_text("wrong")
+        sign_in_by_touch(page, name, password)
+        expect(page.get_by_test_id("nav-jog")).to_be_visible()
+        expect(page.get_by_test_id("nav-users")).to_have_count(0)
+        page.goto(f"{runtime.url}/#/users")
+        expect(page.get_by_test_id("admin-only")).to_be_visible()
+        expect(page.get_by_test_id("users")).to_have_count(0)
+        # What the page does not show, the runtime refuses as well.
+        csrf = page.evaluate("fetch('/api/auth/me').then((r) => r.json()).then((me) => me.csrf)")
+        status = page.evaluate(
+            """(csrf) => fetch('/api/auth/users', {method: 'POST',
+                 headers: {'content-type': 'application/json', 'x-csrf-token': csrf},
+                 body: JSON.stringify({name: 'eve', role: 'admin', password: 'x'.repeat(12),
+                                       confirm_password: 'x'.repeat(12)})})
+               .then((r) => r.status)""",
+            csrf,
+        )
+        assert status == 403
+        sign_out_by_touch(page)
+        page.goto(f"{runtime.url}/#/jog")
+        expect(page.get_by_test_id("sign-in")).to_be_visible()  # the session is gone
+    finally:
+        context.close()
+
+
+def test_hostile_names_and_text_are_shown_as_text(
+    runtime: Runtime, browser: Browser, tmp_path: Path
+) -> None:
+    sim = SimRobotProc(tmp_path, name=HOSTILE)
+    context = open_context(browser, TABLET)
+    try:
+        sim.wait_ready()
+        # Names of programs and variables are names only: the runtime refuses the markup.
+        for path in ("/programs/%3Cimg%20src%3Dx%3E", "/variables/%3Cimg%20src%3Dx%3E"):
+            refused = runtime.api("PUT", path, json={"python": "x = 1"})
+            assert refused.status_code in (400, 422), path
+        printed = runtime.api("PUT", "/programs/shout", json={"python": f"print({HOSTILE!r})"})
+        assert printed.status_code == 200
+        run = runtime.api("POST", "/programs/shout/run", json={})
+        assert run.status_code == 202
+        wait_for(
+            lambda: runtime.api("GET", "/programs/shout/status").json()["state"] == "finished",
+            30,
+        )
+        name, password = runtime.user("programmer")
+        page = context.new_page()
+        page.goto(f"{runtime.url}/#/devices")
+        sign_in_by_touch(page, name, password)
+        card = page.get_by_test_id("detected-device").filter(has_text=HOSTILE)
+        expect(card).to_be_visible(timeout=15_000)
+        page.goto(f"{runtime.url}/#/program")
+        page.get_by_test_id("program-select").select_option("shout")
+        expect(page.get_by_test_id("output")).to_contain_text(HOSTILE, timeout=15_000)
+        assert page.evaluate("window.__pwned") is None
+        assert page.locator("img[src=x]").count() == 0
+    finally:
+        context.close()
+        sim.stop()

@@ -1,0 +1,259 @@
+import { LitElement, css, html } from "lit";
+import { api, errorText } from "../api";
+import { t } from "../i18n";
+import { type RoleName, session } from "../session";
+import { shared } from "../styles";
+
+interface UserRow {
+  name: string;
+  role: RoleName;
+  has_pin: boolean;
+}
+
+interface TokenRow {
+  id: string;
+  name: string;
+  role: RoleName;
+  last_used: number | null;
+}
+
+interface AuditRow {
+  seq: number;
+  ts: number;
+  user: string;
+  role: string;
+  address: string;
+  action: string;
+  target: string;
+  status: number;
+}
+
+const ROLES: RoleName[] = ["viewer", "operator", "programmer", "admin"];
+
+// An administrator's page: the users and their roles, API tokens for scripts, and the audit
+// log. Every change asks for the administrator's own password again.
+export class OpUsersPanel extends LitElement {
+  static properties = {
+    users: { state: true },
+    tokens: { state: true },
+    audit: { state: true },
+    role: { state: true },
+    tokenRole: { state: true },
+    error: { state: true },
+    newToken: { state: true },
+  };
+  declare users: UserRow[];
+  declare tokens: TokenRow[];
+  declare audit: AuditRow[];
+  declare role: RoleName;
+  declare tokenRole: RoleName;
+  declare error: string;
+  declare newToken: string;
+
+  static styles = [
+    shared,
+    css`
+      form {
+        display: grid;
+        gap: 10px;
+        max-width: 560px;
+      }
+      .roles {
+        display: flex;
+        gap: 8px;
+        flex-wrap: wrap;
+      }
+      .roles button[aria-pressed="true"] {
+        border-color: var(--accent);
+        color: var(--accent);
+      }
+      table {
+        width: 100%;
+        border-collapse: collapse;
+      }
+      td,
+      th {
+        text-align: left;
+        padding: 8px 6px;
+        border-bottom: 1px solid var(--line);
+        overflow-wrap: anywhere;
+      }
+      .audit {
+        max-height: 360px;
+        overflow: auto;
+        font-size: 15px;
+      }
+      .token {
+        font-family: monospace;
+        overflow-wrap: anywhere;
+      }
+      a.button {
+        display: inline-flex;
+        align-items: center;
+        min-height: var(--touch);
+        padding: 0 22px;
+        border-radius: 10px;
+        border: 2px solid var(--line);
+        color: var(--text);
+        text-decoration: none;
+        font-weight: 600;
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    this.users = [];
+    this.tokens = [];
+    this.audit = [];
+    this.role = "operator";
+    this.tokenRole = "viewer";
+    this.error = "";
+    this.newToken = "";
+  }
+
+  connectedCallback(): void {
+    super.connectedCallback();
+    if (session.can("admin")) void this.load();
+  }
+
+  private async load(): Promise<void> {
+    try {
+      [this.users, this.tokens, this.audit] = await Promise.all([
+        api<UserRow[]>("GET", "/api/auth/users"),
+        api<TokenRow[]>("GET", "/api/auth/tokens"),
+        api<AuditRow[]>("GET", "/api/auth/audit?limit=50"),
+      ]);
+    } catch (err) {
+      this.error = errorText(err);
+    }
+  }
+
+  private value(name: string): string {
+    return this.renderRoot.querySelector<HTMLInputElement>(`[name="${name}"]`)?.value ?? "";
+  }
+
+  private async act(work: () => Promise<unknown>): Promise<void> {
+    this.error = "";
+    try {
+      await work();
+      await this.load();
+    } catch (err) {
+      this.error = errorText(err);
+    }
+  }
+
+  private addUser(e: Event): void {
+    e.preventDefault();
+    void this.act(() =>
+      api("POST", "/api/auth/users", {
+        name: this.value("new-user").trim(),
+        role: this.role,
+        password: this.value("new-password"),
+        confirm_password: this.value("confirm-user"),
+      }),
+    );
+  }
+
+  private removeUser(name: string): void {
+    const confirm = this.value("confirm-user");
+    void this.act(() => api("DELETE", `/api/auth/users/${encodeURIComponent(name)}`, { confirm_password: confirm }));
+  }
+
+  private addToken(e: Event): void {
+    e.preventDefault();
+    void this.act(async () => {
+      const made = await api<{ token: string }>("POST", "/api/auth/tokens", {
+        name: this.value("token-name").trim(),
+        role: this.tokenRole,
+        confirm_password: this.value("confirm-token"),
+      });
+      this.newToken = made.token;
+    });
+  }
+
+  private roleButtons(current: RoleName, choose: (role: RoleName) => void, prefix: string) {
+    return html`<div class="roles" role="group">
+      ${ROLES.map(
+        (role) => html`<button type="button" data-testid="${prefix}-${role}"
+          aria-pressed=${role === current} @click=${() => choose(role)}>${t(`auth.role.${role}`)}</button>`,
+      )}
+    </div>`;
+  }
+
+  render() {
+    if (!session.can("admin")) {
+      return html`<p class="error" role="alert" data-testid="admin-only">${t("users.admin_only")}</p>`;
+    }
+    return html`
+      ${this.error ? html`<p class="error" role="alert" data-testid="users-error">${this.error}</p>` : ""}
+      <h2>${t("users.title")}</h2>
+      <section class="card">
+        <table data-testid="users">
+          ${this.users.map(
+            (u) => html`<tr data-testid="user" data-name=${u.name}>
+              <td translate="no">${u.name}</td>
+              <td>${t(`auth.role.${u.role}`)}</td>
+              <td>
+                ${u.name === session.me?.user
+                  ? ""
+                  : html`<button class="danger" data-testid="remove-user-${u.name}"
+                      @click=${() => this.removeUser(u.name)}>${t("users.remove")}</button>`}
+              </td>
+            </tr>`,
+          )}
+        </table>
+        <h3>${t("users.add")}</h3>
+        <form @submit=${this.addUser}>
+          <input name="new-user" data-testid="new-user" placeholder=${t("auth.user")}
+            autocapitalize="none" spellcheck="false" required />
+          ${this.roleButtons(this.role, (r) => (this.role = r), "new-role")}
+          <input name="new-password" data-testid="new-password" type="password"
+            autocomplete="new-password" placeholder=${t("auth.password")} required />
+          <input name="confirm-user" data-testid="confirm-user" type="password"
+            autocomplete="current-password" placeholder=${t("users.your_password")} required />
+          <button class="primary" type="submit" data-testid="add-user">${t("users.add")}</button>
+        </form>
+      </section>
+      <h2>${t("users.tokens")}</h2>
+      <section class="card">
+        <table data-testid="tokens">
+          ${this.tokens.map(
+            (k) => html`<tr data-testid="token"><td translate="no">${k.name}</td>
+              <td>${t(`auth.role.${k.role}`)}</td></tr>`,
+          )}
+        </table>
+        <form @submit=${this.addToken}>
+          <input name="token-name" data-testid="token-name" placeholder=${t("users.token_name")} required />
+          ${this.roleButtons(this.tokenRole, (r) => (this.tokenRole = r), "token-role")}
+          <input name="confirm-token" type="password" autocomplete="current-password"
+            placeholder=${t("users.your_password")} required />
+          <button type="submit" data-testid="add-token">${t("users.add_token")}</button>
+        </form>
+        ${this.newToken
+          ? html`<p>${t("users.token_once")}</p><p class="token" data-testid="new-token">${this.newToken}</p>`
+          : ""}
+      </section>
+      <h2>${t("users.audit")}</h2>
+      <section class="card">
+        <a class="button" href="/api/auth/audit/export" download data-testid="audit-export"
+          >${t("users.audit_export")}</a>
+        <div class="audit">
+          <table data-testid="audit">
+            ${this.audit.map(
+              (a) => html`<tr data-testid="audit-entry">
+                <td>${new Date(a.ts * 1000).toLocaleString()}</td>
+                <td translate="no">${a.user}</td>
+                <td translate="no">${a.action} ${a.target}</td>
+                <td>${a.status}</td>
+                <td translate="no">${a.address}</td>
+              </tr>`,
+            )}
+          </table>
+        </div>
+      </section>
+    `;
+  }
+}
+
+customElements.define("op-users-panel", OpUsersPanel);
