@@ -11,7 +11,6 @@ import tempfile
 import time
 from pathlib import Path
 
-import httpx
 import websockets
 
 from runtime.bench.harness.processes import SimRobotProc
@@ -45,7 +44,7 @@ def host_jitter_p99(seconds: float) -> float:
     return float(result.stdout)
 
 
-async def load(url: str, seconds: float) -> None:
+async def load(url: str, seconds: float, signed: dict[str, str]) -> None:
     """Three state subscribers and a 50 Hz jog stream back and forth on joint 1."""
     ws_url = url.replace("http://", "ws://")
 
@@ -56,7 +55,7 @@ async def load(url: str, seconds: float) -> None:
                 json.loads(await ws.recv())
 
     async def jogger() -> None:
-        async with websockets.connect(f"{ws_url}/command/ws") as ws:
+        async with websockets.connect(f"{ws_url}/command/ws", additional_headers=signed) as ws:
             end = time.monotonic() + seconds
             k = 0
             while time.monotonic() < end:
@@ -78,12 +77,12 @@ def run() -> list[Figure]:
     sim = SimRobotProc(home, name="bench-loop")
     try:
         sim.wait_ready()
-        with httpx.Client(base_url=sim.url, timeout=5) as robot:
+        with sim.client() as robot:
             robot.post("/enable").raise_for_status()
             robot.put("/command_mode", json={"mode": "jog"}).raise_for_status()
             time.sleep(0.5)
             robot.delete("/sim/loop_stats").raise_for_status()
-            asyncio.run(load(sim.url, seconds))
+            asyncio.run(load(sim.url, seconds, sim.signed("/command/ws")))
             stats = robot.get("/sim/loop_stats").json()
     finally:
         sim.stop()

@@ -19,11 +19,13 @@ from typing import Any
 import httpx
 import websockets
 from websockets.asyncio.client import ClientConnection
+from websockets.exceptions import InvalidStatus
 
 from plugins.registry import registry
 from runtime.device_manager.models import ConnectionStatus
 from runtime.device_manager.tools import send_tool_setup
 from runtime.interfaces.variables import DeviceRecord
+from runtime.kit.device_auth import HEADER, DeviceAuth, sign
 from runtime.kit.discovery import clean_text
 from runtime.kit.errors import OpenPendantError, Unavailable
 from runtime.kit.settings import LinkSettings
@@ -77,8 +79,10 @@ class DeviceConnection:
         on_status: Callable[[DeviceConnection], None],
         timing: LinkSettings | None = None,
         tool_setup: ToolLoader | None = None,
+        secret: Callable[[], str | None] = lambda: None,
     ) -> None:
         self.record = record
+        self._secret = secret  # the device's pairing secret, read at each session's start
         self.timing = timing or LinkSettings()
         self.status: ConnectionStatus = "connecting"
         self.last_error = ""
@@ -227,19 +231,29 @@ class DeviceConnection:
         """One session; returns why it ended if it had connected, else None (status set)."""
         state_ws: ClientConnection | None = None
         command_ws: ClientConnection | None = None
-        http = httpx.AsyncClient(base_url=url, timeout=CONNECT_TIMEOUT)
+        secret = self._secret()
+        auth = DeviceAuth(secret) if secret else None
+        http = httpx.AsyncClient(base_url=url, timeout=CONNECT_TIMEOUT, auth=auth)
         try:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT * 2):
                     info = await self._fetch_info(http, url)
                     if self.record.kind == "robot":
                         info = await self._apply_tool(http, info)
-                    state_ws = await self._open(url, "/state/ws")
+                    state_ws = await self._open(url, "/state/ws", None)
                     if has_session(self.record.kind):
-                        command_ws = await self._open(url, "/command/ws")
+                        command_ws = await self._open(url, "/command/ws", secret)
                         timeout = self.timing.driver_timeout
                         await command_ws.send(json.dumps({"type": "session", "timeout": timeout}))
                     first = await state_ws.recv()
+            except InvalidStatus as exc:
+                refused = exc.response.status_code == 401
+                self._failed(
+                    "the device refuses this runtime's commands: pair it (its pairing code)"
+                    if refused
+                    else f"cannot reach {url}: {describe(exc)}"
+                )
+                return None
             except (OSError, httpx.HTTPError, websockets.WebSocketException, TimeoutError) as exc:
                 self._failed(f"cannot reach {url}: {describe(exc)}")
                 return None
@@ -407,10 +421,15 @@ class DeviceConnection:
             raise WrongDevice(f"another device (uuid {shown}) answers at {url}")
         return info
 
-    async def _open(self, url: str, path: str) -> ClientConnection:
+    async def _open(self, url: str, path: str, secret: str | None) -> ClientConnection:
         ws_url = url.replace("http://", "ws://", 1).replace("https://", "wss://", 1)
+        headers = {HEADER: sign(secret, "GET", path)} if secret else {}
         return await websockets.connect(
-            ws_url + path, open_timeout=CONNECT_TIMEOUT, close_timeout=0.2, max_size=MAX_STATE
+            ws_url + path,
+            open_timeout=CONNECT_TIMEOUT,
+            close_timeout=0.2,
+            max_size=MAX_STATE,
+            additional_headers=headers,
         )
 
 

@@ -69,6 +69,11 @@ class AddDeviceRequest(Strict):
 
     local_name: str
     uuid: str | None = Field(default=None, min_length=1, max_length=64)
+    # The device's pairing code (a device on another computer prints it when it starts; one
+    # this runtime started, or one started on this computer, is paired already).
+    pairing: str | None = Field(
+        default=None, min_length=16, max_length=128, pattern=r"^[A-Za-z0-9_-]+$"
+    )
     url: str | None = Field(default=None, pattern=r"^https?://[^\s/]+(:\d+)?/?$", max_length=256)
 
     @field_validator("local_name")

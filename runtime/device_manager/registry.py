@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import hmac
 import json
 import logging
 import math
+import secrets
 import time
 from collections.abc import Coroutine
 from pathlib import Path
@@ -34,6 +36,7 @@ from runtime.device_manager.models import (
 from runtime.device_manager.tools import stored_tool, tool_variable
 from runtime.interfaces.robot import RobotInfo, ToolSetup
 from runtime.interfaces.variables import DeviceRecord
+from runtime.kit.device_auth import keep_secret, known_secret, proof
 from runtime.kit.discovery import Detected, checked_uuid, clean_text
 from runtime.kit.errors import (
     Conflict,
@@ -60,7 +63,9 @@ class DeviceRegistry:
         lease_seconds: float = 15.0,
         timing: LinkSettings | None = None,
         lease_file: Path | None = None,
+        data_dir: Path | None = None,
     ) -> None:
+        self.data_dir = data_dir  # where the devices' pairing secrets are kept
         self.storage = storage
         self.fanout = fanout  # everything, device states included
         self.events = Fanout()  # lists and leases only, for services
@@ -96,20 +101,56 @@ class DeviceRegistry:
     def _seen_elsewhere(self, conn: DeviceConnection, device: Detected) -> None:
         """An added device announced at another address. While its link is live the device
         answers where it is: the announcement is a second device with its identity (or a
-        stale one), shown to the user and not followed. A device whose link is down has
-        moved (a restart on a new port): the link follows."""
+        stale one), shown to the user and not followed. A device whose link is down may have
+        moved (a restart on a new port): the link follows if it proves who it is."""
         claim = AddressClaim(url=device.url, name=device.name, seen=time.time())
-        if conn.status == "connected":
+        if conn.status != "connected":
+            self._background(self._follow_if_proven(conn, device.url, claim))
+            return
+        log.warning(
+            "%s is live at %s; another device announces its uuid at %s: not followed",
+            conn.name,
+            conn.record.url,
+            device.url,
+        )
+        self.claims[conn.name] = claim
+        self._publish_devices()
+
+    def secret_of(self, uuid: str) -> str | None:
+        return known_secret(self.data_dir, uuid) if self.data_dir is not None else None
+
+    async def _follow_if_proven(
+        self, conn: DeviceConnection, url: str, claim: AddressClaim
+    ) -> None:
+        """A device whose link is down, announced at another address, is followed there only
+        if what answers there proves it holds the device's secret; else it is a claim for an
+        administrator to accept (PUT /devices/{name}/address) or ignore."""
+        secret = self.secret_of(conn.record.uuid)
+        nonce = secrets.token_hex(16)
+        proven = False
+        if secret is not None:
+            try:
+                async with httpx.AsyncClient(base_url=url, timeout=2.0) as http:
+                    answer = await http.get("/pair/proof", params={"nonce": nonce})
+                proven = answer.status_code == 200 and hmac.compare_digest(
+                    str(answer.json().get("proof", "")), proof(secret, nonce)
+                )
+            except (httpx.HTTPError, ValueError, AttributeError):
+                proven = False
+        async with self._lock:
+            if self.connections.get(conn.name) is not conn or conn.record.url == url:
+                return
+            if proven and conn.status != "connected":
+                self._move(conn, url)
+                return
             log.warning(
-                "%s is live at %s; another device announces its uuid at %s: not followed",
+                "%s: a device announces its uuid at %s without proving it is %s: not followed",
                 conn.name,
-                conn.record.url,
-                device.url,
+                url,
+                conn.name,
             )
             self.claims[conn.name] = claim
-            self._publish_devices()
-            return
-        self._move(conn, device.url)
+        self._publish_devices()
 
     def _move(self, conn: DeviceConnection, url: str) -> None:
         log.warning("%s moves from %s to %s", conn.name, conn.record.url, url)
@@ -198,6 +239,8 @@ class DeviceRegistry:
                     f"no installed plugin knows devices of kind {record.kind!r}",
                     code="unknown_kind",
                 )
+            if request.pairing is not None and self.data_dir is not None:
+                keep_secret(self.data_dir, record.uuid, request.pairing)
             # Persist first: if storage refuses, nothing has changed.
             await self.storage.put(
                 RECORD_PREFIX + record.local_name,
@@ -276,12 +319,13 @@ class DeviceRegistry:
             self._on_status,
             self.timing,
             tool_setup=lambda name: stored_tool(self.storage, name),
+            secret=lambda: self.secret_of(record.uuid),
         )
         self.connections[record.local_name] = conn
         found = self.detected.get(record.uuid)
         if found is not None and found.url != record.url:
-            conn.move_to(found.url)
-            self._background(self._persist_url(record.local_name, conn.record))
+            claim = AddressClaim(url=found.url, name=found.name, seen=time.time())
+            self._background(self._follow_if_proven(conn, found.url, claim))
         conn.start()
         return conn
 

@@ -131,6 +131,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
         settings.lease_seconds,
         settings.link,
         lease_file=settings.data_dir / "leases.json",
+        data_dir=settings.data_dir,
     )
     browser = Browser(settings.zeroconf_interfaces(), registry.on_found, registry.on_gone)
 

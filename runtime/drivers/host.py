@@ -17,6 +17,7 @@ from plugins.api import resolve
 from plugins.registry import registry
 from runtime.drivers import command_stream
 from runtime.drivers.command_log import CommandLog
+from runtime.drivers.guard import CommandGuard
 from runtime.drivers.routes import interface_router
 from runtime.drivers.state_stream import StateStream
 from runtime.interfaces.device import DeviceDriver
@@ -132,6 +133,7 @@ def serve_driver(
     state_rate_hz: float,
     routers: Sequence[APIRouter] = (),
     ttl: int = DEFAULT_TTL,
+    secret: str,
 ) -> None:
     sock = listening_socket(host, port)
     actual_port = int(sock.getsockname()[1])
@@ -154,4 +156,4 @@ def serve_driver(
     )
     log.info("serving %s on port %d", ident.name, actual_port)
     sys.stdout.flush()
-    run_app(app, sock)
+    run_app(CommandGuard(app, secret), sock)

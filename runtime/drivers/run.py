@@ -23,10 +23,12 @@ from plugins.api import Driver, resolve
 from plugins.registry import registry
 from runtime.drivers.host import serve_driver
 from runtime.kit.app import describe_validation_errors
+from runtime.kit.device_auth import device_secret
 from runtime.kit.errors import OpenPendantError
 from runtime.kit.logs import setup_logging
 from runtime.kit.settings import SETTINGS_ENV, load_settings, settings_from_env
 
+SECRET_ENV = "OPENPENDANT_DEVICE_SECRET"
 NAMESPACE = uuids.UUID("6f1d9a52-3c39-4b61-9d0e-5c2a1f6b7e10")
 
 
@@ -63,6 +65,11 @@ def parser(spec: Driver, model: type[BaseModel]) -> argparse.ArgumentParser:
     p.add_argument("--port", type=int, default=0, help="0 picks a free port")
     p.add_argument("--config", type=Path, default=None, help="runtime YAML config")
     p.add_argument("--options-json", default=None, help="the options as one JSON object")
+    p.add_argument(
+        "--secret",
+        default=None,
+        help=f"the pairing secret (default: ${SECRET_ENV}, or kept in the data directory)",
+    )
     for field, info in model.model_fields.items():
         flag = "--" + field.replace("_", "-")
         if info.annotation is bool:
@@ -125,6 +132,15 @@ def run_driver(name: str, argv: list[str] | None = None) -> int:
         print(f"openpendant driver {name}: {exc.message}", file=sys.stderr)
         return 2
     routers = [resolve(spec.routes)(driver)] if spec.routes else []
+    launched = bool(os.environ.get(SETTINGS_ENV))
+    secret = (
+        args["secret"]
+        or os.environ.get(SECRET_ENV)
+        or device_secret(settings.data_dir, driver.identity.uuid)
+    )
+    if not launched:
+        # Started by hand (a board on the LAN): the administrator gives this when adding it.
+        print(f"openpendant driver {name}: pairing code {secret}", file=sys.stderr, flush=True)
     serve_driver(
         driver,
         host=args["host"],
@@ -133,5 +149,6 @@ def run_driver(name: str, argv: list[str] | None = None) -> int:
         state_rate_hz=settings.state_rate_hz,
         ttl=settings.discovery.ttl,
         routers=routers,
+        secret=secret,
     )
     return 0

@@ -10,12 +10,14 @@ import httpx
 from playwright.sync_api import BrowserContext, expect
 
 from runtime.bench.harness.processes import Runtime, SimRobotProc
+from runtime.kit.device_auth import DeviceAuth, known_secret
 from tests.browser.conftest import PageErrors, add_robot, fits_the_screen, sign_in
 
 
-def jog_first_joint(url: str, seconds: float) -> None:
-    """Move the simulated robot through its own driver API, as another client would."""
-    with httpx.Client(base_url=url, timeout=5) as robot:
+def jog_first_joint(url: str, secret: str, seconds: float) -> None:
+    """Move the simulated robot through its own driver API, as the runtime it is paired
+    with could."""
+    with httpx.Client(base_url=url, timeout=5, auth=DeviceAuth(secret)) as robot:
         robot.post("/enable").raise_for_status()
         robot.put("/command_mode", json={"mode": "jog"}).raise_for_status()
         end = time.monotonic() + seconds
@@ -54,8 +56,10 @@ def test_add_the_detected_robot_by_touch_and_see_it_live(
 
     # Live: the robot moves (commanded by another client) and the numbers follow.
     first = joints.nth(0).inner_text()
-    sim_url = runtime.api("GET", "/devices/robot").json()["url"]
-    jog_first_joint(sim_url, 0.6)
+    device = runtime.api("GET", "/devices/robot").json()
+    secret = known_secret(runtime.data_dir, device["uuid"])
+    assert secret is not None
+    jog_first_joint(device["url"], secret, 0.6)
     expect(joints.nth(0)).not_to_have_text(first)
     page.screenshot(path=artifacts / "3-added-live.png")
 

@@ -73,7 +73,9 @@ def test_the_system_panel_shows_the_runtimes_warnings(
     # A robot added, then gone: the device manager warns that it cannot reach it.
     sim = SimRobotProc(tmp_path, name="ghost-arm")
     sim.wait_ready()
-    added = runtime.api("POST", "/devices", json={"url": sim.url, "local_name": "ghost"})
+    added = runtime.api(
+        "POST", "/devices", json={"url": sim.url, "local_name": "ghost", "pairing": sim.secret}
+    )
     assert added.status_code == 201, added.text
     wait_for(lambda: runtime.api("GET", "/devices/ghost").json()["status"] == "connected", 10)
     sim.stop()

@@ -114,7 +114,8 @@ def test_the_robot_in_focus_is_the_one_shown_and_moved(
     # 2 m away (at the origin it would stand inside the UR5, and avoidance holds both).
     frame = {"type": "frame", "value": {"pose": {"position": [2.0, 0.0, 0.0]}}}
     assert runtime.api("PUT", "/variables/frames.panda", json=frame).is_success
-    added = runtime.api("POST", "/devices", json={"uuid": panda.uuid, "local_name": "panda"})
+    paired = {"uuid": panda.uuid, "local_name": "panda", "pairing": panda.secret}
+    added = runtime.api("POST", "/devices", json=paired)
     assert added.status_code == 201, added.text
     expect(chip(page, "panda")).to_be_visible(timeout=10_000)
     expect(chip(page, "panda")).to_have_attribute("aria-pressed", "false")
@@ -281,7 +282,8 @@ def test_a_robot_added_inside_another_is_reported_then_mounted_elsewhere_and_jog
     runtime: Runtime, robot: str, panda: SimRobotProc, tablet: BrowserContext, artifacts: Path
 ) -> None:
     runtime.api("DELETE", "/variables/frames.panda")  # added at the world origin: in the UR5
-    added = runtime.api("POST", "/devices", json={"uuid": panda.uuid, "local_name": "panda"})
+    paired = {"uuid": panda.uuid, "local_name": "panda", "pairing": panda.secret}
+    added = runtime.api("POST", "/devices", json=paired)
     assert added.status_code == 201, added.text
     page = tablet.new_page()
     page.goto(f"{runtime.url}/#/jog")
@@ -344,7 +346,8 @@ def test_the_3d_mouse_follows_the_frame_buttons_and_shows_its_axes(
     mouse.wait_ready()
     try:
         wait_for(lambda: runtime.is_detected(mouse.uuid), 10, what="mouse detected")
-        added = runtime.api("POST", "/devices", json={"uuid": mouse.uuid, "local_name": "mouse"})
+        paired = {"uuid": mouse.uuid, "local_name": "mouse", "pairing": mouse.secret}
+        added = runtime.api("POST", "/devices", json=paired)
         assert added.status_code == 201, added.text
         page = phone.new_page()
         page.goto(f"{runtime.url}/#/jog")

@@ -171,7 +171,8 @@ def test_a_removed_device_leaves_no_session_behind(runtime: Runtime, tmp_path: P
     sim.wait_ready()
     try:
         wait_for(lambda: sim.uuid in detected(runtime), 10, what="detected")
-        added = runtime.api("POST", "/devices", json={"uuid": sim.uuid, "local_name": "gone"})
+        pairing = {"uuid": sim.uuid, "local_name": "gone", "pairing": sim.secret}
+        added = runtime.api("POST", "/devices", json=pairing)
         assert added.status_code == 201, added.text
         wait_for(
             lambda: runtime.api("GET", "/devices/gone").json()["status"] == "connected",
@@ -198,7 +199,11 @@ def test_a_device_can_be_re_pointed_by_the_user_and_an_impostor_is_refused(
 ) -> None:
     first = SimRobotProc(tmp_path, "moving-ur5")
     first.wait_ready()
-    added = runtime.api("POST", "/devices", json={"url": first.url, "local_name": "mover"})
+    added = runtime.api(
+        "POST",
+        "/devices",
+        json={"url": first.url, "local_name": "mover", "pairing": first.secret},
+    )
     assert added.status_code == 201, added.text
     wait_for(lambda: runtime.api("GET", "/devices/mover").json()["status"] == "connected", 10)
     second = SimRobotProc(tmp_path, "moving-ur5", extra=["--uuid", first.uuid])
@@ -225,6 +230,51 @@ def test_a_device_can_be_re_pointed_by_the_user_and_an_impostor_is_refused(
         for proc in (first, second, other):
             proc.stop()
         runtime.api("DELETE", "/devices/mover")
+
+
+def test_a_device_back_at_another_address_is_followed_only_if_it_proves_who_it_is(
+    runtime: Runtime, tmp_path: Path
+) -> None:
+    """Issue 15: an announcement with an added robot's uuid took over its connection."""
+    board = tmp_path / "board"  # the robot's board keeps its pairing secret
+    first = SimRobotProc(board, "returning-ur5")
+    first.wait_ready()
+    pairing = {"url": first.url, "local_name": "returning", "pairing": first.secret}
+    assert runtime.api("POST", "/devices", json=pairing).status_code == 201
+    wait_for(lambda: runtime.api("GET", "/devices/returning").json()["status"] == "connected", 10)
+    first.stop()  # the link is down: where it comes back is where it will be commanded
+    impostor = SimRobotProc(tmp_path / "elsewhere", "returning-ur5", extra=["--uuid", first.uuid])
+    genuine: SimRobotProc | None = None
+    try:
+        impostor.wait_ready()
+        claim = wait_for(
+            lambda: (
+                (c := runtime.api("GET", "/devices/returning").json()["address_claim"])
+                and c["url"] == impostor.url
+                and c
+            ),
+            10,
+            what="the impostor's claim shown",
+        )
+        assert not claim["followed"]
+        device = runtime.api("GET", "/devices/returning").json()
+        assert device["url"] == first.url and device["status"] != "connected"
+        genuine = SimRobotProc(board, "returning-ur5", extra=["--uuid", first.uuid])
+        genuine.wait_ready()
+        wait_for(
+            lambda: (
+                (d := runtime.api("GET", "/devices/returning").json())["status"] == "connected"
+                and d["url"] == genuine.url
+            ),
+            10,
+            what="the genuine robot followed to its new port",
+        )
+        assert httpx.get(f"{impostor.url}/clients").json()["sessions"] == 0
+    finally:
+        for proc in (impostor, genuine):
+            if proc is not None:
+                proc.stop()
+        runtime.api("DELETE", "/devices/returning")
 
 
 def test_malformed_link_socket_messages_are_refused_and_the_socket_stays(

@@ -113,7 +113,8 @@ class Hosts:
     def add_robot(self) -> None:
         api = self.runtime.api
         wait_for(lambda: self.runtime.is_detected(self.sim.uuid), 10, what="robot detected")
-        added = api("POST", "/devices", json={"uuid": self.sim.uuid, "local_name": "robot"})
+        pairing = {"uuid": self.sim.uuid, "local_name": "robot", "pairing": self.sim.secret}
+        added = api("POST", "/devices", json=pairing)
         assert added.status_code == 201, added.text
         self.wait_connected(10)
         self.token = api("POST", "/devices/robot/lease", json={"holder": "tests"}).json()["token"]

@@ -10,10 +10,12 @@ from typing import Any
 import httpx
 import numpy as np
 import pytest
-from websockets.exceptions import ConnectionClosed
+from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
-from runtime.bench.harness.processes import SimRobotProc, wait_for
+from runtime.bench.harness.processes import STILL, SimRobotProc, wait_for
+from runtime.kit.device_auth import HEADER as DEVICE_AUTH
+from runtime.kit.device_auth import DeviceAuth, proof, sign
 from runtime.robotics.robot_info import load_robot_info
 
 INFO = load_robot_info("ur5")
@@ -24,9 +26,17 @@ AMAX = np.array([j.max_acceleration for j in INFO.joints])
 
 
 class Robot:
-    def __init__(self, url: str) -> None:
-        self.http = httpx.Client(base_url=url, timeout=5.0)
-        self.ws_url = url.replace("http://", "ws://")
+    """The driver as the runtime it is paired with talks to it (every command signed)."""
+
+    def __init__(self, sim: SimRobotProc) -> None:
+        self.sim = sim
+        self.http = sim.client()
+        self.ws_url = sim.url.replace("http://", "ws://")
+
+    def command_socket(self) -> Any:
+        return connect(
+            f"{self.ws_url}/command/ws", additional_headers=self.sim.signed("/command/ws")
+        )
 
     def call(self, method: str, path: str, body: Any = None, expect: int = 200) -> Any:
         response = self.http.request(method, path, json=body)
@@ -57,7 +67,7 @@ class Robot:
 
 @pytest.fixture
 def robot(sim: SimRobotProc) -> Iterator[Robot]:
-    r = Robot(sim.url)
+    r = Robot(sim)
     r.recover()
     wait_for(r.stopped, 5, what="robot at rest")
     yield r
@@ -249,7 +259,7 @@ def test_state_streams_over_websocket(robot: Robot) -> None:
 def test_a_dropped_command_stream_halts_the_robot(robot: Robot) -> None:
     robot.call("PUT", "/command_mode", {"mode": "jog"})
     timeouts_before = robot.call("GET", "/sim/loop_stats")["command_timeouts"]
-    with connect(f"{robot.ws_url}/command/ws") as ws:
+    with robot.command_socket() as ws:
         ws.send(json.dumps({"type": "jog_joint", "velocity": [0.5, 0, 0, 0, 0, 0], "timeout": 1.0}))
         ws.send(json.dumps({"type": "jog_joint", "velocity": ["NaN"]}))
         error = json.loads(ws.recv(timeout=2))
@@ -271,7 +281,7 @@ def test_a_silent_session_halts_the_robot_and_is_closed(robot: Robot) -> None:
     robot.call("PUT", "/command_mode", {"mode": "trajectory"})
     q = robot.state()["joint_position"]
     goal = [q[0] + 0.8, *q[1:]]
-    with connect(f"{robot.ws_url}/command/ws") as ws:
+    with robot.command_socket() as ws:
         ws.send(json.dumps({"type": "session", "timeout": 0.3}))
         ws.send(json.dumps({"type": "keepalive"}))
         path = {"waypoints": [{"time_from_start": 4.0, "position": goal}]}
@@ -292,7 +302,7 @@ def test_a_session_that_closes_halts_a_trajectory(robot: Robot) -> None:
     robot.call("PUT", "/command_mode", {"mode": "trajectory"})
     q = robot.state()["joint_position"]
     goal = [q[0] + 0.8, *q[1:]]
-    with connect(f"{robot.ws_url}/command/ws") as ws:
+    with robot.command_socket() as ws:
         ws.send(json.dumps({"type": "session", "timeout": 5.0}))
         robot.call(
             "POST", "/trajectory", {"waypoints": [{"time_from_start": 4.0, "position": goal}]}
@@ -303,8 +313,44 @@ def test_a_session_that_closes_halts_a_trajectory(robot: Robot) -> None:
 
 
 def test_refusals_on_the_command_stream_name_their_command(robot: Robot) -> None:
-    with connect(f"{robot.ws_url}/command/ws") as ws:
+    with robot.command_socket() as ws:
         ws.send(json.dumps({"type": "jog_joint", "id": 17, "velocity": [0.1] * 6}))
         error = json.loads(ws.recv(timeout=2))
     assert error["id"] == 17
     assert error["error"]["code"] == "wrong_mode"
+
+
+def test_the_driver_obeys_only_the_runtime_it_is_paired_with(
+    sim: SimRobotProc, robot: Robot
+) -> None:
+    """Issue 15: PUT /command_mode then POST /jog_joint, straight to the robot's port, moved a
+    joint 20 degrees."""
+    before = np.array(robot.state()["joint_position"])
+    strangers = (
+        httpx.Client(base_url=sim.url, timeout=5),
+        httpx.Client(base_url=sim.url, timeout=5, auth=DeviceAuth("not-the-secret-at-all")),
+    )
+    for stranger in strangers:
+        for method, path, body in (
+            ("POST", "/enable", None),
+            ("PUT", "/command_mode", {"mode": "jog"}),
+            ("POST", "/jog_joint", {"velocity": [0.3, 0, 0, 0, 0, 0], "timeout": 0.5}),
+        ):
+            refused = stranger.request(method, path, json=body)
+            assert refused.status_code == 401, (method, path)
+            assert refused.json()["error"]["code"] == "device_auth"
+        stranger.close()
+    with pytest.raises(InvalidStatus):
+        connect(f"{robot.ws_url}/command/ws", open_timeout=5)
+    # A signature is good once: replayed, it is refused.
+    header = {DEVICE_AUTH: sign(sim.secret, "POST", "/enable")}
+    assert httpx.post(f"{sim.url}/enable", headers=header).status_code == 200
+    assert httpx.post(f"{sim.url}/enable", headers=header).status_code == 401
+    # What it is and how it is stay readable; the proof answers a challenge, not the secret.
+    assert httpx.get(f"{sim.url}/state").status_code == 200
+    with connect(f"{robot.ws_url}/state/ws") as ws:
+        assert json.loads(ws.recv(timeout=5))["joint_position"]
+    nonce = "n" * 32
+    answer = httpx.get(f"{sim.url}/pair/proof", params={"nonce": nonce}).json()
+    assert answer == {"proof": proof(sim.secret, nonce)} and sim.secret not in str(answer)
+    assert np.abs(np.array(robot.state()["joint_position"]) - before).max() < STILL

@@ -122,7 +122,8 @@ def test_a_robot_that_reconnects_gets_its_stored_tool_again(cell: Cell, tmp_path
     try:
         # Ready is not yet seen: the runtime adds by uuid only what its discovery has found.
         wait_for(discovered, 10, what="the robot discovered")
-        added = runtime.api("POST", "/devices", json={"uuid": sim.uuid, "local_name": "arm2"})
+        pairing = {"uuid": sim.uuid, "local_name": "arm2", "pairing": sim.secret}
+        added = runtime.api("POST", "/devices", json=pairing)
         assert added.status_code == 201, added.text
         wait_for(lambda: runtime.api("GET", "/devices/arm2").json()["status"] == "connected", 10)
         token = runtime.api("POST", "/devices/arm2/lease", json={"holder": "tests"}).json()["token"]

@@ -16,6 +16,7 @@ from runtime.auth.roles import Role
 from runtime.auth.store import AuthStore, LockedOut, Unauthenticated
 from runtime.kit import tickets
 from runtime.kit.app import install_error_handlers
+from runtime.kit.device_auth import WINDOW, Verifier, sign
 from runtime.kit.errors import Conflict, InvalidValue
 from webui import policy
 from webui.access import AccessGuard
@@ -252,3 +253,17 @@ def test_changes_to_users_ask_for_the_password_again(gateway: TestClient, store:
         == "operator"
     )
     assert gateway.post("/api/auth/pin", json={"user": "ada", "pin": "2468"}).status_code == 401
+
+
+def test_device_signatures_are_bound_to_method_path_and_time_and_good_once() -> None:
+    verifier = Verifier("the-device-secret")
+    signed = sign("the-device-secret", "POST", "/jog_joint", now=1000.0)
+    assert not verifier.check(signed, "PUT", "/jog_joint", now=1000.0)
+    assert not verifier.check(signed, "POST", "/enable", now=1000.0)
+    assert not verifier.check(signed, "POST", "/jog_joint", now=1000.0 + WINDOW + 1)
+    assert verifier.check(signed, "POST", "/jog_joint", now=1001.0)
+    assert not verifier.check(signed, "POST", "/jog_joint", now=1002.0)  # replayed
+    forged = sign("another-secret", "POST", "/jog_joint", now=1000.0)
+    assert not verifier.check(forged, "POST", "/jog_joint", now=1000.0)
+    for junk in (None, "", "x.y", "1000.0.nonce." + "0" * 64, "a" * 500):
+        assert not verifier.check(junk, "POST", "/jog_joint", now=1000.0)

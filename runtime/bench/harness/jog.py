@@ -15,6 +15,7 @@ import numpy as np
 from websockets.sync.client import ClientConnection, connect
 
 from runtime.bench.harness.processes import Runtime, wait_for
+from runtime.kit.device_auth import DeviceAuth, known_secret
 
 _presses = itertools.count(1)
 
@@ -134,8 +135,12 @@ class RobotView:
     def __init__(self, runtime: Runtime, name: str = "robot") -> None:
         self.runtime = runtime
         self.name = name
-        self.url = runtime.api("GET", f"/devices/{name}").json()["url"]
-        self.http = httpx.Client(base_url=self.url, timeout=5)
+        device = runtime.api("GET", f"/devices/{name}").json()
+        self.url = device["url"]
+        # Signed as the runtime signs (the device and the runtime keep its secret).
+        secret = known_secret(runtime.data_dir, device["uuid"])
+        auth = DeviceAuth(secret) if secret else None
+        self.http = httpx.Client(base_url=self.url, timeout=5, auth=auth)
 
     def state(self) -> dict[str, Any]:
         return self.http.get("/state").json()  # type: ignore[no-any-return]

@@ -21,6 +21,8 @@ import httpx
 from runtime.auth.roles import Role
 from runtime.auth.setup import auth_path, create_token
 from runtime.auth.store import AuthStore
+from runtime.kit.device_auth import HEADER as DEVICE_AUTH
+from runtime.kit.device_auth import DeviceAuth, known_secret, sign
 from runtime.kit.internal import FILE as INTERNAL_FILE
 from runtime.kit.internal import HEADER as INTERNAL_HEADER
 from runtime.kit.settings import DeviceSpec, default_devices
@@ -283,6 +285,7 @@ class SimRobotProc(Proc):
             home / "logs" / f"sim-{name}-{port}.log",
             nice=nice,
         )
+        self.home = home
         self.url = ""
         self.uuid = ""
 
@@ -292,6 +295,21 @@ class SimRobotProc(Proc):
         self.url, self.uuid = ready["url"], ready["uuid"]
         return str(self.url)
 
+    @property
+    def secret(self) -> str:
+        """Its pairing code (kept in its data directory, as a board keeps it)."""
+        found = known_secret(self.home / "openpendant", self.uuid)
+        assert found is not None, f"{self.uuid} keeps no secret"
+        return found
+
+    def client(self, timeout: float = 5.0) -> httpx.Client:
+        """An HTTP client whose commands the device obeys (signed with its secret)."""
+        return httpx.Client(base_url=self.url, timeout=timeout, auth=DeviceAuth(self.secret))
+
+    def signed(self, path: str) -> dict[str, str]:
+        """The header that opens one of its command sockets."""
+        return {DEVICE_AUTH: sign(self.secret, "GET", path)}
+
 
 class DriverProc(SimRobotProc):
     """`openpendant driver NAME …`: any installed driver, as its own advertised device."""
@@ -299,6 +317,7 @@ class DriverProc(SimRobotProc):
     def __init__(self, home: Path, driver: str, name: str, *options: str) -> None:
         argv = [sys.executable, "-m", "runtime.cli", "driver", driver, "--name", name, *options]
         Proc.__init__(self, argv, child_env(home), home / "logs" / f"{driver}-{name}.log")
+        self.home = home
         self.url = ""
         self.uuid = ""
 
@@ -321,6 +340,7 @@ class SpaceMouseProc(SimRobotProc):
             name,
         ]
         Proc.__init__(self, argv, child_env(home), home / "logs" / f"mouse-{name}.log")
+        self.home = home
         self.url = ""
         self.uuid = ""
 

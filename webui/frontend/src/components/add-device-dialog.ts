@@ -13,6 +13,7 @@ export class OpAddDeviceDialog extends LitElement {
     url: { type: String },
     suggested: { type: String },
     localName: { state: true },
+    pairing: { state: true },
     error: { state: true },
     busy: { state: true },
   };
@@ -20,6 +21,7 @@ export class OpAddDeviceDialog extends LitElement {
   declare url: string;
   declare suggested: string;
   declare localName: string;
+  declare pairing: string;
   declare error: string;
   declare busy: boolean;
 
@@ -50,6 +52,7 @@ export class OpAddDeviceDialog extends LitElement {
     this.url = "";
     this.suggested = "";
     this.localName = "";
+    this.pairing = "";
     this.error = "";
     this.busy = false;
   }
@@ -72,9 +75,9 @@ export class OpAddDeviceDialog extends LitElement {
     this.busy = true;
     this.error = "";
     try {
-      const body = this.device
-        ? { uuid: this.device.uuid, local_name: this.localName }
-        : { url: this.url, local_name: this.localName };
+      const where = this.device ? { uuid: this.device.uuid } : { url: this.url };
+      const pairing = this.pairing.trim();
+      const body = { ...where, local_name: this.localName, ...(pairing ? { pairing } : {}) };
       const added = await api<AddedDevice>("POST", "/api/devices", body);
       this.dispatchEvent(new CustomEvent("added", { detail: added, bubbles: true, composed: true }));
     } catch (err) {
@@ -103,6 +106,17 @@ export class OpAddDeviceDialog extends LitElement {
         <div class="hint ${valid ? "muted" : "error"}">
           ${t("devices.local_name_hint")}
         </div>
+        <label for="pairing">${t("devices.pairing")}</label>
+        <input
+          id="pairing"
+          data-testid="pairing-code"
+          autocomplete="off"
+          autocapitalize="none"
+          spellcheck="false"
+          .value=${this.pairing}
+          @input=${(e: InputEvent) => (this.pairing = (e.target as HTMLInputElement).value)}
+        />
+        <div class="hint muted">${t("devices.pairing_hint")}</div>
         ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
         <div class="actions">
           <button type="button" @click=${this.close}>${t("devices.cancel")}</button>

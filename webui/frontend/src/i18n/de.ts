@@ -42,6 +42,8 @@ export const de: Catalogue = {
   // add-device-dialog.ts
   "devices.add_heading": "Gerät hinzufügen",
   "devices.add_text": "{device} zu dieser Zelle hinzufügen.",
+  "devices.pairing": "Kopplungscode (nur für ein Gerät, das auf einem anderen Rechner gestartet wurde)",
+  "devices.pairing_hint": "Das Gerät gibt ihn beim Start aus. Ein auf diesem Rechner gestartetes Gerät ist bereits gekoppelt.",
   "devices.local_name": "Lokaler Name (in Programmen verwendet)",
   "devices.local_name_hint":
     "Kleinbuchstaben, Ziffern und _; beginnt mit einem Buchstaben; bis zu 32 Zeichen.",

@@ -42,6 +42,8 @@ export const en = {
   // add-device-dialog.ts
   "devices.add_heading": "Add device",
   "devices.add_text": "Add {device} to this cell.",
+  "devices.pairing": "Pairing code (only for a device started on another computer)",
+  "devices.pairing_hint": "The device prints it when it starts. A device started on this computer is paired already.",
   "devices.local_name": "Local name (used in programs)",
   "devices.local_name_hint":
     "Lowercase letters, digits and _; starts with a letter; up to 32 characters.",

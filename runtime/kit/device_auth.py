@@ -1,0 +1,110 @@
+"""A device obeys only the runtime it is paired with: a secret per device, kept by both
+(`<data-dir>/device-secrets/<uuid>`, readable by its owner only; a device on another computer
+shows it as its pairing code, and the administrator gives it when adding the device).
+
+The secret itself never travels. Each command request and command socket carries
+`X-Device-Auth: <time>.<nonce>.<mac>`, the MAC an HMAC-SHA256 of time, nonce, method and path:
+good for a minute, once. A device that announces itself at a new address proves it has the
+secret by answering a fresh challenge (`GET /pair/proof?nonce=…`) before the runtime follows
+it; an impostor cannot."""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import re
+import secrets
+import time
+from collections import OrderedDict
+from collections.abc import Generator
+from pathlib import Path
+
+import httpx
+
+HEADER = "X-Device-Auth"
+WINDOW = 60.0  # s either side of the device's clock
+FOLDER = "device-secrets"
+SAFE_UUID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:-]{0,63}\Z")
+
+
+def secret_path(data_dir: Path, uuid: str) -> Path:
+    if not SAFE_UUID.match(uuid) or uuid in (".", ".."):
+        raise ValueError(f"not a device uuid: {uuid[:40]!r}")
+    return data_dir / FOLDER / uuid
+
+
+def known_secret(data_dir: Path, uuid: str) -> str | None:
+    try:
+        return secret_path(data_dir, uuid).read_text().strip() or None
+    except (FileNotFoundError, ValueError):
+        return None
+
+
+def keep_secret(data_dir: Path, uuid: str, secret: str) -> None:
+    path = secret_path(data_dir, uuid)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.parent.chmod(0o700)
+    path.touch(mode=0o600)
+    path.chmod(0o600)
+    path.write_text(secret + "\n")
+
+
+def device_secret(data_dir: Path, uuid: str) -> str:
+    """The device's secret, made on its first start."""
+    found = known_secret(data_dir, uuid)
+    if found is None:
+        found = secrets.token_urlsafe(24)
+        keep_secret(data_dir, uuid, found)
+    return found
+
+
+def _mac(secret: str, text: str) -> str:
+    return hmac.new(secret.encode(), text.encode(), hashlib.sha256).hexdigest()
+
+
+def sign(secret: str, method: str, path: str, now: float | None = None) -> str:
+    stamp = f"{now if now is not None else time.time():.3f}"
+    nonce = secrets.token_hex(8)
+    return f"{stamp}.{nonce}.{_mac(secret, f'{stamp}.{nonce}.{method.upper()}.{path}')}"
+
+
+def proof(secret: str, nonce: str) -> str:
+    return _mac(secret, f"proof.{nonce}")
+
+
+class Verifier:
+    """The device's side: each signature is good once, within the window."""
+
+    def __init__(self, secret: str) -> None:
+        self.secret = secret
+        self.seen: OrderedDict[str, float] = OrderedDict()
+
+    def check(self, value: str | None, method: str, path: str, now: float | None = None) -> bool:
+        if not value or value.count(".") < 2 or len(value) > 200:
+            return False
+        stamp, nonce, mac = value.rsplit(".", 2)
+        try:
+            at = float(stamp)
+        except ValueError:
+            return False
+        now = time.time() if now is None else now
+        if abs(now - at) > WINDOW or value in self.seen:
+            return False
+        expected = _mac(self.secret, f"{stamp}.{nonce}.{method.upper()}.{path}")
+        if not hmac.compare_digest(mac, expected):
+            return False
+        self.seen[value] = at
+        while self.seen and next(iter(self.seen.values())) < now - 2 * WINDOW:
+            self.seen.popitem(last=False)
+        return True
+
+
+class DeviceAuth(httpx.Auth):
+    """Signs every request of an httpx client to one device."""
+
+    def __init__(self, secret: str) -> None:
+        self.secret = secret
+
+    def auth_flow(self, request: httpx.Request) -> Generator[httpx.Request, httpx.Response, None]:
+        request.headers[HEADER] = sign(self.secret, request.method, request.url.path)
+        yield request
