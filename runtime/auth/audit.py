@@ -12,6 +12,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
+from runtime.auth.store import private
+
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS audit (
     seq INTEGER PRIMARY KEY AUTOINCREMENT,
@@ -55,7 +57,7 @@ class AuditLog:
         # the file whole; a power cut may lose the last moment's entries).
         self._db.execute("PRAGMA synchronous = NORMAL")
         self._db.executescript(SCHEMA)
-        path.chmod(0o600)
+        private(path)
         self._lock = threading.Lock()
 
     def close(self) -> None:

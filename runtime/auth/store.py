@@ -104,6 +104,14 @@ class TokenInfo:
     last_used: float | None
 
 
+def private(path: Path) -> None:
+    """The database and its write-ahead files, readable by the runtime's user only (the WAL
+    holds recent rows too)."""
+    for part in (path, path.with_name(path.name + "-wal"), path.with_name(path.name + "-shm")):
+        if part.exists():
+            part.chmod(0o600)
+
+
 def digest(secret: str) -> str:
     return hashlib.sha256(secret.encode()).hexdigest()
 
@@ -145,7 +153,7 @@ class AuthStore:
         self._db.execute("PRAGMA foreign_keys = ON")
         self._db.execute("PRAGMA journal_mode = WAL")
         self._db.executescript(SCHEMA)
-        path.chmod(0o600)
+        private(path)
         self._lock = threading.Lock()
         self._touched: dict[str, float] = {}  # session id -> last use not yet written
         # Hashing a wrong user's password keeps a login's time the same whether or not the

@@ -50,6 +50,8 @@ def test_passwords_are_kept_as_argon2id_hashes_only(store: AuthStore) -> None:
     raw = sqlite3.connect(store.path).execute("SELECT password FROM users").fetchone()[0]
     assert raw.startswith("$argon2id$") and "correct horse" not in raw
     assert store.verify("ada", "correct horse battery") == Role.admin
+    for part in (store.path, store.path.with_name("auth.sqlite-wal")):
+        assert part.stat().st_mode & 0o777 == 0o600, part
     with pytest.raises(Unauthenticated):
         store.verify("ada", "wrong password!")
     with pytest.raises(Unauthenticated):
