@@ -347,8 +347,9 @@ class AuthStore:
 
     def create_token(self, name: str, role: Role) -> str:
         """A new token for scripts; only its digest is kept, so it is shown this once."""
-        if not name or len(name) > 64 or not name.isprintable():
-            raise InvalidValue("a token's name has 1 to 64 printable characters")
+        # ASCII: the name travels in a header to the services (as the acting user).
+        if not name or len(name) > 64 or not (name.isascii() and name.isprintable()):
+            raise InvalidValue("a token's name has 1 to 64 printable ASCII characters")
         secret = TOKEN_PREFIX + secrets.token_urlsafe(32)
         with self._tx() as db:
             db.execute(

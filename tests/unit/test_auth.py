@@ -116,6 +116,9 @@ def test_api_tokens_are_shown_once_scoped_and_revocable(store: AuthStore) -> Non
     who = store.token(token)
     assert who is not None and who.role == Role.viewer and who.user == "token:nightly check"
     assert store.token(token + "x") is None
+    for bad in ("", "x" * 65, "Prüfung", "a\nb"):
+        with pytest.raises(InvalidValue):
+            store.create_token(bad, Role.viewer)
     store.revoke_token(store.tokens()[0].id)
     assert store.token(token) is None
 
