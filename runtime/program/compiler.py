@@ -12,8 +12,11 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import contextlib
+import ctypes
 import logging
 import multiprocessing
+import os
+import signal
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, TypeVar
@@ -136,6 +139,19 @@ def _ready() -> bool:
     return True
 
 
+PR_SET_PDEATHSIG = 1
+
+
+def _child_start(parent: int) -> None:
+    """In the child: it dies with the program service. A `kill -9` of the service must not
+    leave a compiler behind (it would wait on its queue, holding memory, for ever)."""
+    libc = ctypes.CDLL("libc.so.6", use_errno=True)
+    libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    if os.getppid() != parent:  # the service died before the line above
+        os._exit(0)
+    allow_deep_json()
+
+
 class Compiler:
     def __init__(self, time_limit: float = TIME_LIMIT) -> None:
         self.time_limit = time_limit
@@ -151,7 +167,8 @@ class Compiler:
             self._pool = concurrent.futures.ProcessPoolExecutor(
                 max_workers=1,
                 mp_context=multiprocessing.get_context("fork"),
-                initializer=allow_deep_json,
+                initializer=_child_start,
+                initargs=(os.getpid(),),
             )
         return self._pool
 

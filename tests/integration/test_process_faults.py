@@ -11,6 +11,7 @@ import os
 import signal
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -52,6 +53,26 @@ def ready(cell: Cell) -> Cell:
 def healthy(cell: Cell) -> bool:
     services = cell.runtime.api("GET", "/health").json()["services"]
     return all(s.get("status") == "ok" for s in services.values())
+
+
+def children(pid: int) -> list[int]:
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.append(int(stat.parent.name))
+    return found
+
+
+def alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
 
 
 def kill(cell: Cell, service: str) -> float:
@@ -194,10 +215,15 @@ def test_a_killed_program_service_halts_its_run_and_records_it_failed(ready: Cel
     holder = ready.runtime.api("GET", "/devices/robot/lease").json()["holder"]
     assert holder == "program slow"
     time.sleep(0.3)
+    service = int(ready.runtime.api("GET", "/health").json()["services"]["program"]["pid"])
+    helpers = children(service)  # its program compiler, its run's worker
+    assert helpers
     before = ready.robot.last_command_seq()
     killed = kill(ready, "program")
     assert halted_after(ready, killed, before) < HALT_WITHIN
     assert_stays_still(ready)
+    # Nothing of it lingers: no orphan holds memory (or a robot) for ever.
+    wait_for(lambda: not any(alive(pid) for pid in helpers), 5, what="its helpers gone")
     wait_for(lambda: healthy(ready), 30, what="the program service back")
     status = wait_for(
         lambda: (
