@@ -13,7 +13,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from runtime.auth.audit import AuditLog
 from runtime.auth.roles import Role
 from runtime.auth.store import AuthStore, Identity
-from runtime.kit.asgi import headers_of, refuse
+from runtime.kit.service_guard import refuse
 from webui import policy
 from webui.proxy import BAD_PATH, PathRefused, service_path
 
@@ -21,6 +21,10 @@ SESSION_COOKIE = "op_session"
 CSRF_HEADER = "x-csrf-token"
 DOCS = ("/docs", "/redoc", "/openapi.json")
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
+
+
+def headers_of(scope: Scope) -> dict[str, str]:
+    return {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope["headers"]}
 
 
 def client_address(scope: Scope) -> str:

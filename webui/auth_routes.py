@@ -114,15 +114,6 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         )
         return {"user": user, "role": role.name, "csrf": csrf}
 
-    def record_by(
-        request: Request,
-        who: Identity,
-        action: str,
-        status: int,
-        detail: dict[str, Any] | None = None,
-    ) -> None:
-        record(request, who.user, who.role.name, action, status, detail)
-
     async def check(request: Request, user: str, secret: str, *, pin: bool = False) -> Role:
         try:
             role = await asyncio.to_thread(store.verify, user, secret, pin=pin)
@@ -183,7 +174,7 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         who = identity(request)
         if who.session is not None:
             store.close_session(who.session)
-        record_by(request, who, "LOGOUT", 204)
+        record(request, who.user, who.role.name, "LOGOUT", 204)
         response = Response(status_code=204)
         response.delete_cookie(SESSION_COOKIE, path="/")
         return response
@@ -200,7 +191,7 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         """Every session of the user ends; this one goes on with a new session."""
         who = await reauthenticated(request, body.current)
         await asyncio.to_thread(store.set_password, who.user, body.new)
-        record_by(request, who, "PASSWORD", 200)
+        record(request, who.user, who.role.name, "PASSWORD", 200)
         return signed_in(request, response, who.user, who.role)
 
     @router.post("/ticket")
@@ -218,7 +209,8 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         who = await reauthenticated(request, body.confirm_password)
         role = Role.named(body.role)
         await asyncio.to_thread(store.create_user, body.name, body.password, role)
-        record_by(request, who, "ADD_USER", 201, {"name": body.name, "role": role.name})
+        detail = {"name": body.name, "role": role.name}
+        record(request, who.user, who.role.name, "ADD_USER", 201, detail)
         return {"name": body.name, "role": role.name}
 
     @router.put("/users/{name}")
@@ -232,9 +224,10 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         if body.pin is not None:
             await asyncio.to_thread(store.set_pin, name, body.pin or None)
         after = store.role_of(name)
-        record_by(
+        record(
             request,
-            who,
+            who.user,
+            who.role.name,
             "CHANGE_USER",
             200,
             {
@@ -253,7 +246,7 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         if name == who.user:
             raise InvalidValue("you cannot remove yourself", code="self")
         store.delete_user(name)
-        record_by(request, who, "DELETE_USER", 204, {"name": name})
+        record(request, who.user, who.role.name, "DELETE_USER", 204, {"name": name})
         return Response(status_code=204)
 
     @router.get("/tokens")
@@ -265,14 +258,15 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         """The token is shown in this answer only."""
         who = await reauthenticated(request, body.confirm_password)
         secret = store.create_token(body.name, Role.named(body.role))
-        record_by(request, who, "ADD_TOKEN", 201, {"name": body.name, "role": body.role})
+        detail = {"name": body.name, "role": body.role}
+        record(request, who.user, who.role.name, "ADD_TOKEN", 201, detail)
         return {"token": secret, "name": body.name, "role": body.role}
 
     @router.delete("/tokens/{token_id}", status_code=204)
     async def revoke_token(token_id: str, body: Confirmation, request: Request) -> Response:
         who = await reauthenticated(request, body.confirm_password)
         store.revoke_token(token_id)
-        record_by(request, who, "REVOKE_TOKEN", 204, {"token": token_id})
+        record(request, who.user, who.role.name, "REVOKE_TOKEN", 204, {"token": token_id})
         return Response(status_code=204)
 
     @router.get("/audit")

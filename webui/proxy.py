@@ -93,16 +93,17 @@ def service_path(path: str) -> str:
 
 
 def below_prefix(full_path: str, prefix: str) -> str:
-    """What follows /api/<prefix>/ in the request's whole path, checked and quoted (see
-    service_path). Routing's own match drops a trailing newline (`$`), so the path is taken
-    from the request, not from the match."""
+    """What follows /api/<prefix>/ in the request's whole path. Routing's own match drops a
+    trailing newline (`$`), so the path is taken from the request, not from the match."""
     head = f"/api/{prefix}"
     if not full_path.startswith(head):
         raise PathRefused(full_path)
     rest = full_path[len(head) :]
     if rest and not rest.startswith("/"):
         raise PathRefused(full_path)
-    return service_path(rest.removeprefix("/"))
+    plain = rest.removeprefix("/")
+    service_path(plain)
+    return plain
 
 
 class PathRefused(ValueError):
@@ -135,8 +136,8 @@ class ServiceProxy:
             return error_response(404, "not_found", f"no service serves /api/{prefix}")
         service, base = target
         try:
-            below = below_prefix(request.scope["path"], prefix)
-            url = f"{base}/{prefix}" + (f"/{below}" if below else "")
+            path = below_prefix(request.scope["path"], prefix)
+            url = f"{base}/{prefix}" + (f"/{service_path(path)}" if path else "")
         except PathRefused:
             return error_response(400, "bad_path", BAD_PATH)
         headers = {**forwarded_headers(request), **identity_headers(request)}
@@ -169,7 +170,7 @@ class ServiceProxy:
         service, base = target
         query = f"?{ws.url.query}" if ws.url.query else ""
         try:
-            below = below_prefix(ws.scope["path"], prefix)
+            below = service_path(below_prefix(ws.scope["path"], prefix))
         except PathRefused:
             await _close_with_error(ws, "bad_path", BAD_PATH)
             return

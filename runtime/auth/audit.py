@@ -4,6 +4,7 @@ to change or delete a row)."""
 from __future__ import annotations
 
 import json
+import sqlite3
 import threading
 import time
 from collections.abc import Callable
@@ -11,7 +12,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from runtime.auth.store import open_private
+from runtime.auth.store import private
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS audit (
@@ -49,9 +50,14 @@ class Entry:
 class AuditLog:
     def __init__(self, path: Path, clock: Callable[[], float] = time.time) -> None:
         self.clock = clock
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self._db = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+        self._db.execute("PRAGMA journal_mode = WAL")
         # Written on the gateway's loop after each change: no fsync per entry (WAL keeps
         # the file whole; a power cut may lose the last moment's entries).
-        self._db = open_private(path, SCHEMA, "synchronous = NORMAL")
+        self._db.execute("PRAGMA synchronous = NORMAL")
+        self._db.executescript(SCHEMA)
+        private(path)
         self._lock = threading.Lock()
 
     def close(self) -> None:

@@ -112,17 +112,6 @@ def private(path: Path) -> None:
             part.chmod(0o600)
 
 
-def open_private(path: Path, schema: str, *pragmas: str) -> sqlite3.Connection:
-    """A WAL database that only the runtime's user can read."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    db = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
-    for pragma in ("journal_mode = WAL", *pragmas):
-        db.execute(f"PRAGMA {pragma}")
-    db.executescript(schema)
-    private(path)
-    return db
-
-
 def digest(secret: str) -> str:
     return hashlib.sha256(secret.encode()).hexdigest()
 
@@ -161,7 +150,12 @@ class AuthStore:
         # argon2id at OWASP's recommended cost (19 MiB, 2 passes, 1 lane): a sign-in takes
         # tens of milliseconds of one core on the runtime computer, not 64 MiB and four.
         self.hasher = PasswordHasher(time_cost=2, memory_cost=19456, parallelism=1)
-        self._db = open_private(path, SCHEMA, "foreign_keys = ON")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self._db = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+        self._db.execute("PRAGMA foreign_keys = ON")
+        self._db.execute("PRAGMA journal_mode = WAL")
+        self._db.executescript(SCHEMA)
+        private(path)
         self._lock = threading.Lock()
         self._touched: dict[str, float] = {}  # session id -> last use not yet written
         # Hashing a wrong user's password keeps a login's time the same whether or not the

@@ -9,8 +9,8 @@ from urllib.parse import parse_qs
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from runtime.kit.asgi import header, refuse
 from runtime.kit.device_auth import HEADER, Verifier, proof
+from runtime.kit.service_guard import refuse
 
 OPEN_SOCKETS = frozenset({"/state/ws"})
 # A simulator's hooks into the world around its device (an E-stop pressed, a part taken, a
@@ -19,6 +19,14 @@ OPEN_SOCKETS = frozenset({"/state/ws"})
 WORLD_PREFIXES = ("/sim/", "/replay/")
 READS = frozenset({"GET", "HEAD"})
 PROOF_PATH = "/pair/proof"
+
+
+def _header(scope: Scope) -> str | None:
+    wanted = HEADER.lower().encode()
+    for key, value in scope.get("headers", []):
+        if key.lower() == wanted:
+            return bytes(value).decode("latin-1")
+    return None
 
 
 class CommandGuard:
@@ -44,7 +52,7 @@ class CommandGuard:
             or (kind == "websocket" and scope["path"] not in OPEN_SOCKETS)
         )
         method = scope.get("method", "GET")
-        if guarded and not self.verifier.check(header(scope, HEADER), method, scope["path"]):
+        if guarded and not self.verifier.check(_header(scope), method, scope["path"]):
             await refuse(
                 scope,
                 receive,

@@ -7,13 +7,13 @@ cannot overwrite a newer write either."""
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from contextvars import ContextVar
 
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from runtime.kit.asgi import send_error
 from runtime.kit.errors import OpenPendantError
 
 HEADER = "X-Deadline"
@@ -67,11 +67,26 @@ class DeadlineMiddleware:
             if key == _HEADER_KEY:
                 deadline = parse(value)
         if deadline is not None and time.time() > deadline:
-            error = DeadlinePassed("the request waited past its deadline; nothing was done")
-            await send_error(send, error.status, error.code, error.message)
+            body = DeadlinePassed("the request waited past its deadline; nothing was done")
+            await _respond(send, body)
             return
         token = current.set(deadline)
         try:
             await self.app(scope, receive, send)
         finally:
             current.reset(token)
+
+
+async def _respond(send: Send, error: DeadlinePassed) -> None:
+    payload = json.dumps(error.body()).encode()
+    await send(
+        {
+            "type": "http.response.start",
+            "status": error.status,
+            "headers": [
+                (b"content-type", b"application/json"),
+                (b"content-length", str(len(payload)).encode()),
+            ],
+        }
+    )
+    await send({"type": "http.response.body", "body": payload})

@@ -6,13 +6,32 @@ from __future__ import annotations
 
 from urllib.parse import parse_qs
 
+from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 from runtime.kit import tickets
-from runtime.kit.asgi import header, refuse
 from runtime.kit.internal import HEADER, internal_token, is_internal
 
 OPEN_PATHS = frozenset({"/health"})
+
+
+async def refuse(
+    scope: Scope, receive: Receive, send: Send, status: int, code: str, message: str
+) -> None:
+    if scope["type"] == "websocket":
+        # Closed before it is accepted: nothing the socket would have carried is acted on.
+        await send({"type": "websocket.close", "code": 1008, "reason": code})
+        return
+    body = {"error": {"code": code, "message": message}}
+    await JSONResponse(body, status_code=status)(scope, receive, send)
+
+
+def _header(scope: Scope, name: str) -> str | None:
+    wanted = name.lower().encode()
+    for key, value in scope.get("headers", []):
+        if key.lower() == wanted:
+            return bytes(value).decode("latin-1")
+    return None
 
 
 class InternalOnly:
@@ -25,7 +44,7 @@ class InternalOnly:
             scope["type"] in ("http", "websocket")
             and self.enforced
             and scope.get("path") not in OPEN_PATHS
-            and not is_internal(header(scope, HEADER))
+            and not is_internal(_header(scope, HEADER))
         ):
             await refuse(
                 scope, receive, send, 403, "internal_only", "this port answers the runtime only"

@@ -14,6 +14,7 @@ ASGI middleware in front of them.
 from __future__ import annotations
 
 import ipaddress
+import json
 import socket
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -21,8 +22,6 @@ from functools import cache
 from urllib.parse import urlsplit
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
-
-from runtime.kit.asgi import headers_of, refuse, send_error
 
 BODY_TYPES = frozenset({"application/json", "application/yaml", "application/x-yaml"})
 BODY_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
@@ -158,6 +157,10 @@ class WebPolicy:
         return CSP + f"; connect-src 'self' ws://{host}:* wss://{host}:*"
 
 
+def _headers(scope: Scope) -> dict[str, str]:
+    return {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope["headers"]}
+
+
 class WebGuard:
     def __init__(self, app: ASGIApp, policy: WebPolicy) -> None:
         self.app = app
@@ -167,27 +170,26 @@ class WebGuard:
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
-        headers = headers_of(scope)
+        headers = _headers(scope)
         refusal = self.policy.check_host(headers.get("host")) or self.policy.check_origin(
             headers.get("origin")
         )
         if scope["type"] == "websocket":
             if refusal is not None:
-                # The browser sees a failed handshake (403).
-                await refuse(scope, receive, send, refusal.status, refusal.code, refusal.message)
+                # Closed before it is accepted: the browser sees a failed handshake (403).
+                await send({"type": "websocket.close", "code": 1008, "reason": refusal.code})
                 return
             await self.app(scope, receive, send)
             return
         refusal = refusal or self.policy.check_body(scope["method"], headers)
         send = self._with_headers(send, headers.get("host"))
         if refusal is not None:
-            await send_error(send, refusal.status, refusal.code, refusal.message)
+            await _refuse(send, refusal)
             return
         if "content-length" not in headers and scope["method"] in BODY_METHODS:
             body = await self._read_chunked(receive)
             if body is None:
-                too_large = self.policy.too_large()
-                await send_error(send, too_large.status, too_large.code, too_large.message)
+                await _refuse(send, self.policy.too_large())
                 return
             receive = _replay(body, receive)
         await self.app(scope, receive, send)
@@ -236,3 +238,18 @@ def _replay(body: bytes, receive: Receive) -> Receive:
         return {"type": "http.request", "body": body, "more_body": False}
 
     return receiving
+
+
+async def _refuse(send: Send, refusal: Refusal) -> None:
+    body = json.dumps({"error": {"code": refusal.code, "message": refusal.message}}).encode()
+    await send(
+        {
+            "type": "http.response.start",
+            "status": refusal.status,
+            "headers": [
+                (b"content-type", b"application/json"),
+                (b"content-length", str(len(body)).encode()),
+            ],
+        }
+    )
+    await send({"type": "http.response.body", "body": body})
