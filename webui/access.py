@@ -5,7 +5,6 @@ audit entry for each change."""
 
 from __future__ import annotations
 
-import hmac
 from http.cookies import SimpleCookie
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
@@ -13,6 +12,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 from runtime.auth.audit import AuditLog
 from runtime.auth.roles import Role
 from runtime.auth.store import AuthStore, Identity
+from runtime.kit.constant_time import same_secret
 from runtime.kit.service_guard import refuse
 from webui import policy
 from webui.proxy import BAD_PATH, PathRefused, service_path
@@ -117,7 +117,7 @@ class AccessGuard:
         method = scope.get("method", "WS")
         if who.via == "session" and scope["type"] == "http" and method not in SAFE_METHODS:
             sent = headers.get(CSRF_HEADER, "")
-            if not who.csrf or not hmac.compare_digest(sent, who.csrf):
+            if not who.csrf or not same_secret(sent, who.csrf):
                 return 403, "csrf_failed", "the request lacks this session's CSRF token"
         return None
 

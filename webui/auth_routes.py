@@ -5,7 +5,6 @@ tokens and audit log. Changes to users and credentials ask for the password agai
 from __future__ import annotations
 
 import asyncio
-import hmac
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request, Response
@@ -16,6 +15,7 @@ from runtime.auth.roles import Role
 from runtime.auth.store import AuthStore, Identity, LockedOut, Unauthenticated
 from runtime.interfaces.common import Strict
 from runtime.kit import tickets
+from runtime.kit.constant_time import same_secret
 from runtime.kit.errors import InvalidValue, OpenPendantError
 from runtime.kit.settings import is_loopback
 from webui.access import SESSION_COOKIE, client_address
@@ -144,7 +144,7 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         """The first administrator: from the runtime computer itself, or with the one-time
         code the runtime printed where it was started."""
         local = is_loopback(client_address(request.scope))
-        code_ok = setup_code is not None and hmac.compare_digest(body.code or "", setup_code)
+        code_ok = setup_code is not None and same_secret(body.code or "", setup_code)
         if not (local or code_ok):
             raise Forbidden(
                 "set up from the runtime computer, or give the code it printed at start",
@@ -271,7 +271,7 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
 
     @router.get("/audit")
     async def audit_entries(
-        before: int | None = None, limit: int = Query(100, ge=1, le=1000)
+        before: int | None = Query(None, ge=1, le=2**53), limit: int = Query(100, ge=1, le=1000)
     ) -> list[dict[str, Any]]:
         return [
             e.__dict__ for e in await asyncio.to_thread(audit.entries, before=before, limit=limit)

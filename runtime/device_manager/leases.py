@@ -14,6 +14,7 @@ from pathlib import Path
 from pydantic import BaseModel, Field
 
 from runtime.interfaces.common import PlainText, Strict
+from runtime.kit.constant_time import same_secret
 from runtime.kit.errors import Conflict, OpenPendantError
 
 log = logging.getLogger(__name__)
@@ -133,7 +134,7 @@ class LeaseBook:
         lease = self._live(device, time.time())
         if lease is None:
             raise LeaseRefused(f"take control of {device} first", code="lease_required")
-        if token is None or not secrets.compare_digest(lease.token, token):
+        if token is None or not same_secret(lease.token, token):
             raise LeaseRefused(f"{device} is controlled by {lease.holder!r}")
         return self.acquire(device, lease.holder, token)
 
@@ -141,7 +142,7 @@ class LeaseBook:
         lease = self._live(device, time.time())
         if lease is None:
             return
-        if token is None or not secrets.compare_digest(lease.token, token):
+        if token is None or not same_secret(lease.token, token):
             raise Conflict(f"{device} is controlled by {lease.holder!r}", code="lease_held")
         del self._leases[device]
         self._save()

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import hmac
 import json
 import logging
 import math
@@ -36,6 +35,7 @@ from runtime.device_manager.models import (
 from runtime.device_manager.tools import stored_tool, tool_variable
 from runtime.interfaces.robot import RobotInfo, ToolSetup
 from runtime.interfaces.variables import DeviceRecord
+from runtime.kit.constant_time import same_secret
 from runtime.kit.device_auth import keep_secret, known_secret, proof
 from runtime.kit.discovery import Detected, checked_uuid, clean_text
 from runtime.kit.errors import (
@@ -132,7 +132,7 @@ class DeviceRegistry:
             try:
                 async with httpx.AsyncClient(base_url=url, timeout=2.0) as http:
                     answer = await http.get("/pair/proof", params={"nonce": nonce})
-                proven = answer.status_code == 200 and hmac.compare_digest(
+                proven = answer.status_code == 200 and same_secret(
                     str(answer.json().get("proof", "")), proof(secret, nonce)
                 )
             except (httpx.HTTPError, ValueError, AttributeError):

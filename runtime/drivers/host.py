@@ -11,7 +11,7 @@ import sys
 from collections.abc import AsyncIterator, Sequence
 from typing import Any
 
-from fastapi import APIRouter, FastAPI, WebSocket
+from fastapi import APIRouter, FastAPI, Query, WebSocket
 
 from plugins.api import resolve
 from plugins.registry import registry
@@ -62,7 +62,7 @@ def device_router(driver: DeviceDriver, stream: StateStream) -> APIRouter:
         }
 
     @router.websocket("/state/ws")
-    async def state_ws(ws: WebSocket, max_rate: float | None = None) -> None:
+    async def state_ws(ws: WebSocket, max_rate: float | None = Query(None, gt=0, le=1000)) -> None:
         await stream.fanout.serve(ws, [stream.current()], max_rate_hz=max_rate)
 
     return router

@@ -8,7 +8,7 @@ import inspect
 from collections.abc import Callable, Coroutine
 from typing import Any
 
-from fastapi import APIRouter, Response
+from fastapi import APIRouter, Query, Response
 
 from runtime.drivers.command_log import CommandLog, LoggedCommand
 from runtime.interfaces.endpoints import Endpoint, endpoints, param_types
@@ -21,7 +21,7 @@ def interface_router(driver: Any, log: CommandLog) -> APIRouter:
     router = APIRouter()
 
     @router.get("/command_log")
-    async def command_log(after: int = 0) -> list[LoggedCommand]:
+    async def command_log(after: int = Query(0, ge=0, le=2**53)) -> list[LoggedCommand]:
         """Commands this driver accepted, newest last (the last 2000)."""
         return log.since(after)
 

@@ -12,6 +12,8 @@ from runtime.interfaces.common import JointVector, Pose, Strict
 
 # A variable's name is only a name: no path separators, spaces, control or bidi characters.
 NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_.\-]{0,127}\Z")
+# The same for pydantic fields (whose Rust regex has no \Z; its $ is the end of the text).
+VARIABLE_NAME = r"^[A-Za-z][A-Za-z0-9_.\-]{0,127}$"
 
 
 class Variable(BaseModel):

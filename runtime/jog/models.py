@@ -9,6 +9,7 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from runtime.interfaces.common import Strict
+from runtime.interfaces.variables import VARIABLE_NAME
 
 PressId = Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_.:-]+$")]
 RobotName = Annotated[str, Field(min_length=1, max_length=32)]
@@ -53,7 +54,7 @@ class MoveToPress(Strict):
     press: PressId
     robot: RobotName
     token: Token = None
-    waypoint: str = Field(min_length=1, max_length=128)
+    waypoint: str = Field(pattern=VARIABLE_NAME)
     speed: Speed = 0.25
 
 
@@ -92,7 +93,7 @@ class MouseBinding(Strict):
 
 
 class TeachRequest(Strict):
-    name: str = Field(min_length=1, max_length=128)
+    name: str = Field(pattern=VARIABLE_NAME)
     kind: Literal["joint", "pose"] = "joint"
     frame: Literal["base", "world"] = "base"
     tags: list[str] = Field(default_factory=list, max_length=32)

@@ -46,6 +46,21 @@ def describe_validation_errors(errors: Any) -> tuple[str, list[dict[str, Any]]]:
     return "; ".join(parts) or "invalid request", clean
 
 
+def unreadable_body(exc: StarletteHTTPException) -> str | None:
+    """What was wrong with a JSON body FastAPI could not read (it says only "There was an
+    error parsing the body"; the cause says why)."""
+    if exc.status_code != 400 or exc.detail != "There was an error parsing the body":
+        return None
+    cause = exc.__cause__
+    if isinstance(cause, RecursionError):
+        return "the JSON body is nested too deeply"
+    if isinstance(cause, ValueError) and "digits" in str(cause):
+        return "a number in the JSON body has too many digits"
+    if isinstance(cause, UnicodeDecodeError):
+        return "the JSON body is not UTF-8 text"
+    return f"the JSON body could not be read ({type(cause).__name__})"
+
+
 def install_error_handlers(app: FastAPI) -> None:
     @app.exception_handler(OpenPendantError)
     async def _domain(_: Request, exc: OpenPendantError) -> JSONResponse:
@@ -58,6 +73,9 @@ def install_error_handlers(app: FastAPI) -> None:
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(_: Request, exc: StarletteHTTPException) -> JSONResponse:
+        unreadable = unreadable_body(exc)
+        if unreadable is not None:
+            return error_response(400, "bad_body", unreadable)
         code = {404: "not_found", 405: "method_not_allowed"}.get(exc.status_code, "http_error")
         return error_response(exc.status_code, code, str(exc.detail))
 

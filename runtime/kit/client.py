@@ -78,6 +78,12 @@ class ServiceClient:
             raise Unavailable(
                 f"{self.name} is unreachable ({type(exc).__name__})", code="unreachable"
             ) from exc
+        if response.status_code >= 300 and response.status_code < 400:
+            # Services never redirect one another: a redirect means the path named no route.
+            raise Unavailable(
+                f"{self.name} answered {response.status_code} to {method} {path}",
+                code="unexpected_answer",
+            )
         if response.status_code >= 400:
             try:
                 body = response.json()

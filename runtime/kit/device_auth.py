@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import hashlib
 import hmac
+import math
 import re
 import secrets
 import time
@@ -20,6 +21,8 @@ from collections.abc import Generator
 from pathlib import Path
 
 import httpx
+
+from runtime.kit.constant_time import same_secret
 
 HEADER = "X-Device-Auth"
 WINDOW = 60.0  # s either side of the device's clock
@@ -80,7 +83,7 @@ class Verifier:
         self.seen: OrderedDict[str, float] = OrderedDict()
 
     def check(self, value: str | None, method: str, path: str, now: float | None = None) -> bool:
-        if not value or value.count(".") < 2 or len(value) > 200:
+        if not value or not value.isascii() or value.count(".") < 2 or len(value) > 200:
             return False
         stamp, nonce, mac = value.rsplit(".", 2)
         try:
@@ -88,10 +91,10 @@ class Verifier:
         except ValueError:
             return False
         now = time.time() if now is None else now
-        if abs(now - at) > WINDOW or value in self.seen:
+        if not math.isfinite(at) or abs(now - at) > WINDOW or value in self.seen:
             return False
         expected = _mac(self.secret, f"{stamp}.{nonce}.{method.upper()}.{path}")
-        if not hmac.compare_digest(mac, expected):
+        if not same_secret(mac, expected):
             return False
         self.seen[value] = at
         while self.seen and next(iter(self.seen.values())) < now - 2 * WINDOW:

@@ -6,11 +6,11 @@ so a page cannot reach a service's port even on the runtime computer itself."""
 from __future__ import annotations
 
 import hashlib
-import hmac
 import os
 from functools import cache
 from urllib.parse import urlsplit
 
+from runtime.kit.constant_time import same_secret
 from runtime.kit.settings import is_loopback
 
 ENV = "OPENPENDANT_INTERNAL_TOKEN"
@@ -33,7 +33,7 @@ def internal_headers(url: str) -> dict[str, str]:
 
 def is_internal(value: str | None) -> bool:
     token = internal_token()
-    return token is not None and value is not None and hmac.compare_digest(value, token)
+    return token is not None and value is not None and same_secret(value, token)
 
 
 def derived_key(purpose: str) -> bytes:

@@ -10,6 +10,7 @@ import hmac
 import json
 import time
 
+from runtime.kit.constant_time import same_secret
 from runtime.kit.internal import derived_key
 
 LIFETIME = 60.0  # s to open the socket with it
@@ -29,10 +30,10 @@ def issue(user: str, role: int, now: float | None = None) -> str:
 
 def check(ticket: str | None, now: float | None = None) -> tuple[str, int] | None:
     """(user, role) of a valid ticket, else None."""
-    if not ticket or ticket.count(".") != 1:
+    if not ticket or not ticket.isascii() or ticket.count(".") != 1:
         return None
     payload, signature = ticket.split(".")
-    if not hmac.compare_digest(signature, _sign(payload.encode())):
+    if not same_secret(signature, _sign(payload.encode())):
         return None
     try:
         data = json.loads(base64.urlsafe_b64decode(payload.encode()))

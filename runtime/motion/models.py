@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import BaseModel, Field, model_validator
 
 from runtime.interfaces.common import JointVector, Pose, Strict
+from runtime.interfaces.variables import VARIABLE_NAME
 
 Ratio = Field(default=0.5, gt=0, le=1)
 
@@ -19,7 +20,7 @@ class Target(Strict):
     joints: JointVector | None = None
     pose: Pose | None = None
     frame: Literal["base", "world"] = "base"
-    waypoint: str | None = Field(default=None, max_length=128)
+    waypoint: str | None = Field(default=None, pattern=VARIABLE_NAME)
     # Corner rounding at this point when passing through it (m for TCP paths, rad for joint
     # paths); 0 stops there.
     blend: float = Field(default=0.0, ge=0, le=1.0)

@@ -8,7 +8,7 @@ import contextlib
 from collections.abc import AsyncIterator
 from typing import Any
 
-from fastapi import APIRouter, FastAPI, Request, Response, WebSocket
+from fastapi import APIRouter, FastAPI, Query, Request, Response, WebSocket
 
 from blockly_blocks.catalog import definitions, toolbox, words
 from blockly_blocks.workspace import MAX_WORKSPACE_BYTES, allow_deep_json
@@ -135,7 +135,7 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
         return await runs.breakpoints(name, body.ids)
 
     @router.get("/{name}/status")
-    async def status(name: str, after: int = 0) -> RunStatus:
+    async def status(name: str, after: int = Query(0, ge=0, le=2**53)) -> RunStatus:
         return runs.status(name, after)
 
     return router

@@ -28,7 +28,7 @@ class PutVariable(Strict):
     value: Any
     tags: list[str] | None = None
     doc: str | None = Field(default=None, max_length=10_000)
-    expected_version: int | None = Field(default=None, ge=0)
+    expected_version: int | None = Field(default=None, ge=0, le=2**53)
 
 
 class RenameVariable(Strict):
@@ -122,7 +122,9 @@ def variables_router(store: VariableStore, changes: Fanout) -> APIRouter:
         return new
 
     @router.delete("/{name}")
-    async def delete_variable(name: str, expected_version: int | None = None) -> Variable:
+    async def delete_variable(
+        name: str, expected_version: int | None = Query(None, ge=0, le=2**53)
+    ) -> Variable:
         variable = await asyncio.to_thread(store.delete, name, expected_version)
         notify("deleted", variable)
         return variable

@@ -23,6 +23,7 @@ from webui.access import AccessGuard
 from webui.auth_routes import auth_router
 
 UI = "http://127.0.0.1:8080"
+JSON = "application/json"
 
 
 class Clock:
@@ -151,6 +152,7 @@ def test_tickets_are_signed_and_short_lived() -> None:
     payload, signature = ticket.split(".")
     assert tickets.check(f"{payload}.{'0' * len(signature)}", now=120.0) is None
     assert tickets.check("nonsense", now=120.0) is None
+    assert tickets.check(f"{payload}.\u00e9{signature[1:]}", now=120.0) is None
 
 
 def test_the_table_gives_the_rights_a_technician_expects() -> None:
@@ -208,6 +210,14 @@ def test_the_first_administrator_needs_the_code_from_another_computer(
     assert "httponly" in cookie and "samesite=strict" in cookie
     again = gateway.post("/api/auth/setup", json={**body, "code": "1234-5678"})
     assert again.status_code == 409  # once only
+
+
+def test_a_setup_code_in_any_characters_is_a_refusal(gateway: TestClient, store: AuthStore) -> None:
+    # Found by schemathesis: non-ASCII made the code comparison raise (500).
+    body = r'{"user": "ada", "password": "correct horse battery", "code": "\u008b\ud95d\uddeb"}'
+    sent = gateway.post("/api/auth/setup", content=body, headers={"content-type": JSON})
+    assert sent.status_code == 403
+    assert store.user_count() == 0
 
 
 def test_a_session_changes_nothing_without_its_csrf_token_and_ends_on_logout(
@@ -270,5 +280,6 @@ def test_device_signatures_are_bound_to_method_path_and_time_and_good_once() -> 
     assert not verifier.check(signed, "POST", "/jog_joint", now=1002.0)  # replayed
     forged = sign("another-secret", "POST", "/jog_joint", now=1000.0)
     assert not verifier.check(forged, "POST", "/jog_joint", now=1000.0)
-    for junk in (None, "", "x.y", "1000.0.nonce." + "0" * 64, "a" * 500):
+    nan = "nan." + signed.split(".", 2)[2]
+    for junk in (None, "", "x.y", "1000.0.nonce." + "0" * 64, "a" * 500, nan, signed + "\u00e9"):
         assert not verifier.check(junk, "POST", "/jog_joint", now=1000.0)

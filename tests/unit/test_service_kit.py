@@ -59,6 +59,23 @@ def test_nan_and_infinity_in_a_body_are_a_clear_422() -> None:
         assert "finite" in error["message"]
 
 
+def test_bodies_no_parser_can_read_are_a_clear_400() -> None:
+    client = TestClient(make_app())
+    pose = '{"position": [0, 0, 0]}'
+    for raw, says in (
+        ("[" * 100_000 + "]" * 100_000, "nested too deeply"),
+        (f'{{"pose": {pose}, "speed": {"9" * 5000}}}', "too many digits"),
+        (b'{"pose": {"position": [0, 0, 0]}, "speed": "\xff"}', "not UTF-8"),
+    ):
+        response = client.post("/move", content=raw, headers={"content-type": "application/json"})
+        error = response.json()["error"]
+        assert response.status_code == 400 and error["code"] == "bad_body", error
+        assert says in error["message"]
+    json_type = {"content-type": "application/json"}
+    huge = client.post("/move", content=f'{{"pose": {pose}, "speed": 1e300}}', headers=json_type)
+    assert huge.status_code == 200  # a large but finite float is a value, not an error
+
+
 def test_domain_errors_unknown_routes_and_crashes_use_the_error_body() -> None:
     client = TestClient(make_app(), raise_server_exceptions=False)
     assert client.get("/busy").status_code == 409
