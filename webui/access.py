@@ -5,6 +5,8 @@ audit entry for each change."""
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 from http.cookies import SimpleCookie
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
@@ -21,6 +23,8 @@ SESSION_COOKIE = "op_session"
 CSRF_HEADER = "x-csrf-token"
 DOCS = ("/docs", "/redoc", "/openapi.json")
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
+RECHECK_EVERY = 2.0  # s between re-checks of an open socket's session or token
+ENDED = 4401  # close code: the socket's sign-in ended
 
 
 def headers_of(scope: Scope) -> dict[str, str]:
@@ -46,12 +50,12 @@ def cookie_value(headers: dict[str, str], name: str) -> str | None:
     return morsel.value if morsel is not None else None
 
 
-def identify(store: AuthStore, headers: dict[str, str]) -> Identity | None:
+def identify(store: AuthStore, headers: dict[str, str], *, touch: bool = True) -> Identity | None:
     authorization = headers.get("authorization", "")
     if authorization[:7].lower() == "bearer ":
         return store.token(authorization[7:].strip())
     secret = cookie_value(headers, SESSION_COOKIE)
-    return store.session(secret) if secret else None
+    return store.session(secret, touch=touch) if secret else None
 
 
 def need_of(scope: Scope) -> policy.Need | None:
@@ -102,6 +106,9 @@ class AccessGuard:
         )
         # The sign-in routes record what they do themselves (with what the request cannot say).
         own_record = scope["path"].startswith("/api/auth/")
+        if scope["type"] == "websocket" and identity is not None and isinstance(need, Role):
+            socket = _EndedWithItsIdentity(self.store, headers, need, receive, send)
+            receive, send = socket.receive, socket.send
         if identity is None or method in SAFE_METHODS or watching or own_record:
             await self.app(scope, receive, send)
             return
@@ -149,3 +156,45 @@ class AccessGuard:
                 )
 
         return sending
+
+
+class _EndedWithItsIdentity:
+    """An open socket lives only as long as what opened it: a sign-out, a new password, a
+    lower role, a revoked token or an expired session closes it within RECHECK_EVERY s
+    (code 4401), and the app behind sees the client leave."""
+
+    def __init__(
+        self, store: AuthStore, headers: dict[str, str], need: Role, receive: Receive, send: Send
+    ) -> None:
+        self.store, self.headers, self.need = store, headers, need
+        self._receive, self._send = receive, send
+        self._pending: asyncio.Future[Message] | None = None
+        self._closed = False
+
+    def _allowed(self) -> bool:
+        who = identify(self.store, self.headers, touch=False)
+        return who is not None and who.role >= self.need
+
+    async def receive(self) -> Message:
+        if self._pending is None:
+            self._pending = asyncio.ensure_future(self._receive())
+        while True:
+            done, _ = await asyncio.wait({self._pending}, timeout=RECHECK_EVERY)
+            if done:
+                message, self._pending = self._pending.result(), None
+                return message
+            if not self._allowed():
+                self._pending.cancel()
+                self._pending = None
+                if not self._closed:
+                    self._closed = True
+                    with contextlib.suppress(Exception):
+                        await self._send({"type": "websocket.close", "code": ENDED, "reason": ""})
+                return {"type": "websocket.disconnect", "code": ENDED}
+
+    async def send(self, message: Message) -> None:
+        if self._closed:
+            return  # closed for its user: what the app still had to say goes nowhere
+        if message["type"] == "websocket.close":
+            self._closed = True
+        await self._send(message)

@@ -311,7 +311,9 @@ class AuthStore:
             )
         return secret, csrf
 
-    def session(self, secret: str) -> Identity | None:
+    def session(self, secret: str, *, touch: bool = True) -> Identity | None:
+        """The session's identity, if it lives. `touch=False` looks without counting as use
+        (an open socket's re-checks must not keep an unattended tablet signed in)."""
         sid = digest(secret)
         now = self.clock()
         with self._lock:
@@ -326,6 +328,8 @@ class AuthStore:
         if now - last > self.idle or now - row[3] > self.absolute:
             self.close_session(sid)
             return None
+        if not touch:
+            return Identity(row[0], Role.named(row[1]), "session", session=sid, csrf=row[2])
         self._touched[sid] = now
         if now - row[4] > TOUCH_EVERY:
             with self._tx() as db:

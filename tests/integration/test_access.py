@@ -5,16 +5,19 @@ is accepted), each role exactly its rights; services answer only the runtime."""
 from __future__ import annotations
 
 import re
+import time
 from collections.abc import Iterator
 from typing import Any
 
 import httpx
 import pytest
 from fastapi import FastAPI
-from websockets.exceptions import InvalidStatus
-from websockets.sync.client import connect
+from websockets.exceptions import ConnectionClosed, InvalidStatus
+from websockets.sync.client import ClientConnection, connect
 
 from runtime.auth.roles import Role
+from runtime.auth.setup import auth_path
+from runtime.auth.store import AuthStore
 from runtime.bench.harness.processes import Runtime
 from runtime.kit.settings import RuntimeSettings
 from runtime.services import all_services, load_factory
@@ -136,6 +139,47 @@ def test_every_socket_is_closed_before_it_is_accepted_unless_the_role_may_use_it
                 with pytest.raises(InvalidStatus) as refused:
                     connect(runtime.ws_url(path), additional_headers=runtime.auth(role))
                 assert refused.value.response.status_code in (403, 404), (path, role)
+
+
+def closed_code(ws: ClientConnection, within: float) -> int | None:
+    """The close code the runtime ends the socket with (messages before it are read)."""
+    deadline = time.monotonic() + within
+    while time.monotonic() < deadline:
+        try:
+            ws.recv(timeout=max(0.1, deadline - time.monotonic()))
+        except TimeoutError:
+            break
+        except ConnectionClosed as closed:
+            return closed.rcvd.code if closed.rcvd is not None else None
+    return None
+
+
+def test_an_open_socket_ends_with_the_sign_in_that_opened_it(runtime: Runtime) -> None:
+    name, password = runtime.user("operator")
+    login = httpx.post(
+        f"{runtime.url}/api/auth/login", json={"user": name, "password": password}, timeout=10
+    )
+    cookie = {"Cookie": f"op_session={login.cookies['op_session']}"}
+    with connect(runtime.ws_url("/devices/ws"), additional_headers=cookie) as ws:
+        ws.recv(timeout=5)  # open and streaming
+        out = runtime.api(
+            "POST",
+            "/auth/logout",
+            role=None,
+            headers={**cookie, "x-csrf-token": login.json()["csrf"]},
+        )
+        assert out.status_code == 204
+        assert closed_code(ws, within=10) == 4401
+    store = AuthStore(auth_path(runtime.data_dir))
+    try:
+        token = store.create_token("socket-script", Role.programmer)
+        bearer = {"Authorization": f"Bearer {token}"}
+        with connect(runtime.ws_url("/programs/_ws"), additional_headers=bearer) as ws:
+            assert closed_code(ws, within=3) is None  # stays open while the token lives
+            store.revoke_token(next(t.id for t in store.tokens() if t.name == "socket-script"))
+            assert closed_code(ws, within=10) == 4401
+    finally:
+        store.close()
 
 
 def test_the_jog_port_wants_an_operators_ticket(runtime: Runtime) -> None:

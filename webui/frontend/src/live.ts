@@ -5,7 +5,8 @@
 // show them, and what it cannot show is dropped at the runtime, never queued here.
 
 import type { ReactiveController, ReactiveControllerHost } from "lit";
-import { retryDelay, socketUrl } from "./socket";
+import { session } from "./session";
+import { retryDelay, SIGN_IN_ENDED, socketUrl } from "./socket";
 import type { AddedDevice, DetectedDevice, InputState, RobotState } from "./types";
 
 type Message =
@@ -53,7 +54,8 @@ export class DeviceFeed extends EventTarget {
       this.receive(event.data as string);
       this.changed(); // the acknowledgement goes with the next drawn frame
     };
-    socket.onclose = () => {
+    socket.onclose = (event) => {
+      if (event.code === SIGN_IN_ENDED) session.lost();
       this.socket = null;
       this.online = false;
       this.unacked = 0;

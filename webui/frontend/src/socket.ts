@@ -2,6 +2,11 @@
 // dropped socket tries again (doubling from 0.5 s, at most 2 s: a page is usable again soon
 // after the runtime is back), and a socket that does so.
 
+import { session } from "./session";
+
+/** The close code of a socket whose sign-in ended (signed out, revoked, expired). */
+export const SIGN_IN_ENDED = 4401;
+
 export function socketUrl(path: string, port?: number): string {
   const scheme = location.protocol === "https:" ? "wss" : "ws";
   const host = port ? `${location.hostname}:${port}` : location.host;
@@ -34,8 +39,9 @@ export class ReconnectingSocket {
       this.onOpen();
     };
     socket.onmessage = (event) => this.onMessage(String(event.data));
-    socket.onclose = () => {
+    socket.onclose = (event) => {
       this.socket = null;
+      if (event.code === SIGN_IN_ENDED) session.lost();
       if (this.stopped) return;
       window.setTimeout(() => this.start(), retryDelay(this.retry++));
     };
