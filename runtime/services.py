@@ -17,6 +17,7 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 
 from plugins.api import Service
 from plugins.registry import registry
+from runtime.auth.audit import AUDIT_FILE, AuditLog
 from runtime.auth.roles import Role
 from runtime.kit.logs import setup_logging
 from runtime.kit.serve import listening_socket, run_app
@@ -87,7 +88,8 @@ def run_service(
     if public_fd is not None and spec.public_paths:
         public = socket.socket(fileno=public_fd)
         # What a browser reaches directly: the UI's origin only, with an operator's ticket.
-        guarded = WebGuard(TicketRequired(app, Role.operator), web_policy(settings))
+        audit = AuditLog(settings.data_dir / AUDIT_FILE)
+        guarded = WebGuard(TicketRequired(app, Role.operator, audit), web_policy(settings))
         app = PublicPaths(internal, guarded, int(public.getsockname()[1]), spec.public_paths)
         sockets.append(public)
     else:

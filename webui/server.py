@@ -14,7 +14,7 @@ from fastapi import FastAPI, Query, Request, Response, WebSocket
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
-from runtime.auth.audit import AuditLog
+from runtime.auth.audit import AUDIT_FILE, AuditLog
 from runtime.auth.setup import SETUP_CODE_ENV, auth_store
 from runtime.kit.app import create_app
 from runtime.kit.errors import NotFound
@@ -86,7 +86,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
 
     app = create_app("webui", lifespan=lifespan)
     store = auth_store(settings)
-    audit = AuditLog(settings.data_dir / "audit.sqlite")
+    audit = AuditLog(settings.data_dir / AUDIT_FILE)
     # Outermost first: the guard of what a browser may send, then who it is.
     app.add_middleware(AccessGuard, store=store, audit=audit)
     app.add_middleware(WebGuard, policy=web_policy(settings))

@@ -32,6 +32,7 @@ CREATE TRIGGER IF NOT EXISTS audit_no_delete BEFORE DELETE ON audit
 BEGIN SELECT RAISE(ABORT, 'the audit log is append-only'); END;
 """
 MAX_DETAIL = 4096
+AUDIT_FILE = "audit.sqlite"  # in the data directory
 
 
 @dataclass(frozen=True)

@@ -4,11 +4,14 @@ ticket of a role that may use the path."""
 
 from __future__ import annotations
 
+import asyncio
 from urllib.parse import parse_qs
 
 from starlette.responses import JSONResponse
-from starlette.types import ASGIApp, Receive, Scope, Send
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from runtime.auth.audit import AuditLog
+from runtime.auth.roles import Role
 from runtime.kit import tickets
 from runtime.kit.internal import HEADER, internal_token, is_internal
 
@@ -54,11 +57,14 @@ class InternalOnly:
 
 
 class TicketRequired:
-    """A socket opened straight from a browser shows the ticket the gateway gave its user."""
+    """A socket opened straight from a browser shows the ticket the gateway gave its user;
+    its opening and closing go to the audit log under that user (the gateway, which audits
+    everything else, does not see this port)."""
 
-    def __init__(self, app: ASGIApp, role: int) -> None:
+    def __init__(self, app: ASGIApp, role: int, audit: AuditLog | None = None) -> None:
         self.app = app
         self.role = role
+        self.audit = audit
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] in ("http", "websocket"):
@@ -72,4 +78,34 @@ class TicketRequired:
             if holder[1] < self.role:
                 await refuse(scope, receive, send, 403, "forbidden", "your role may not do this")
                 return
+            if scope["type"] == "websocket" and self.audit is not None:
+                await self._audited(scope, receive, send, *holder)
+                return
         await self.app(scope, receive, send)
+
+    async def _audited(
+        self, scope: Scope, receive: Receive, send: Send, user: str, role: int
+    ) -> None:
+        audit = self.audit
+        assert audit is not None
+        client = scope.get("client")
+        entry = {
+            "user": user,
+            "role": Role(role).name,
+            "address": str(client[0]) if client else "",
+            "target": scope["path"],
+        }
+        opened = False
+
+        async def sending(message: Message) -> None:
+            nonlocal opened
+            await send(message)
+            if message["type"] == "websocket.accept":
+                opened = True
+                await asyncio.to_thread(audit.record, action="OPEN", status=101, **entry)
+
+        try:
+            await self.app(scope, receive, sending)
+        finally:
+            if opened:
+                await asyncio.to_thread(audit.record, action="CLOSE", status=200, **entry)

@@ -18,7 +18,7 @@ from websockets.sync.client import ClientConnection, connect
 from runtime.auth.roles import Role
 from runtime.auth.setup import auth_path
 from runtime.auth.store import AuthStore
-from runtime.bench.harness.processes import Runtime
+from runtime.bench.harness.processes import Runtime, wait_for
 from runtime.kit.settings import RuntimeSettings
 from runtime.services import all_services, load_factory
 from webui import policy
@@ -192,6 +192,14 @@ def test_the_jog_port_wants_an_operators_ticket(runtime: Runtime) -> None:
     ticket = runtime.api("POST", "/auth/ticket", role="operator").json()["ticket"]
     with connect(f"{url}?ticket={ticket}"):
         pass
+
+    def jog_entries() -> list[tuple[str, str, str]]:
+        entries = runtime.api("GET", "/auth/audit").json()
+        return [(e["action"], e["user"], e["role"]) for e in entries if e["target"] == "/jog/ws"]
+
+    # The gateway never sees this port: the jog service writes its sockets to the audit log.
+    operator = ("token:tests-operator", "operator")
+    wait_for(lambda: jog_entries()[:2] == [("CLOSE", *operator), ("OPEN", *operator)], 10)
 
 
 def test_services_answer_only_the_runtime(runtime: Runtime) -> None:
