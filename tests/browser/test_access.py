@@ -124,3 +124,44 @@ def test_hostile_names_and_text_are_shown_as_text(
     finally:
         context.close()
         sim.stop()
+
+
+def test_an_administrator_changes_a_users_role_and_pin_by_touch(
+    runtime: Runtime, browser: Browser
+) -> None:
+    admin, admin_password = runtime.user("admin")
+    operator, _ = runtime.user("operator")
+
+    def listed() -> dict[str, tuple[str, bool]]:
+        users = runtime.api("GET", "/auth/users").json()
+        return {u["name"]: (u["role"], u["has_pin"]) for u in users}
+
+    context = open_context(browser, TABLET)
+    try:
+        page = context.new_page()
+        errors = PageErrors(page)
+        page.goto(f"{runtime.url}/#/users")
+        sign_in_by_touch(page, admin, admin_password)
+        row = page.locator(f"[data-testid=user][data-name={operator}]")
+        page.get_by_test_id(f"change-user-{operator}").tap()
+        page.get_by_test_id("edit-role-programmer").tap()
+        page.get_by_test_id("edit-pin").fill("2468")
+        page.get_by_test_id("confirm-edit").fill("not my password")
+        page.get_by_test_id("save-user").tap()
+        expect(page.get_by_test_id("users-error")).to_be_visible()
+        assert listed()[operator] == ("operator", False)  # refused: nothing changed
+        page.get_by_test_id("confirm-edit").fill(admin_password)
+        page.get_by_test_id("save-user").tap()
+        expect(page.get_by_test_id("change-user")).to_have_count(0)
+        expect(row).to_contain_text("Programmer")
+        expect(row).to_contain_text("PIN")
+        assert listed()[operator] == ("programmer", True)
+        page.get_by_test_id(f"change-user-{operator}").tap()
+        page.get_by_test_id("edit-no-pin").tap()
+        page.get_by_test_id("confirm-edit").fill(admin_password)
+        page.get_by_test_id("save-user").tap()
+        expect(row).not_to_contain_text("PIN")
+        assert listed()[operator] == ("programmer", False)
+        assert all("401" in e or "403" in e for e in errors.errors), errors.errors
+    finally:
+        context.close()

@@ -41,6 +41,8 @@ export class OpUsersPanel extends LitElement {
     tokenRole: { state: true },
     error: { state: true },
     newToken: { state: true },
+    editing: { state: true },
+    editRole: { state: true },
   };
   declare users: UserRow[];
   declare tokens: TokenRow[];
@@ -49,6 +51,8 @@ export class OpUsersPanel extends LitElement {
   declare tokenRole: RoleName;
   declare error: string;
   declare newToken: string;
+  declare editing: string;
+  declare editRole: RoleName;
 
   static styles = [
     shared,
@@ -77,6 +81,16 @@ export class OpUsersPanel extends LitElement {
         padding: 8px 6px;
         border-bottom: 1px solid var(--line);
         overflow-wrap: anywhere;
+      }
+      label.check {
+        display: flex;
+        align-items: center;
+        gap: 10px;
+        min-height: var(--touch);
+      }
+      label.check input {
+        width: 28px;
+        height: 28px;
       }
       .audit {
         max-height: 360px;
@@ -110,6 +124,8 @@ export class OpUsersPanel extends LitElement {
     this.tokenRole = "viewer";
     this.error = "";
     this.newToken = "";
+    this.editing = "";
+    this.editRole = "operator";
   }
 
   connectedCallback(): void {
@@ -160,6 +176,49 @@ export class OpUsersPanel extends LitElement {
     void this.act(() => api("DELETE", `/api/auth/users/${encodeURIComponent(name)}`, { confirm_password: confirm }));
   }
 
+  private edit(user: UserRow): void {
+    this.editing = user.name;
+    this.editRole = user.role;
+  }
+
+  private changeUser(e: Event, user: UserRow): void {
+    e.preventDefault();
+    const change: Record<string, string> = { confirm_password: this.value("confirm-edit") };
+    if (this.editRole !== user.role) change.role = this.editRole;
+    const password = this.value("edit-password");
+    if (password) change.password = password;
+    const pin = this.value("edit-pin").trim();
+    const noPin = this.renderRoot.querySelector<HTMLInputElement>('[name="edit-no-pin"]')?.checked;
+    if (noPin) change.pin = "";
+    else if (pin) change.pin = pin;
+    void this.act(async () => {
+      await api("PUT", `/api/auth/users/${encodeURIComponent(user.name)}`, change);
+      this.editing = "";
+    });
+  }
+
+  private editor(user: UserRow) {
+    return html`<form data-testid="change-user" @submit=${(e: Event) => this.changeUser(e, user)}>
+      <h3 translate="no">${user.name}</h3>
+      ${this.roleButtons(this.editRole, (r) => (this.editRole = r), "edit-role")}
+      <input name="edit-password" data-testid="edit-password" type="password"
+        autocomplete="new-password" placeholder=${t("users.new_password")} />
+      <input name="edit-pin" data-testid="edit-pin" inputmode="numeric" autocomplete="off"
+        pattern="[0-9]{4,8}" placeholder=${t("users.new_pin")} />
+      ${user.has_pin
+        ? html`<label class="check"><input type="checkbox" name="edit-no-pin" data-testid="edit-no-pin" />
+            ${t("users.remove_pin")}</label>`
+        : ""}
+      <input name="confirm-edit" data-testid="confirm-edit" type="password"
+        autocomplete="current-password" placeholder=${t("users.your_password")} required />
+      <div class="roles">
+        <button class="primary" type="submit" data-testid="save-user">${t("users.save")}</button>
+        <button type="button" data-testid="cancel-edit" @click=${() => (this.editing = "")}>
+          ${t("users.cancel")}</button>
+      </div>
+    </form>`;
+  }
+
   private addToken(e: Event): void {
     e.preventDefault();
     void this.act(async () => {
@@ -193,8 +252,10 @@ export class OpUsersPanel extends LitElement {
           ${this.users.map(
             (u) => html`<tr data-testid="user" data-name=${u.name}>
               <td translate="no">${u.name}</td>
-              <td>${t(`auth.role.${u.role}`)}</td>
+              <td>${t(`auth.role.${u.role}`)}${u.has_pin ? html` · ${t("auth.pin")}` : ""}</td>
               <td>
+                <button data-testid="change-user-${u.name}" @click=${() => this.edit(u)}>
+                  ${t("users.change")}</button>
                 ${u.name === session.me?.user
                   ? ""
                   : html`<button class="danger" data-testid="remove-user-${u.name}"
@@ -203,6 +264,7 @@ export class OpUsersPanel extends LitElement {
             </tr>`,
           )}
         </table>
+        ${this.users.filter((u) => u.name === this.editing).map((u) => this.editor(u))}
         <h3>${t("users.add")}</h3>
         <form @submit=${this.addUser}>
           <input name="new-user" data-testid="new-user" placeholder=${t("auth.user")}
