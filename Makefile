@@ -39,8 +39,14 @@ lint: $(PY_STAMP)
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 
+# The whole suite (tests/suite.py: real-time tests one at a time, the rest alongside them);
+# with ARGS, just pytest with those (e.g. ARGS=tests/unit or ARGS="-k jog").
 test: setup lint
+ifeq ($(strip $(ARGS)),)
+	$(BIN)/python -m tests.suite
+else
 	$(BIN)/pytest $(ARGS)
+endif
 
 # Every panel on a tablet and a phone, dark and light, into docs/screenshots/.
 screenshots: setup

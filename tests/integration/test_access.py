@@ -23,6 +23,9 @@ from runtime.kit.settings import RuntimeSettings
 from runtime.services import all_services, load_factory
 from webui import policy
 
+# No real-time margins here: runs alongside the rest (tests/suite.py).
+pytestmark = pytest.mark.concurrent
+
 ROLES = ("viewer", "operator", "programmer", "admin")
 REFUSALS = {"unauthenticated", "forbidden", "csrf_failed", "internal_only"}
 

@@ -22,6 +22,9 @@ import pytest
 
 from runtime.bench.harness.processes import Runtime
 
+# No real-time margins here: runs alongside the rest (tests/suite.py).
+pytestmark = pytest.mark.concurrent
+
 SERVICES = ("device_manager", "variable_storage", "jog", "motion", "program", "webui")
 SCHEMATHESIS = Path(sys.executable).with_name("schemathesis")
 

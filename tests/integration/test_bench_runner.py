@@ -7,7 +7,12 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from runtime.bench.harness.processes import child_env
+
+# No real-time margins here: runs alongside the rest (tests/suite.py).
+pytestmark = pytest.mark.concurrent
 
 
 def test_unknown_benchmark_is_an_error(home: Path) -> None:

@@ -23,6 +23,9 @@ from runtime.bench.harness.processes import Proc, child_env, free_port, wait_for
 from runtime.kit.settings import default_devices
 from runtime.launcher.run import device_uuid
 
+# No real-time margins here: runs alongside the rest (tests/suite.py).
+pytestmark = pytest.mark.concurrent
+
 ROOT = Path(__file__).resolve().parents[2]
 
 

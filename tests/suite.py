@@ -1,0 +1,61 @@
+"""The whole test suite as `make test` runs it, in two sessions at once:
+
+- the tests that hold real-time margins (robots streaming state, links that go stale after
+  200 ms, the deadman, browsers) run one at a time at normal priority, as they always did;
+- the tests marked `concurrent` (unit tests, security and API checks, the store, the install)
+  run on both cores at the lowest priority (nice 19) in the time the first session leaves
+  idle (it waits on processes, sockets and browsers about half of the time), so they never
+  take the CPU from a real-time test.
+
+Exit status: the worse of the two. The concurrent session's report is printed after the
+other's."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def main(extra: list[str]) -> int:
+    pytest = [sys.executable, "-m", "pytest"]
+    with tempfile.TemporaryDirectory(prefix="openpendant-concurrent-") as scratch:
+        log_path = Path(scratch) / "concurrent.log"
+        with log_path.open("w") as log:
+            background = subprocess.Popen(
+                [
+                    *pytest,
+                    "-m",
+                    "concurrent",
+                    "-n",
+                    "2",
+                    "--dist",
+                    "loadfile",
+                    # Its own temporary directories and no shared cache: the two sessions
+                    # must not clean up or overwrite each other's.
+                    f"--basetemp={scratch}/tmp",
+                    "-p",
+                    "no:cacheprovider",
+                    *extra,
+                ],
+                cwd=ROOT,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                preexec_fn=lambda: os.nice(19),
+            )
+            try:
+                foreground = subprocess.call([*pytest, "-m", "not concurrent", *extra], cwd=ROOT)
+            finally:
+                background_status = background.wait()
+        print("\n======== tests run alongside (marked concurrent) ========", flush=True)
+        print(log_path.read_text(errors="replace"), flush=True)
+    print(f"real-time tests: exit {foreground}; concurrent tests: exit {background_status}")
+    return foreground or background_status
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
