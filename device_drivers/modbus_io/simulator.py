@@ -1,0 +1,146 @@
+"""A simulated Modbus TCP device on pymodbus's own server, holding the signals of a register
+map: what the driver reads and writes goes over the real protocol. A test (or the simulated
+cell) sets inputs by name, may make the device answer with an exception code, or fall
+silent."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from typing import Any
+
+from pymodbus.constants import ExcCodes
+from pymodbus.server import ModbusTcpServer
+from pymodbus.simulator import DataType, SimData, SimDevice
+
+from device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
+from device_drivers.modbus_io.registers import KIND, RegisterMap, Table
+
+# Function code -> (table, writes)
+FUNCTIONS: dict[int, tuple[Table, bool]] = {
+    1: ("coil", False),
+    2: ("discrete_input", False),
+    3: ("holding_register", False),
+    4: ("input_register", False),
+    5: ("coil", True),
+    15: ("coil", True),
+    6: ("holding_register", True),
+    16: ("holding_register", True),
+}
+
+
+def _size(registers: RegisterMap, table: Table) -> int:
+    return max([s.address + s.words for s in registers.signals if s.table == table] or [1])
+
+
+class ModbusSimulator:
+    def __init__(self, registers: RegisterMap, host: str = "127.0.0.1", port: int = 5020) -> None:
+        self.map = registers
+        self.host, self.port = host, port
+        # What the device holds, by table: one int per register, one 0/1 per coil or input.
+        self.data: dict[Table, list[int]] = {
+            table: [0]
+            * max([s.address + s.words for s in registers.signals if s.table == table] or [1])
+            for table in KIND
+        }
+        self.fail_with: int | None = None  # answer every request with this exception code
+        self.silent = asyncio.Event()  # set: the device answers nothing
+        self.requests: list[tuple[int, int]] = []  # (function code, address), in order
+        self._server: ModbusTcpServer | None = None
+        self._task: asyncio.Task[Any] | None = None
+
+    def _device(self) -> SimDevice:
+        def bits(table: Table) -> list[SimData]:
+            return [SimData(0, count=len(self.data[table]), values=False, datatype=DataType.BITS)]
+
+        def words(table: Table) -> list[SimData]:
+            return [SimData(0, count=len(self.data[table]), values=0, datatype=DataType.REGISTERS)]
+
+        return SimDevice(
+            self.map.unit_id,
+            simdata=(
+                bits("coil"),
+                bits("discrete_input"),
+                words("holding_register"),
+                words("input_register"),
+            ),
+            action=self._action,
+        )
+
+    async def _action(
+        self,
+        function_code: int,
+        start_address: int,
+        address: int,
+        count: int,
+        current_registers: list[int],
+        set_values: list[int] | list[bool] | None,
+    ) -> ExcCodes | None:
+        self.requests.append((function_code, address))
+        if self.silent.is_set():
+            await asyncio.Event().wait()  # never answers (the client gives up)
+        if self.fail_with is not None:
+            return ExcCodes(self.fail_with)
+        if function_code not in FUNCTIONS:
+            return None
+        table, writes = FUNCTIONS[function_code]
+        held = self.data[table]
+        if writes and set_values is not None:
+            for i, v in enumerate(set_values):
+                held[address + i] = int(v)
+            return None
+        bitwise = table in ("coil", "discrete_input")
+        for a in range(address, min(address + count, len(held))):
+            if bitwise:
+                word, bit = divmod(a, 16)
+                mask = 1 << bit
+                i = word - start_address
+                current_registers[i] = (
+                    (current_registers[i] | mask) if held[a] else (current_registers[i] & ~mask)
+                )
+            else:
+                current_registers[a - start_address] = held[a]
+        return None
+
+    # Signals by name ------------------------------------------------------------------------
+
+    def set(self, name: str, value: bool | float) -> None:
+        """What the device's own side does: an input changing, an output forced."""
+        reg = self.map.named(name)
+        if reg.type == "bool":
+            words = [int(bool(value))]
+        else:
+            raw = to_raw(float(value), reg.scale, reg.offset, reg.data_type)
+            words = encode(raw, reg.data_type, self.map.byte_order, self.map.word_order)
+        self.data[reg.table][reg.address : reg.address + reg.words] = words
+
+    def get(self, name: str) -> bool | float:
+        reg = self.map.named(name)
+        words = self.data[reg.table][reg.address : reg.address + reg.words]
+        if reg.type == "bool":
+            return bool(words[0])
+        raw = decode(words, reg.data_type, self.map.byte_order, self.map.word_order)
+        return to_unit(raw, reg.scale, reg.offset)
+
+    # The server -----------------------------------------------------------------------------
+
+    async def start(self) -> None:
+        self._server = ModbusTcpServer(self._device(), address=(self.host, self.port))
+        self._task = asyncio.create_task(self._server.serve_forever())
+        await asyncio.sleep(0)
+        for _ in range(100):  # listening once a connection is accepted
+            with contextlib.suppress(OSError):
+                _, writer = await asyncio.open_connection(self.host, self.port)
+                writer.close()
+                return
+            await asyncio.sleep(0.02)
+        raise RuntimeError(f"the Modbus simulator did not listen on {self.host}:{self.port}")
+
+    async def stop(self) -> None:
+        if self._server is not None:
+            await self._server.shutdown()  # type: ignore[no-untyped-call]
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await self._task
+        self._server = self._task = None
