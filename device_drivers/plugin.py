@@ -7,7 +7,7 @@ from plugins.api import Driver, Plugin
 
 PLUGIN = Plugin(
     name="drivers",
-    description="The simulated robot and the 3D mouse",
+    description="The simulated robot, the 3D mouse and Modbus I/O blocks",
     drivers=(
         Driver(
             "sim-robot",
@@ -26,6 +26,14 @@ PLUGIN = Plugin(
             options="device_drivers.spacemouse.entry:SpaceMouseOptions",
             routes="device_drivers.spacemouse.entry:routes",
             description="a 3Dconnexion SpaceMouse (hidapi, spacenavd, or a recording)",
+        ),
+        Driver(
+            "modbus-io",
+            "io",
+            "device_drivers.modbus_io.entry:create",
+            options="device_drivers.modbus_io.entry:ModbusIOOptions",
+            routes="device_drivers.modbus_io.entry:routes",
+            description="an I/O block over Modbus TCP (a register map; --simulate serves one)",
         ),
     ),
 )

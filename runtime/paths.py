@@ -12,7 +12,9 @@ import deploy
 from runtime.kit.errors import NotFound
 
 # Package data (deploy/robots), found the same in a source checkout and an installed runtime.
-ROBOTS_DIR = Path(deploy.__file__).resolve().parent / "robots"
+DEPLOY_DIR = Path(deploy.__file__).resolve().parent
+ROBOTS_DIR = DEPLOY_DIR / "robots"
+MODBUS_MAPS_DIR = DEPLOY_DIR / "modbus"  # register maps of Modbus I/O blocks
 
 
 @cache

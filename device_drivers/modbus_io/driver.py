@@ -21,6 +21,7 @@ from pymodbus.exceptions import ModbusException
 from device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
 from device_drivers.modbus_io.errors import no_answer, refused
 from device_drivers.modbus_io.registers import Register, RegisterMap, Table
+from device_drivers.modbus_io.simulator import ModbusSimulator
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import (
     IODriver,
@@ -48,15 +49,15 @@ class ModbusIODriver(IODriver):
         poll_hz: float = 20.0,
         timeout: float = 1.0,
         clock: Callable[[], float] = time.time,
+        simulator: ModbusSimulator | None = None,
     ) -> None:
         info = IOInfo(model=registers.model, signals=[r.signal() for r in registers.signals])
         super().__init__(identity, info)
         self.map = registers
         self.period = 1.0 / poll_hz
         self.clock = clock
-        self.client = AsyncModbusTcpClient(
-            host, port=port, timeout=timeout, retries=0, reconnect_delay=0
-        )
+        self.host, self.port, self.timeout = host, port, timeout
+        self._client: AsyncModbusTcpClient | None = None  # made on the loop that uses it
         self.lock = asyncio.Lock()
         self.values: dict[str, SignalValue] = {r.name: None for r in registers.signals}
         self.changed: dict[str, float] = {}
@@ -64,8 +65,18 @@ class ModbusIODriver(IODriver):
         self.error = "not connected yet"
         self.seqno = 0
         self._poller: asyncio.Task[None] | None = None
+        # A simulated device this driver serves itself (`--simulate`), started first.
+        self.simulator = simulator
 
     # The device ---------------------------------------------------------------------------
+
+    @property
+    def client(self) -> AsyncModbusTcpClient:
+        if self._client is None:
+            self._client = AsyncModbusTcpClient(
+                self.host, port=self.port, timeout=self.timeout, retries=0, reconnect_delay=0
+            )
+        return self._client
 
     async def _ensure_connected(self) -> None:
         if self.client.connected:
@@ -151,6 +162,8 @@ class ModbusIODriver(IODriver):
             await asyncio.sleep(delay)
 
     async def start(self) -> None:
+        if self.simulator is not None:
+            await self.simulator.start()
         self._poller = asyncio.create_task(self._poll())
 
     async def shutdown(self) -> None:
@@ -158,7 +171,10 @@ class ModbusIODriver(IODriver):
             self._poller.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._poller
-        self.client.close()
+        if self._client is not None:
+            self._client.close()
+        if self.simulator is not None:
+            await self.simulator.stop()
 
     # The I/O interface --------------------------------------------------------------------
 

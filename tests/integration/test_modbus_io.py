@@ -8,15 +8,17 @@ from __future__ import annotations
 import asyncio
 import itertools
 from collections.abc import Awaitable, Callable
+from pathlib import Path
 from typing import Any
 
+import httpx
 import pytest
 
 from device_drivers.modbus_io.driver import ModbusIODriver
 from device_drivers.modbus_io.errors import EXCEPTIONS, ModbusRefused
 from device_drivers.modbus_io.registers import RegisterMap
 from device_drivers.modbus_io.simulator import ModbusSimulator
-from runtime.bench.harness.processes import free_port
+from runtime.bench.harness.processes import DriverProc, Runtime, free_port, wait_for
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import SignalWrite
 from runtime.kit.errors import InvalidValue, Unavailable
@@ -230,3 +232,45 @@ async def until(check: Callable[[], bool], timeout: float = 10.0) -> None:
         if asyncio.get_running_loop().time() > deadline:
             raise TimeoutError("condition not met")
         await asyncio.sleep(0.02)
+
+
+def test_a_simulated_block_added_to_the_runtime_is_read_and_switched_through_it(
+    tmp_path: Path,
+) -> None:
+    """`openpendant driver modbus-io --simulate`: discovered, added, its input seen change
+    through the runtime, an output switched with control (and refused without it)."""
+    runtime = Runtime(tmp_path, extra=["--no-sim"])
+    device = DriverProc(tmp_path, "modbus-io", "cell-io", "--simulate")
+    try:
+        runtime.wait_ready()
+        url = device.wait_ready()
+        added = runtime.api("POST", "/devices", json={"url": url, "local_name": "cell_io"})
+        assert added.status_code in (200, 201), added.text
+
+        def value(name: str) -> Any:
+            state = runtime.api("GET", "/devices/cell_io/state").json()
+            return state.get("values", {}).get(name, "missing")
+
+        wait_for(lambda: value("part_present") is False, 10, what="the block polled")
+        httpx.put(f"{url}/sim/signals/part_present", json={"value": True}, timeout=5)
+        wait_for(lambda: value("part_present") is True, 10, what="the input seen")
+        switch = {"args": ["lamp_green"], "body": {"value": True}}
+        refused = runtime.api("POST", "/devices/cell_io/call/write", role="operator", json=switch)
+        assert refused.status_code == 409, refused.text
+        assert httpx.get(f"{url}/sim/signals/lamp_green", timeout=5).json()["value"] is False
+        lease = runtime.api(
+            "POST", "/devices/cell_io/lease", role="operator", json={"holder": "tablet"}
+        ).json()["token"]
+        done = runtime.api(
+            "POST",
+            "/devices/cell_io/call/write",
+            role="operator",
+            json=switch,
+            headers={"X-Lease-Token": lease},
+        )
+        assert done.status_code == 200 and done.json()["value"] is True, done.text
+        assert httpx.get(f"{url}/sim/signals/lamp_green", timeout=5).json()["value"] is True
+        wait_for(lambda: value("lamp_green") is True, 10, what="the output in the state")
+    finally:
+        device.stop()
+        runtime.stop()

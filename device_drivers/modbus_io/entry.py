@@ -1,0 +1,95 @@
+"""The Modbus I/O block as the driver host starts it (`openpendant driver modbus-io`):
+against a device at `--address`, or, with `--simulate`, against a simulated device this
+process serves on pymodbus's server (the protocol between them is the real one)."""
+
+from __future__ import annotations
+
+import socket
+from pathlib import Path
+
+from fastapi import APIRouter
+from pydantic import BaseModel, ConfigDict, Field
+
+from device_drivers.modbus_io.driver import ModbusIODriver
+from device_drivers.modbus_io.registers import load_map
+from device_drivers.modbus_io.simulator import ModbusSimulator
+from runtime.interfaces.device import DeviceIdentity
+from runtime.interfaces.io import IOState, SignalWrite
+from runtime.kit.errors import InvalidValue, NotFound
+from runtime.paths import MODBUS_MAPS_DIR
+
+DEFAULT_MAP = MODBUS_MAPS_DIR / "cell_io.yaml"
+
+
+class ModbusIOOptions(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    map: Path | None = Field(default=None, description="register map YAML (default: cell I/O)")
+    address: str = Field(default="127.0.0.1:502", description="the device's host:port (Modbus TCP)")
+    poll_hz: float = Field(default=20.0, gt=0, le=200, description="polls per second")
+    timeout: float = Field(default=1.0, gt=0, le=30, description="seconds to wait for answers")
+    simulate: bool = Field(default=False, description="serve a simulated device and use it")
+
+    def default_name(self) -> str:
+        return "sim-io" if self.simulate else "io"
+
+
+def _address(text: str) -> tuple[str, int]:
+    host, _, port = text.rpartition(":")
+    if not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise InvalidValue(f"--address wants host:port, got {text!r}")
+    return host.strip("[]"), int(port)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def create(name: str, uuid: str, options: ModbusIOOptions) -> ModbusIODriver:
+    registers = load_map(options.map or DEFAULT_MAP)
+    if options.simulate:
+        simulator = ModbusSimulator(registers, "127.0.0.1", _free_port())
+        host, port = simulator.host, simulator.port
+    else:
+        simulator = None
+        host, port = _address(options.address)
+    identity = DeviceIdentity(uuid=uuid, kind="io", model=registers.model[:64], name=name)
+    return ModbusIODriver(
+        identity,
+        registers,
+        host,
+        port,
+        poll_hz=options.poll_hz,
+        timeout=options.timeout,
+        simulator=simulator,
+    )
+
+
+def routes(driver: ModbusIODriver) -> APIRouter:
+    """A simulated device's own side: inputs set as a sensor would, outputs read as a
+    lamp would show them (tests, demonstrations, the simulated cell)."""
+    router = APIRouter(prefix="/sim")
+    simulator = driver.simulator
+    if simulator is None:
+        return router
+
+    @router.put("/signals/{name}")
+    async def set_signal(name: str, body: SignalWrite) -> IOState:
+        try:
+            simulator.set(name, body.value)
+        except KeyError:
+            raise NotFound(f"no signal {name!r}", code="unknown_signal") from None
+        except ValueError as exc:
+            raise InvalidValue(f"{name}: {exc}") from exc
+        return driver.state()
+
+    @router.get("/signals/{name}")
+    async def get_signal(name: str) -> dict[str, bool | float]:
+        try:
+            return {"value": simulator.get(name)}
+        except KeyError:
+            raise NotFound(f"no signal {name!r}", code="unknown_signal") from None
+
+    return router
