@@ -5,20 +5,24 @@ RunHost, `args` what the sandbox function sent, checked here again."""
 from __future__ import annotations
 
 import re
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 from pydantic import BaseModel, ValidationError
 
+from runtime.clients.kinds import IOClient
+from runtime.interfaces.io import SignalWrite
 from runtime.interfaces.robot import DigitalOutputCommand, ToolCommand
 from runtime.kit.app import describe_validation_errors
-from runtime.kit.errors import NotFound
+from runtime.kit.errors import InvalidValue, NotFound
 from runtime.motion.client import MoveKind, MoveRequest, Target
 from runtime.program.host import RunHost
 from runtime.program.stored_values import checked_name, put_value
 from sandbox.supervisor import CallRefused
 
 M = TypeVar("M", bound=BaseModel)
-IO_NAME = re.compile(r"^([a-z][a-z0-9_]{0,31})\.(di|do)(\d{1,2})\Z")
+IO_NAME = re.compile(r"^([a-z][a-z0-9_]{0,31})\.(di|do)(\d{1,2})\Z")  # a robot's
+DEVICE_NAME = re.compile(r"^[a-z][a-z0-9_]{0,31}\Z")
+SIGNAL = re.compile(r"^[a-z][a-z0-9_]{0,31}\Z")
 WAYPOINT_TYPES = ("joint_waypoint", "pose_waypoint")
 
 
@@ -108,29 +112,59 @@ async def check_waypoint(run: RunHost, args: dict[str, Any]) -> dict[str, str]:
     return {"type": variable.type}
 
 
-def _io(name: str) -> tuple[str, str, int]:
-    match = IO_NAME.match(name)
-    if match is None:
+async def _signal(run: RunHost, name: str) -> tuple[str, str, str]:
+    """(device, its kind, signal) of "<device>.<signal>": a robot controller's do0/di3, or
+    a signal an I/O block's register map names (cell_io.lamp_green)."""
+    device, dot, signal = name.partition(".")
+    if not dot or not DEVICE_NAME.match(device) or not SIGNAL.match(signal):
         raise CallRefused(
-            f"I/O names look like robot.do0 or robot.di3, not {name[:40]!r}", "unknown_io"
+            f"I/O names look like robot.do0 or cell_io.lamp, not {name[:40]!r}", "unknown_io"
         )
-    return match.group(1), match.group(2), int(match.group(3))
+    try:
+        kind = (await run.devices.manager.device(device)).kind
+    except NotFound:
+        raise CallRefused(f"there is no device {device!r}", "unknown_device") from None
+    if kind == "robot" and IO_NAME.match(name) is None:
+        raise CallRefused(f"a robot's I/O is do0, do1, … di0, di1, …, not {signal!r}", "unknown_io")
+    if kind not in ("robot", "io"):
+        raise CallRefused(f"{device} is a {kind}: it has no inputs or outputs", "unknown_io")
+    return device, kind, signal
 
 
 async def set_output(run: RunHost, args: dict[str, Any]) -> None:
-    robot, kind, index = _io(str(args["name"]))
-    if kind != "do":
-        raise CallRefused(f"{args['name']} is an input; only outputs can be set", "read_only")
-    client = await run.robot_client(robot)
-    await client.set_digital_output(index, DigitalOutputCommand(value=bool(args["value"])))
+    name = str(args["name"])
+    device, kind, signal = await _signal(run, name)
+    value = bool(args["value"])
+    if kind == "io":
+        block = cast(IOClient, await run.device(device, "io"))
+        try:
+            await block.write(signal, SignalWrite(value=value))
+        except (NotFound, InvalidValue) as exc:
+            raise CallRefused(f"{device}: {exc.message}", exc.code) from None
+        return
+    if not signal.startswith("do"):
+        raise CallRefused(f"{name} is an input; only outputs can be set", "read_only")
+    client = await run.robot_client(device)
+    await client.set_digital_output(int(signal[2:]), DigitalOutputCommand(value=value))
 
 
 async def get_io(run: RunHost, args: dict[str, Any]) -> bool:
-    robot, kind, index = _io(str(args["name"]))
-    state = await run.devices.manager.state(robot)
-    values = state.get("digital_inputs" if kind == "di" else "digital_outputs", [])
+    name = str(args["name"])
+    device, kind, signal = await _signal(run, name)
+    if kind == "io":
+        block = cast(IOClient, await run.read_device(device, "io"))
+        try:
+            reading = await block.read(signal)
+        except NotFound as exc:
+            raise CallRefused(f"{device}: {exc.message}", exc.code) from None
+        if not isinstance(reading.value, bool):
+            raise CallRefused(f"{name} is not a digital signal", "not_digital")
+        return reading.value
+    state = await run.devices.manager.state(device)
+    index = int(signal[2:])
+    values = state.get("digital_inputs" if signal.startswith("di") else "digital_outputs", [])
     if index >= len(values):
-        raise CallRefused(f"{robot} has no {kind}{index}", "unknown_io")
+        raise CallRefused(f"{device} has no {signal}", "unknown_io")
     return bool(values[index])
 
 

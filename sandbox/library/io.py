@@ -1,5 +1,6 @@
-"""Digital I/O by name: "<robot>.do<N>" and "<robot>.di<N>" are the robot controller's
-outputs and inputs (numbered from 0)."""
+"""Digital I/O by name: "<robot>.do<N>" and "<robot>.di<N>" are a robot controller's
+outputs and inputs (numbered from 0); "<block>.<signal>" a signal of an I/O block (its
+register map names them)."""
 
 from __future__ import annotations
 

@@ -14,8 +14,9 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
 
+from runtime.bench.harness import blocks as make
 from runtime.bench.harness.blocks import ids_of
-from runtime.bench.harness.processes import STILL, Runtime, wait_for
+from runtime.bench.harness.processes import STILL, DriverProc, Runtime, wait_for
 from tests.browser.conftest import (
     Finger,
     PageErrors,
@@ -378,3 +379,39 @@ def test_every_block_fits_the_toolbox_on_a_phone(
             assert box is not None
             wide = f"{category.inner_text()}: {block.text_content()}"
             assert box["x"] + box["width"] <= screen["width"], wide
+
+
+def test_the_io_blocks_offer_an_io_blocks_signals_by_name(
+    runtime: Runtime, tablet: BrowserContext
+) -> None:
+    device = DriverProc(runtime.home, "modbus-io", "cell-io", "--simulate")
+    try:
+        url = device.wait_ready()
+        added = runtime.api("POST", "/devices", json={"url": url, "local_name": "cell_io"})
+        assert added.status_code in (200, 201), added.text
+        top = make.block(
+            "io_set_output",
+            {"NAME": "cell_io.lamp_green"},
+            VALUE=make.block("logic_boolean", {"BOOL": "TRUE"}),
+        )
+        saved = runtime.api("PUT", "/programs/lamp", json={"workspace": make.workspace(top)})
+        assert saved.status_code == 200, saved.text
+        page = tablet.new_page()
+        errors = PageErrors(page)
+        page.goto(f"{runtime.url}/#/program")
+        page.get_by_test_id("program-select").select_option("lamp")
+        # The block's own dropdown (its value input holds another: the boolean's).
+        field = page.locator(f'[id^="{top["id"]}_field"]').filter(has_text="cell_io")
+        expect(field).to_contain_text("cell_io.lamp_green")
+        field.tap()
+        menu = page.locator(".blocklyMenuItem")
+        expect(menu.filter(has_text="cell_io.out7")).to_be_visible()
+        offered = menu.all_inner_texts()
+        assert "cell_io.conveyor_run" in offered and "cell_io.part_present" not in offered
+        menu.filter(has_text="cell_io.conveyor_run").tap()
+        expect(field).to_contain_text("cell_io.conveyor_run")
+        assert errors.errors == []
+    finally:
+        runtime.api("DELETE", "/programs/lamp")
+        runtime.api("DELETE", "/devices/cell_io")
+        device.stop()

@@ -271,6 +271,49 @@ def test_a_simulated_block_added_to_the_runtime_is_read_and_switched_through_it(
         assert done.status_code == 200 and done.json()["value"] is True, done.text
         assert httpx.get(f"{url}/sim/signals/lamp_green", timeout=5).json()["value"] is True
         wait_for(lambda: value("lamp_green") is True, 10, what="the output in the state")
+        runtime.api("DELETE", "/devices/cell_io/lease", headers={"X-Lease-Token": lease})
+
+        # The I/O blocks of a program work on the block's signals by name.
+        httpx.put(f"{url}/sim/signals/part_present", json={"value": False}, timeout=5)
+        program = (
+            "set_output('cell_io.lamp_red', True)\n"
+            "wait_for_input('cell_io.part_present', True, 30)\n"
+            "set_output('cell_io.conveyor_run', get_input('cell_io.door_closed') == False)\n"
+            "set_output('cell_io.lamp_red', False)\n"
+        )
+        saved = runtime.api("PUT", "/programs/io_check", json={"python": program})
+        assert saved.status_code == 200, saved.text
+        assert runtime.api("POST", "/programs/io_check/run", json={}).status_code == 202
+
+        def lamp_red() -> bool:
+            return bool(httpx.get(f"{url}/sim/signals/lamp_red", timeout=5).json()["value"])
+
+        wait_for(lamp_red, 20, what="the program switching the red lamp on")
+        status = runtime.api("GET", "/programs/io_check/status").json()
+        assert status["state"] == "running"  # waiting for the part
+        httpx.put(f"{url}/sim/signals/part_present", json={"value": True}, timeout=5)
+        wait_for(
+            lambda: (
+                runtime.api("GET", "/programs/io_check/status").json()["state"]
+                in ("finished", "failed")
+            ),
+            30,
+            what="the program's end",
+        )
+        final = runtime.api("GET", "/programs/io_check/status").json()
+        assert final["state"] == "finished", final
+        assert httpx.get(f"{url}/sim/signals/conveyor_run", timeout=5).json()["value"] is True
+        assert not lamp_red()
+        bad = "set_output('cell_io.part_present', True)\n"
+        assert runtime.api("PUT", "/programs/io_bad", json={"python": bad}).status_code == 200
+        assert runtime.api("POST", "/programs/io_bad/run", json={}).status_code == 202
+        wait_for(
+            lambda: runtime.api("GET", "/programs/io_bad/status").json()["state"] == "error",
+            30,
+            what="writing an input refused",
+        )
+        error = runtime.api("GET", "/programs/io_bad/status").json()["error"]
+        assert error["code"] == "read_only" and "part_present is an input" in error["message"]
     finally:
         device.stop()
         runtime.stop()

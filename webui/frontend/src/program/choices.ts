@@ -20,14 +20,23 @@ async function applyWaypoint({ name, present }: WaypointChange): Promise<void> {
   choices.waypoints = [...names];
 }
 
-/** The robot names and what each has, for the dropdowns of the robot and I/O blocks. */
+interface SignalInfo {
+  name: string;
+  kind: string;
+}
+
+/** The robot names and what each has, for the dropdowns of the robot and I/O blocks: a
+ * robot controller's numbered I/O, and the digital signals of every I/O block by name. */
 export async function refreshChoices(): Promise<void> {
   const { choices } = await import("./catalog");
   const robots = feed.robots().map((r) => r.local_name);
   choices.robots = robots;
+  const withIO = feed.devices.filter((d) => d.kind === "robot" || d.kind === "io");
   const details = await Promise.all(
-    robots.map((r) =>
-      api<DeviceDetails>("GET", `/api/devices/${encodeURIComponent(r)}`).catch(() => null),
+    withIO.map((d) =>
+      api<DeviceDetails>("GET", `/api/devices/${encodeURIComponent(d.local_name)}`).catch(
+        () => null,
+      ),
     ),
   );
   const inputs: string[] = [];
@@ -35,6 +44,14 @@ export async function refreshChoices(): Promise<void> {
   for (const d of details) {
     const info = d?.info?.info;
     if (!d || !info) continue;
+    if (d.kind === "io") {
+      const signals = (info as unknown as { signals?: SignalInfo[] }).signals ?? [];
+      for (const s of signals) {
+        if (s.kind === "digital_input") inputs.push(`${d.local_name}.${s.name}`);
+        if (s.kind === "digital_output") outputs.push(`${d.local_name}.${s.name}`);
+      }
+      continue;
+    }
     for (let i = 0; i < (info.digital_inputs ?? 0); i++) inputs.push(`${d.local_name}.di${i}`);
     for (let i = 0; i < (info.digital_outputs ?? 0); i++) outputs.push(`${d.local_name}.do${i}`);
   }
