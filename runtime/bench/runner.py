@@ -27,6 +27,7 @@ MODULES = (
     "motion",
     "program",
     "scale",
+    "modbus",
 )
 
 
