@@ -19,7 +19,7 @@ from runtime.bench.harness.processes import Runtime, child_env
 from tests.browser.conftest import CHROMIUM, CHROMIUM_ARGS, PHONE, TABLET, add_robot
 from tests.support.programs import PICK_AND_PLACE_WAYPOINTS, pick_and_place, teach
 
-PANELS = ("jog", "program", "scene", "devices", "system", "users")
+PANELS = ("jog", "program", "scene", "io", "devices", "system", "users")
 DEVICES = {"tablet": TABLET, "phone": PHONE}
 THEMES = ("dark", "light")
 OUT = Path(__file__).resolve().parent.parent / "docs" / "screenshots"

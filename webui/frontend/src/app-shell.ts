@@ -78,15 +78,24 @@ export class OpApp extends LitElement {
           padding: 6px;
         }
         nav {
-          gap: 4px;
-          padding: 4px;
+          gap: 2px;
+          padding: 4px 2px;
         }
         nav button {
           flex: 1;
           min-width: 0;
           min-height: 64px;
-          padding: 4px 2px;
-          font-size: 13px;
+          padding: 4px 0;
+          font-size: 10.5px;
+          letter-spacing: -0.2px;
+          overflow: hidden;
+        }
+        /* Seven panels share a phone's width: a long name (German) is cut, not the page. */
+        nav button span {
+          max-width: 100%;
+          overflow: hidden;
+          text-overflow: ellipsis;
+          white-space: nowrap;
         }
         main {
           padding: 10px;

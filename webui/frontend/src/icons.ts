@@ -6,6 +6,7 @@ const icon = (path: SVGTemplateResult): SVGTemplateResult =>
     stroke-width="2" stroke-linecap="round" stroke-linejoin="round" aria-hidden="true">${path}</svg>`;
 
 export const icons = {
+  io: icon(svg`<rect x="4" y="3" width="16" height="18" rx="2"/><circle cx="9" cy="8" r="1.5"/><circle cx="9" cy="16" r="1.5"/><path d="M13 8h3M13 16h3"/>`),
   users: icon(svg`<circle cx="9" cy="8" r="3.5"/><path d="M2.5 20a6.5 6.5 0 0 1 13 0M16 4.5a3.5 3.5 0 0 1 0 7M18 14a6 6 0 0 1 3.5 6"/>`),
   devices: icon(svg`<rect x="3" y="4" width="18" height="12" rx="2"/><path d="M8 20h8M12 16v4"/>`),
   system: icon(

@@ -6,6 +6,7 @@ import { t } from "../i18n";
 import { icons } from "../icons";
 import { type PanelInfo, panelTitle, plugins } from "../plugins";
 import "./devices-panel";
+import "./io-panel";
 import "./jog-panel";
 import "./plugin-panel";
 import "./program-panel";
@@ -39,6 +40,12 @@ const builtIn: Record<string, Panel> = {
     title: () => t("app.panel.scene"),
     icon: icons.scene,
     render: () => html`<op-scene-panel></op-scene-panel>`,
+  },
+  io: {
+    id: "io",
+    title: () => t("app.panel.io"),
+    icon: icons.io,
+    render: () => html`<op-io-panel></op-io-panel>`,
   },
   devices: {
     id: "devices",

@@ -1,0 +1,227 @@
+import { LitElement, css, html } from "lit";
+import { api, errorText } from "../api";
+import { control } from "../control";
+import { t } from "../i18n";
+import { FeedController, feed } from "../live";
+import { session } from "../session";
+import { shared } from "../styles";
+import type { AddedDevice } from "../types";
+
+interface SignalInfo {
+  name: string;
+  kind: "digital_input" | "digital_output" | "analog_input" | "analog_output";
+  unit: string;
+  minimum: number | null;
+  maximum: number | null;
+  description: string;
+}
+
+interface IOState {
+  connected: boolean;
+  values: Record<string, boolean | number | null>;
+  error: string;
+}
+
+interface Details {
+  info: { info: { signals?: SignalInfo[] } } | null;
+}
+
+// Every signal of every I/O block, live from the device feed; outputs switched here only
+// by the pendant that has control of the block (as a robot is jogged only with control).
+export class OpIoPanel extends LitElement {
+  static properties = {
+    signals: { state: true },
+    error: { state: true },
+  };
+  declare signals: Map<string, SignalInfo[]>;
+  declare error: string;
+  private readonly onControl = () => this.requestUpdate();
+
+  static styles = [
+    shared,
+    css`
+      .signals {
+        display: grid;
+        grid-template-columns: repeat(auto-fill, minmax(220px, 1fr));
+        gap: 10px;
+      }
+      .signal {
+        display: flex;
+        align-items: center;
+        justify-content: space-between;
+        gap: 10px;
+        min-height: var(--touch);
+        padding: 6px 12px;
+        border: 1px solid var(--line);
+        border-radius: 10px;
+      }
+      .signal .name {
+        overflow-wrap: anywhere;
+      }
+      .value {
+        font-weight: 700;
+        font-variant-numeric: tabular-nums;
+      }
+      .value[data-state="on"] {
+        color: var(--ok);
+      }
+      .value[data-state="unknown"] {
+        color: var(--muted);
+      }
+      .signal button {
+        min-width: 88px;
+      }
+      .signal button[aria-pressed="true"] {
+        border-color: var(--ok);
+        color: var(--ok);
+      }
+      .analog {
+        display: flex;
+        gap: 6px;
+        align-items: center;
+      }
+      .analog input {
+        width: 90px;
+      }
+      header {
+        display: flex;
+        align-items: center;
+        justify-content: space-between;
+        flex-wrap: wrap;
+        gap: 10px;
+        margin-bottom: 10px;
+      }
+    `,
+  ];
+
+  constructor() {
+    super();
+    new FeedController(this);
+    this.signals = new Map();
+    this.error = "";
+  }
+
+  connectedCallback(): void {
+    super.connectedCallback();
+    control.addEventListener("change", this.onControl);
+  }
+
+  disconnectedCallback(): void {
+    super.disconnectedCallback();
+    control.removeEventListener("change", this.onControl);
+  }
+
+  private blocks(): AddedDevice[] {
+    return feed.devices.filter((d) => d.kind === "io");
+  }
+
+  /** Each block's signals, read once from its description (they do not change). */
+  private async describe(name: string): Promise<void> {
+    try {
+      const details = await api<Details>("GET", `/api/devices/${encodeURIComponent(name)}`);
+      const signals = details.info?.info.signals;
+      if (signals) this.signals = new Map(this.signals).set(name, signals);
+    } catch (err) {
+      this.error = errorText(err);
+    }
+  }
+
+  private async act(work: () => Promise<unknown>): Promise<void> {
+    this.error = "";
+    try {
+      await work();
+    } catch (err) {
+      this.error = errorText(err);
+    }
+  }
+
+  private write(device: string, signal: string, value: boolean | number): void {
+    const token = control.token(device);
+    void this.act(() =>
+      api(
+        "POST",
+        `/api/devices/${encodeURIComponent(device)}/call/write`,
+        { args: [signal], body: { value } },
+        token ? { "X-Lease-Token": token } : {},
+      ),
+    );
+  }
+
+  private setAnalog(e: Event, device: string, signal: string): void {
+    e.preventDefault();
+    const input = (e.target as HTMLFormElement).querySelector("input");
+    const value = Number(input?.value);
+    if (input && input.value.trim() !== "" && Number.isFinite(value)) this.write(device, signal, value);
+  }
+
+  private shown(s: SignalInfo, value: boolean | number | null | undefined) {
+    if (value === null || value === undefined) {
+      return html`<span class="value" data-state="unknown">${t("io.unknown")}</span>`;
+    }
+    if (typeof value === "boolean") {
+      return html`<span class="value" data-state=${value ? "on" : "off"}
+        >${value ? t("io.on") : t("io.off")}</span>`;
+    }
+    return html`<span class="value">${Number(value.toFixed(3))} ${s.unit}</span>`;
+  }
+
+  private signal(device: string, s: SignalInfo, state: IOState | undefined, mine: boolean) {
+    const value = state?.values[s.name];
+    const id = `${device}-${s.name}`;
+    let control_ = html``;
+    if (s.kind === "digital_output") {
+      control_ = html`<button data-testid="toggle-${id}" aria-pressed=${value === true}
+        ?disabled=${!mine || typeof value !== "boolean"}
+        @click=${() => this.write(device, s.name, !value)}>${value ? t("io.off") : t("io.on")}</button>`;
+    } else if (s.kind === "analog_output") {
+      control_ = html`<form class="analog" @submit=${(e: Event) => this.setAnalog(e, device, s.name)}>
+        <input type="number" step="any" inputmode="decimal" data-testid="value-${id}"
+          min=${s.minimum ?? ""} max=${s.maximum ?? ""} ?disabled=${!mine} />
+        <button type="submit" ?disabled=${!mine}>${t("io.set")}</button>
+      </form>`;
+    }
+    return html`<div class="signal" data-testid="signal-${id}" title=${s.description}
+      data-value=${value === null || value === undefined ? "unknown" : String(value)}>
+      <span class="name" translate="no">${s.name}</span>
+      ${this.shown(s, value)} ${control_}
+    </div>`;
+  }
+
+  private block(d: AddedDevice) {
+    const signals = this.signals.get(d.local_name);
+    if (signals === undefined) void this.describe(d.local_name);
+    const state = feed.states.get(d.local_name) as unknown as IOState | undefined;
+    const mine = control.holds(d.local_name);
+    const mayControl = session.can("operator");
+    const holder = d.controlled_by;
+    return html`<section class="card" data-testid="io-block" data-name=${d.local_name}>
+      <header>
+        <h3 translate="no">${d.local_name}</h3>
+        <span data-testid="io-status-${d.local_name}"
+          >${state?.error || (state?.connected ? "" : t("io.disconnected"))}</span>
+        ${mine
+          ? html`<button data-testid="io-release-${d.local_name}"
+              @click=${() => this.act(() => control.release(d.local_name))}>${t("jog.control.release")}</button>`
+          : html`<span>${holder ? t("jog.control.controlled_by", { holder }) : ""}</span>
+              <button class="primary" data-testid="io-control-${d.local_name}" ?disabled=${!mayControl}
+                @click=${() => this.act(() => control.take(d.local_name))}>${t("jog.control.take")}</button>`}
+      </header>
+      <div class="signals">
+        ${(signals ?? []).map((s) => this.signal(d.local_name, s, state, mine))}
+      </div>
+    </section>`;
+  }
+
+  render() {
+    const blocks = this.blocks();
+    return html`
+      ${this.error ? html`<p class="error" role="alert" data-testid="io-error">${this.error}</p>` : ""}
+      <h2>${t("app.panel.io")}</h2>
+      ${blocks.length
+        ? blocks.map((d) => this.block(d))
+        : html`<p class="card" data-testid="io-none">${t("io.none")}</p>`}
+    `;
+  }
+}
+
+customElements.define("op-io-panel", OpIoPanel);
