@@ -121,6 +121,8 @@ class ServiceProxy:
         self.http = httpx.AsyncClient(
             timeout=httpx.Timeout(deadline.GATEWAY_TIMEOUT, connect=2.0),
             headers=internal_headers(LOOPBACK),
+            # Idle connections are dropped well before the services close them (30 s).
+            limits=httpx.Limits(keepalive_expiry=5.0),
         )
 
     async def aclose(self) -> None:

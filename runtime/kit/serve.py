@@ -26,6 +26,11 @@ def run_app(app: ASGIApp, *sockets: socket.socket) -> None:
         access_log=False,
         lifespan="on",
         timeout_graceful_shutdown=3,
+        # Longer than any client of ours keeps an idle connection (httpx: 5 s). With both at
+        # 5 s a client could send on a connection the server was closing that instant, and
+        # the request failed ("server disconnected": a 503 at the gateway, seen now and then
+        # in the browser tests).
+        timeout_keep_alive=30,
         ws_ping_interval=5.0,
         ws_ping_timeout=5.0,
     )

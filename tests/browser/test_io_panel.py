@@ -64,10 +64,10 @@ def test_toggle_an_output_and_see_an_input_change(
     assert device_side(block, "lamp_green") is False
 
     # An analog output, set in its unit and range.
-    page.get_by_test_id("value-cell_io-conveyor_speed").fill("42.5")
-    page.get_by_test_id("value-cell_io-conveyor_speed").press("Enter")
-    expect(page.get_by_test_id("signal-cell_io-conveyor_speed")).to_contain_text("42.5 %")
-    assert device_side(block, "conveyor_speed") == pytest.approx(42.5)
+    page.get_by_test_id("value-cell_io-feeder_speed").fill("42.5")
+    page.get_by_test_id("value-cell_io-feeder_speed").press("Enter")
+    expect(page.get_by_test_id("signal-cell_io-feeder_speed")).to_contain_text("42.5 %")
+    assert device_side(block, "feeder_speed") == pytest.approx(42.5)
 
     page.get_by_test_id("io-release-cell_io").tap()
     expect(lamp).to_be_disabled()

@@ -407,9 +407,9 @@ def test_the_io_blocks_offer_an_io_blocks_signals_by_name(
         menu = page.locator(".blocklyMenuItem")
         expect(menu.filter(has_text="cell_io.out7")).to_be_visible()
         offered = menu.all_inner_texts()
-        assert "cell_io.conveyor_run" in offered and "cell_io.part_present" not in offered
-        menu.filter(has_text="cell_io.conveyor_run").tap()
-        expect(field).to_contain_text("cell_io.conveyor_run")
+        assert "cell_io.feeder_run" in offered and "cell_io.part_present" not in offered
+        menu.filter(has_text="cell_io.feeder_run").tap()
+        expect(field).to_contain_text("cell_io.feeder_run")
         assert errors.errors == []
     finally:
         runtime.api("DELETE", "/programs/lamp")

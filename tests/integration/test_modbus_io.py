@@ -278,7 +278,7 @@ def test_a_simulated_block_added_to_the_runtime_is_read_and_switched_through_it(
         program = (
             "set_output('cell_io.lamp_red', True)\n"
             "wait_for_input('cell_io.part_present', True, 30)\n"
-            "set_output('cell_io.conveyor_run', get_input('cell_io.door_closed') == False)\n"
+            "set_output('cell_io.feeder_run', get_input('cell_io.door_closed') == False)\n"
             "set_output('cell_io.lamp_red', False)\n"
         )
         saved = runtime.api("PUT", "/programs/io_check", json={"python": program})
@@ -302,7 +302,7 @@ def test_a_simulated_block_added_to_the_runtime_is_read_and_switched_through_it(
         )
         final = runtime.api("GET", "/programs/io_check/status").json()
         assert final["state"] == "finished", final
-        assert httpx.get(f"{url}/sim/signals/conveyor_run", timeout=5).json()["value"] is True
+        assert httpx.get(f"{url}/sim/signals/feeder_run", timeout=5).json()["value"] is True
         assert not lamp_red()
         bad = "set_output('cell_io.part_present', True)\n"
         assert runtime.api("PUT", "/programs/io_bad", json={"python": bad}).status_code == 200

@@ -15,9 +15,6 @@ from websockets.sync.client import connect
 from runtime.bench.harness.jog import Cell, JogClient
 from runtime.bench.harness.processes import Runtime
 
-# No real-time margins here: runs alongside the rest (tests/suite.py).
-pytestmark = pytest.mark.concurrent
-
 ATTACKER = "http://attacker.example"
 
 # What a foreign page can send without asking the browser first: text/plain, no custom
