@@ -5,12 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import pytest
-
 from runtime.bench.harness.processes import Runtime, child_env, wait_for
-
-# No real-time margins here: runs alongside the rest (tests/suite.py).
-pytestmark = pytest.mark.concurrent
 
 
 def test_control_lease_between_two_pendants(home: Path) -> None:

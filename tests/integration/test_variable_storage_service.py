@@ -19,9 +19,6 @@ from websockets.sync.client import connect
 from runtime.bench.harness.processes import Proc, child_env, free_port, wait_for
 from tests.unit.test_variable_store import REJECT, ROUND_TRIP
 
-# No real-time margins here: runs alongside the rest (tests/suite.py).
-pytestmark = pytest.mark.concurrent
-
 
 class Storage(Proc):
     def __init__(self, home: Path, data_dir: Path, port: int | None = None) -> None:
