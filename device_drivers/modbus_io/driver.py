@@ -1,6 +1,6 @@
-"""An I/O block over Modbus TCP: every signal of the register map polled at a steady rate,
-outputs written and confirmed by reading them back. One request at a time per device (many
-devices and gateways mishandle interleaved requests), so concurrent writers queue.
+"""An I/O block over Modbus (TCP or RTU): every signal of the register map polled at a
+steady rate, outputs written and confirmed by reading them back. One request at a time per
+device (see link.py), so concurrent writers queue.
 
 When the device does not answer, every signal is unknown (None) until it does: a value read
 before the silence is not shown as if it were still true."""
@@ -13,14 +13,10 @@ import logging
 import math
 import time
 from collections.abc import Callable
-from typing import Any
-
-from pymodbus.client import AsyncModbusTcpClient
-from pymodbus.exceptions import ModbusException
 
 from device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
-from device_drivers.modbus_io.errors import no_answer, refused
-from device_drivers.modbus_io.registers import Register, RegisterMap, Table
+from device_drivers.modbus_io.link import ModbusLink, Table, poll_forever
+from device_drivers.modbus_io.registers import Register, RegisterMap
 from device_drivers.modbus_io.simulator import ModbusSimulator
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import (
@@ -43,11 +39,9 @@ class ModbusIODriver(IODriver):
         self,
         identity: DeviceIdentity,
         registers: RegisterMap,
-        host: str,
-        port: int,
+        link: ModbusLink,
         *,
         poll_hz: float = 20.0,
-        timeout: float = 1.0,
         clock: Callable[[], float] = time.time,
         simulator: ModbusSimulator | None = None,
     ) -> None:
@@ -56,9 +50,7 @@ class ModbusIODriver(IODriver):
         self.map = registers
         self.period = 1.0 / poll_hz
         self.clock = clock
-        self.host, self.port, self.timeout = host, port, timeout
-        self._client: AsyncModbusTcpClient | None = None  # made on the loop that uses it
-        self.lock = asyncio.Lock()
+        self.link = link
         self.values: dict[str, SignalValue] = {r.name: None for r in registers.signals}
         self.changed: dict[str, float] = {}
         self.connected = False
@@ -70,47 +62,8 @@ class ModbusIODriver(IODriver):
 
     # The device ---------------------------------------------------------------------------
 
-    @property
-    def client(self) -> AsyncModbusTcpClient:
-        if self._client is None:
-            self._client = AsyncModbusTcpClient(
-                self.host, port=self.port, timeout=self.timeout, retries=0, reconnect_delay=0
-            )
-        return self._client
-
-    async def _ensure_connected(self) -> None:
-        if self.client.connected:
-            return
-        if not await self.client.connect():
-            raise no_answer("connecting", "nothing accepts connections at its address")
-
-    async def _request(self, what: str, call: Any, *args: Any, **kwargs: Any) -> Any:
-        """One request, its exception or silence turned into a clear error."""
-        await self._ensure_connected()
-        try:
-            response = await call(*args, device_id=self.map.unit_id, **kwargs)
-        except (TimeoutError, ModbusException, OSError) as exc:
-            self.client.close()  # a late answer must not be taken for the next request's
-            raise no_answer(what, type(exc).__name__) from exc
-        if response.isError():
-            raise refused(int(getattr(response, "exception_code", 0)), what)
-        return response
-
     async def _read_block(self, table: Table, first: int, count: int) -> Words:
-        calls = {
-            "coil": self.client.read_coils,
-            "discrete_input": self.client.read_discrete_inputs,
-            "holding_register": self.client.read_holding_registers,
-            "input_register": self.client.read_input_registers,
-        }
-        what = f"reading {count} {table.replace('_', ' ')}s from {first}"
-        response = await self._request(what, calls[table], first, count=count)
-        if table in ("coil", "discrete_input"):
-            data = [int(bool(b)) for b in response.bits[:count]]
-        else:
-            data = list(response.registers)
-        if len(data) != count:
-            raise no_answer(what, f"{len(data)} values for {count}")
+        data = await self.link.read(table, first, count)
         return {(table, first + i): v for i, v in enumerate(data)}
 
     def _value(self, reg: Register, words: Words) -> SignalValue:
@@ -138,7 +91,7 @@ class ModbusIODriver(IODriver):
 
     async def poll_once(self) -> None:
         try:
-            async with self.lock:
+            async with self.link.lock:
                 words: Words = {}
                 for table, first, count in self.map.blocks():
                     words.update(await self._read_block(table, first, count))
@@ -151,28 +104,17 @@ class ModbusIODriver(IODriver):
             {r.name: self._value(r, words) for r in self.map.signals}, connected=True, error=""
         )
 
-    async def _poll(self) -> None:
-        next_at = time.monotonic()
-        while True:
-            await self.poll_once()
-            next_at += self.period
-            delay = next_at - time.monotonic()
-            if delay < 0:  # fell behind (a timeout): start again from now, no burst
-                next_at, delay = time.monotonic(), 0.0
-            await asyncio.sleep(delay)
-
     async def start(self) -> None:
         if self.simulator is not None:
             await self.simulator.start()
-        self._poller = asyncio.create_task(self._poll())
+        self._poller = asyncio.create_task(poll_forever(self.period, self.poll_once))
 
     async def shutdown(self) -> None:
         if self._poller is not None:
             self._poller.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._poller
-        if self._client is not None:
-            self._client.close()
+        self.link.close()
         if self.simulator is not None:
             await self.simulator.stop()
 
@@ -202,7 +144,7 @@ class ModbusIODriver(IODriver):
 
     async def read(self, name: str) -> SignalReading:
         reg = self._register(name)
-        async with self.lock:
+        async with self.link.lock:
             value = await self._read_signal(reg)
         return SignalReading(name=name, value=value, ts=self.clock())
 
@@ -228,12 +170,12 @@ class ModbusIODriver(IODriver):
         if reg.table not in ("coil", "holding_register"):
             raise InvalidValue(f"{name} is an input: only outputs are written", code="read_only")
         words = self._coded(reg, command.value)
-        async with self.lock:
+        async with self.link.lock:
             what = f"writing {name}"
             if reg.table == "coil":
-                await self._request(what, self.client.write_coil, reg.address, bool(words[0]))
+                await self.link.write_coil(what, reg.address, bool(words[0]))
             else:
-                await self._request(what, self.client.write_registers, reg.address, words)
+                await self.link.write_registers(what, reg.address, words)
             # Confirmed only by what the device then holds.
             held = await self._read_block(reg.table, reg.address, reg.words)
             value = self._value(reg, held)

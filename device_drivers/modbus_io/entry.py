@@ -1,6 +1,7 @@
 """The Modbus I/O block as the driver host starts it (`openpendant driver modbus-io`):
-against a device at `--address`, or, with `--simulate`, against a simulated device this
-process serves on pymodbus's server (the protocol between them is the real one)."""
+against a device at `--address` (TCP) or on `--serial` (RTU), or, with `--simulate`,
+against a simulated device this process serves on pymodbus's server (the protocol between
+them is the real one)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from fastapi import APIRouter
 from pydantic import BaseModel, ConfigDict, Field
 
 from device_drivers.modbus_io.driver import ModbusIODriver
+from device_drivers.modbus_io.link import Address, ModbusLink, Parity, tcp_address
 from device_drivers.modbus_io.registers import load_map
 from device_drivers.modbus_io.simulator import ModbusSimulator
 from runtime.interfaces.device import DeviceIdentity
@@ -21,27 +23,42 @@ from runtime.paths import MODBUS_MAPS_DIR
 DEFAULT_MAP = MODBUS_MAPS_DIR / "cell_io.yaml"
 
 
-class ModbusIOOptions(BaseModel):
+class LinkOptions(BaseModel):
+    """Where the device is and how to talk to it, for every Modbus driver."""
+
     model_config = ConfigDict(extra="forbid")
 
-    map: Path | None = Field(default=None, description="register map YAML (default: cell I/O)")
     address: str = Field(default="127.0.0.1:502", description="the device's host:port (Modbus TCP)")
+    serial: str = Field(
+        default="", max_length=200, description="a serial port for Modbus RTU (instead of TCP)"
+    )
+    baudrate: int = Field(default=115200, ge=300, le=4_000_000, description="RTU: bits per second")
+    parity: Parity = Field(default="N", description="RTU: N, E or O")
+    stopbits: int = Field(default=1, ge=1, le=2, description="RTU: stop bits")
+    unit_id: int | None = Field(default=None, ge=0, le=247, description="unit id (default: map's)")
     poll_hz: float = Field(default=20.0, gt=0, le=200, description="polls per second")
     timeout: float = Field(default=1.0, gt=0, le=30, description="seconds to wait for answers")
     simulate: bool = Field(default=False, description="serve a simulated device and use it")
+
+    def link_address(self) -> Address:
+        if self.serial:
+            return Address(
+                serial=self.serial,
+                baudrate=self.baudrate,
+                parity=self.parity,
+                stopbits=self.stopbits,
+            )
+        return tcp_address(self.address)
+
+
+class ModbusIOOptions(LinkOptions):
+    map: Path | None = Field(default=None, description="register map YAML (default: cell I/O)")
 
     def default_name(self) -> str:
         return "sim-io" if self.simulate else "io"
 
 
-def _address(text: str) -> tuple[str, int]:
-    host, _, port = text.rpartition(":")
-    if not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise InvalidValue(f"--address wants host:port, got {text!r}")
-    return host.strip("[]"), int(port)
-
-
-def _free_port() -> int:
+def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
@@ -49,22 +66,16 @@ def _free_port() -> int:
 
 def create(name: str, uuid: str, options: ModbusIOOptions) -> ModbusIODriver:
     registers = load_map(options.map or DEFAULT_MAP)
+    if options.unit_id is not None:
+        registers = registers.model_copy(update={"unit_id": options.unit_id})
+    simulator = None
+    address = options.link_address()
     if options.simulate:
-        simulator = ModbusSimulator(registers, "127.0.0.1", _free_port())
-        host, port = simulator.host, simulator.port
-    else:
-        simulator = None
-        host, port = _address(options.address)
+        simulator = ModbusSimulator(registers, "127.0.0.1", free_port())
+        address = simulator.address
     identity = DeviceIdentity(uuid=uuid, kind="io", model=registers.model[:64], name=name)
-    return ModbusIODriver(
-        identity,
-        registers,
-        host,
-        port,
-        poll_hz=options.poll_hz,
-        timeout=options.timeout,
-        simulator=simulator,
-    )
+    link = ModbusLink(address, registers.unit_id, options.timeout)
+    return ModbusIODriver(identity, registers, link, poll_hz=options.poll_hz, simulator=simulator)
 
 
 def routes(driver: ModbusIODriver) -> APIRouter:

@@ -4,17 +4,16 @@ and in which unit it is read (loaded from YAML)."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Literal
 
 import yaml
 from pydantic import Field, ValidationError, model_validator
 
 from device_drivers.modbus_io.codec import DataType, Order, word_count
+from device_drivers.modbus_io.link import Table
 from runtime.interfaces.common import Strict
 from runtime.interfaces.io import SIGNAL_NAME, SignalInfo, SignalKind
 from runtime.kit.errors import InvalidValue
 
-Table = Literal["coil", "discrete_input", "input_register", "holding_register"]
 KIND: dict[Table, SignalKind] = {
     "coil": "digital_output",
     "discrete_input": "digital_input",

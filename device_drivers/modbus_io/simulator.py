@@ -1,7 +1,8 @@
-"""A simulated Modbus TCP device on pymodbus's own server, holding the signals of a register
-map: what the driver reads and writes goes over the real protocol. A test (or the simulated
-cell) sets inputs by name, may make the device answer with an exception code, or fall
-silent."""
+"""A simulated Modbus device on pymodbus's own server (TCP, or RTU framing on a loopback
+socket as a serial line carries it), holding the signals of a register map: what the driver
+reads and writes goes over the real protocol. A test (or the simulated cell) sets inputs by
+name, may make the device answer with an exception code, or fall silent. A subclass that is
+a machine (a gripper) reacts to writes and refreshes what a read sees."""
 
 from __future__ import annotations
 
@@ -9,12 +10,14 @@ import asyncio
 import contextlib
 from typing import Any
 
+from pymodbus import FramerType
 from pymodbus.constants import ExcCodes
-from pymodbus.server import ModbusTcpServer
+from pymodbus.server import ModbusSerialServer, ModbusTcpServer
 from pymodbus.simulator import DataType, SimData, SimDevice
 
 from device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
-from device_drivers.modbus_io.registers import KIND, RegisterMap, Table
+from device_drivers.modbus_io.link import Address, Table
+from device_drivers.modbus_io.registers import KIND, RegisterMap
 
 # Function code -> (table, writes)
 FUNCTIONS: dict[int, tuple[Table, bool]] = {
@@ -34,19 +37,22 @@ def _size(registers: RegisterMap, table: Table) -> int:
 
 
 class ModbusSimulator:
-    def __init__(self, registers: RegisterMap, host: str = "127.0.0.1", port: int = 5020) -> None:
+    def __init__(
+        self,
+        registers: RegisterMap,
+        host: str = "127.0.0.1",
+        port: int = 5020,
+        *,
+        rtu: bool = False,
+    ) -> None:
         self.map = registers
-        self.host, self.port = host, port
+        self.host, self.port, self.rtu = host, port, rtu
         # What the device holds, by table: one int per register, one 0/1 per coil or input.
-        self.data: dict[Table, list[int]] = {
-            table: [0]
-            * max([s.address + s.words for s in registers.signals if s.table == table] or [1])
-            for table in KIND
-        }
+        self.data: dict[Table, list[int]] = {table: [0] * _size(registers, table) for table in KIND}
         self.fail_with: int | None = None  # answer every request with this exception code
         self.silent = asyncio.Event()  # set: the device answers nothing
         self.requests: list[tuple[int, int]] = []  # (function code, address), in order
-        self._server: ModbusTcpServer | None = None
+        self._server: ModbusTcpServer | ModbusSerialServer | None = None
         self._task: asyncio.Task[Any] | None = None
 
     def _device(self) -> SimDevice:
@@ -88,7 +94,9 @@ class ModbusSimulator:
         if writes and set_values is not None:
             for i, v in enumerate(set_values):
                 held[address + i] = int(v)
+            self._written(table, address)
             return None
+        self._reading(table, address)
         bitwise = table in ("coil", "discrete_input")
         for a in range(address, min(address + count, len(held))):
             if bitwise:
@@ -101,6 +109,12 @@ class ModbusSimulator:
             else:
                 current_registers[a - start_address] = held[a]
         return None
+
+    def _written(self, table: Table, address: int) -> None:
+        """After a write from `address` on: what a machine does about it."""
+
+    def _reading(self, table: Table, address: int) -> None:
+        """Before a read from `address` on: bring what it holds up to date."""
 
     # Signals by name ------------------------------------------------------------------------
 
@@ -124,8 +138,20 @@ class ModbusSimulator:
 
     # The server -----------------------------------------------------------------------------
 
+    @property
+    def address(self) -> Address:
+        """Where a driver finds it: over TCP, or through pyserial's socket:// as a line."""
+        if self.rtu:
+            return Address(serial=f"socket://{self.host}:{self.port}")
+        return Address(self.host, self.port)
+
     async def start(self) -> None:
-        self._server = ModbusTcpServer(self._device(), address=(self.host, self.port))
+        if self.rtu:
+            self._server = ModbusSerialServer(
+                self._device(), framer=FramerType.RTU, port=f"socket://{self.host}:{self.port}"
+            )
+        else:
+            self._server = ModbusTcpServer(self._device(), address=(self.host, self.port))
         self._task = asyncio.create_task(self._server.serve_forever())
         await asyncio.sleep(0)
         for _ in range(100):  # listening once a connection is accepted

@@ -8,6 +8,7 @@ import asyncio
 import time
 
 from device_drivers.modbus_io.driver import ModbusIODriver
+from device_drivers.modbus_io.link import ModbusLink
 from device_drivers.modbus_io.registers import load_map
 from device_drivers.modbus_io.simulator import ModbusSimulator
 from runtime.bench.harness.processes import free_port
@@ -30,7 +31,7 @@ async def _measure(count: int) -> tuple[list[float], list[float]]:
     sim = ModbusSimulator(registers, port=free_port())
     await sim.start()
     identity = DeviceIdentity(uuid="bench-io", kind="io", model="bench", name="bench-io")
-    driver = ModbusIODriver(identity, registers, sim.host, sim.port)
+    driver = ModbusIODriver(identity, registers, ModbusLink(sim.address, registers.unit_id, 1.0))
     writes: list[float] = []
     polls: list[float] = []
     try:

@@ -1,27 +1,30 @@
-"""The Modbus I/O driver against a device on pymodbus's own server, over TCP on loopback:
-every data type in every byte and word order, scaling, every exception code, a silent
-device (its signals become unknown), a device restarted (the driver reconnects) and 20
-writers at once (one request at a time, each write confirmed by its read-back)."""
+"""The Modbus I/O driver against a device on pymodbus's own server, over TCP on loopback
+(and RTU framing through pyserial's socket:// as a serial line would carry it): every data
+type in every byte and word order, scaling, every exception code, a silent device (its
+signals become unknown), a device restarted (the driver reconnects) and 20 writers at once
+(one request at a time, each write confirmed by its read-back). The block in a running
+runtime is in test_modbus_runtime.py."""
 
 from __future__ import annotations
 
 import asyncio
 import itertools
 from collections.abc import Awaitable, Callable
-from pathlib import Path
 from typing import Any
 
-import httpx
 import pytest
 
 from device_drivers.modbus_io.driver import ModbusIODriver
 from device_drivers.modbus_io.errors import EXCEPTIONS, ModbusRefused
+from device_drivers.modbus_io.link import ModbusLink
 from device_drivers.modbus_io.registers import RegisterMap
 from device_drivers.modbus_io.simulator import ModbusSimulator
-from runtime.bench.harness.processes import DriverProc, Runtime, free_port, wait_for
+from runtime.bench.harness.processes import free_port
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import SignalWrite
 from runtime.kit.errors import InvalidValue, Unavailable
+
+pytestmark = pytest.mark.concurrent  # no runtime, no robot: nothing here is real-time
 
 SIGNALS: list[dict[str, Any]] = [
     {"name": "part_present", "table": "discrete_input", "address": 3},
@@ -84,14 +87,16 @@ def run(
     test: Callable[[ModbusSimulator, ModbusIODriver], Awaitable[None]],
     registers: RegisterMap | None = None,
     timeout: float = 0.5,
+    rtu: bool = False,
 ) -> None:
     registers = registers or make_map()
 
     async def main() -> None:
-        sim = ModbusSimulator(registers, port=free_port())
+        sim = ModbusSimulator(registers, port=free_port(), rtu=rtu)
         await sim.start()
         identity = DeviceIdentity(uuid="io-1", kind="io", model="test block", name="io")
-        driver = ModbusIODriver(identity, registers, sim.host, sim.port, timeout=timeout)
+        link = ModbusLink(sim.address, registers.unit_id, timeout)
+        driver = ModbusIODriver(identity, registers, link)
         try:
             await test(sim, driver)
         finally:
@@ -102,9 +107,11 @@ def run(
 
 
 @pytest.mark.parametrize(
-    ("byte_order", "word_order"), list(itertools.product(("big", "little"), repeat=2))
+    ("byte_order", "word_order", "rtu"),
+    [(*orders, False) for orders in itertools.product(("big", "little"), repeat=2)]
+    + [("big", "little", True)],
 )
-def test_every_type_scaled_in_every_order(byte_order: str, word_order: str) -> None:
+def test_every_type_scaled_in_every_order(byte_order: str, word_order: str, rtu: bool) -> None:
     inputs = {
         "part_present": True,
         "counts": -1234,
@@ -128,7 +135,7 @@ def test_every_type_scaled_in_every_order(byte_order: str, word_order: str) -> N
         # The coding is the device's: the raw words differ by order, the values do not.
         assert sim.data["input_register"][2:4] != [0, 0]
 
-    run(test, make_map(byte_order, word_order))
+    run(test, make_map(byte_order, word_order), rtu=rtu)
 
 
 def test_writes_the_device_cannot_hold_are_refused_before_sending() -> None:
@@ -232,88 +239,3 @@ async def until(check: Callable[[], bool], timeout: float = 10.0) -> None:
         if asyncio.get_running_loop().time() > deadline:
             raise TimeoutError("condition not met")
         await asyncio.sleep(0.02)
-
-
-def test_a_simulated_block_added_to_the_runtime_is_read_and_switched_through_it(
-    tmp_path: Path,
-) -> None:
-    """`openpendant driver modbus-io --simulate`: discovered, added, its input seen change
-    through the runtime, an output switched with control (and refused without it)."""
-    runtime = Runtime(tmp_path, extra=["--no-sim"])
-    device = DriverProc(tmp_path, "modbus-io", "cell-io", "--simulate")
-    try:
-        runtime.wait_ready()
-        url = device.wait_ready()
-        added = runtime.api("POST", "/devices", json={"url": url, "local_name": "cell_io"})
-        assert added.status_code in (200, 201), added.text
-
-        def value(name: str) -> Any:
-            state = runtime.api("GET", "/devices/cell_io/state").json()
-            return state.get("values", {}).get(name, "missing")
-
-        wait_for(lambda: value("part_present") is False, 10, what="the block polled")
-        httpx.put(f"{url}/sim/signals/part_present", json={"value": True}, timeout=5)
-        wait_for(lambda: value("part_present") is True, 10, what="the input seen")
-        switch = {"args": ["lamp_green"], "body": {"value": True}}
-        refused = runtime.api("POST", "/devices/cell_io/call/write", role="operator", json=switch)
-        assert refused.status_code == 409, refused.text
-        assert httpx.get(f"{url}/sim/signals/lamp_green", timeout=5).json()["value"] is False
-        lease = runtime.api(
-            "POST", "/devices/cell_io/lease", role="operator", json={"holder": "tablet"}
-        ).json()["token"]
-        done = runtime.api(
-            "POST",
-            "/devices/cell_io/call/write",
-            role="operator",
-            json=switch,
-            headers={"X-Lease-Token": lease},
-        )
-        assert done.status_code == 200 and done.json()["value"] is True, done.text
-        assert httpx.get(f"{url}/sim/signals/lamp_green", timeout=5).json()["value"] is True
-        wait_for(lambda: value("lamp_green") is True, 10, what="the output in the state")
-        runtime.api("DELETE", "/devices/cell_io/lease", headers={"X-Lease-Token": lease})
-
-        # The I/O blocks of a program work on the block's signals by name.
-        httpx.put(f"{url}/sim/signals/part_present", json={"value": False}, timeout=5)
-        program = (
-            "set_output('cell_io.lamp_red', True)\n"
-            "wait_for_input('cell_io.part_present', True, 30)\n"
-            "set_output('cell_io.feeder_run', get_input('cell_io.door_closed') == False)\n"
-            "set_output('cell_io.lamp_red', False)\n"
-        )
-        saved = runtime.api("PUT", "/programs/io_check", json={"python": program})
-        assert saved.status_code == 200, saved.text
-        assert runtime.api("POST", "/programs/io_check/run", json={}).status_code == 202
-
-        def lamp_red() -> bool:
-            return bool(httpx.get(f"{url}/sim/signals/lamp_red", timeout=5).json()["value"])
-
-        wait_for(lamp_red, 20, what="the program switching the red lamp on")
-        status = runtime.api("GET", "/programs/io_check/status").json()
-        assert status["state"] == "running"  # waiting for the part
-        httpx.put(f"{url}/sim/signals/part_present", json={"value": True}, timeout=5)
-        wait_for(
-            lambda: (
-                runtime.api("GET", "/programs/io_check/status").json()["state"]
-                in ("finished", "failed")
-            ),
-            30,
-            what="the program's end",
-        )
-        final = runtime.api("GET", "/programs/io_check/status").json()
-        assert final["state"] == "finished", final
-        assert httpx.get(f"{url}/sim/signals/feeder_run", timeout=5).json()["value"] is True
-        assert not lamp_red()
-        bad = "set_output('cell_io.part_present', True)\n"
-        assert runtime.api("PUT", "/programs/io_bad", json={"python": bad}).status_code == 200
-        assert runtime.api("POST", "/programs/io_bad/run", json={}).status_code == 202
-        wait_for(
-            lambda: runtime.api("GET", "/programs/io_bad/status").json()["state"] == "error",
-            30,
-            what="writing an input refused",
-        )
-        error = runtime.api("GET", "/programs/io_bad/status").json()["error"]
-        assert error["code"] == "read_only" and "part_present is an input" in error["message"]
-    finally:
-        device.stop()
-        runtime.stop()
