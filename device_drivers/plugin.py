@@ -7,7 +7,7 @@ from plugins.api import Driver, Plugin
 
 PLUGIN = Plugin(
     name="drivers",
-    description="The simulated robot, the 3D mouse and Modbus I/O blocks",
+    description="The simulated robot, the 3D mouse, Modbus I/O blocks and grippers",
     drivers=(
         Driver(
             "sim-robot",
@@ -33,7 +33,15 @@ PLUGIN = Plugin(
             "device_drivers.modbus_io.entry:create",
             options="device_drivers.modbus_io.entry:ModbusIOOptions",
             routes="device_drivers.modbus_io.entry:routes",
-            description="an I/O block over Modbus TCP (a register map; --simulate serves one)",
+            description="an I/O block over Modbus TCP or RTU (a register map; --simulate: a sim)",
+        ),
+        Driver(
+            "modbus-gripper",
+            "gripper",
+            "device_drivers.modbus_io.gripper_entry:create",
+            options="device_drivers.modbus_io.gripper_entry:ModbusGripperOptions",
+            routes="device_drivers.modbus_io.gripper_entry:routes",
+            description="a Robotiq 2F-85/2F-140 or a gripper on digital I/O, over Modbus",
         ),
     ),
 )
