@@ -130,6 +130,42 @@ def io_wait_input(block: Block, g: Generator) -> list[str]:
     return [f"wait_for_input({name}, {state}, {g.value(block, 'TIMEOUT', '10')})"]
 
 
+def io_set_analog(block: Block, g: Generator) -> list[str]:
+    name = py_string(_choice(block, g, "NAME"))
+    return [f"set_analog_output({name}, {g.value(block, 'VALUE', '0')})"]
+
+
+def io_get_analog(block: Block, g: Generator) -> str:
+    return f"get_analog({py_string(_choice(block, g, 'NAME'))})"
+
+
+# Grippers ----------------------------------------------------------------------------------
+
+
+def _gripper(block: Block, g: Generator) -> str:
+    return py_string(_choice(block, g, "GRIPPER"))
+
+
+def gripper_open(block: Block, g: Generator) -> list[str]:
+    return [f"gripper_open({_gripper(block, g)})"]
+
+
+def gripper_close(block: Block, g: Generator) -> list[str]:
+    return [f"gripper_close({_gripper(block, g)})"]
+
+
+def gripper_set_force(block: Block, g: Generator) -> list[str]:
+    return [f"gripper_set_force({_gripper(block, g)}, {g.value(block, 'FORCE', '50')})"]
+
+
+def gripper_wait_grip(block: Block, g: Generator) -> list[str]:
+    return [f"gripper_wait_for_grip({_gripper(block, g)}, {g.value(block, 'TIMEOUT', '5')})"]
+
+
+def gripper_holds_part(block: Block, g: Generator) -> str:
+    return f"gripper_holds_part({_gripper(block, g)})"
+
+
 # Variable storage -------------------------------------------------------------------------
 
 

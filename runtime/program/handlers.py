@@ -112,7 +112,7 @@ async def check_waypoint(run: RunHost, args: dict[str, Any]) -> dict[str, str]:
     return {"type": variable.type}
 
 
-async def _signal(run: RunHost, name: str) -> tuple[str, str, str]:
+async def signal_of(run: RunHost, name: str) -> tuple[str, str, str]:
     """(device, its kind, signal) of "<device>.<signal>": a robot controller's do0/di3, or
     a signal an I/O block's register map names (cell_io.lamp_green)."""
     device, dot, signal = name.partition(".")
@@ -133,7 +133,7 @@ async def _signal(run: RunHost, name: str) -> tuple[str, str, str]:
 
 async def set_output(run: RunHost, args: dict[str, Any]) -> None:
     name = str(args["name"])
-    device, kind, signal = await _signal(run, name)
+    device, kind, signal = await signal_of(run, name)
     value = bool(args["value"])
     if kind == "io":
         block = cast(IOClient, await run.device(device, "io"))
@@ -150,7 +150,7 @@ async def set_output(run: RunHost, args: dict[str, Any]) -> None:
 
 async def get_io(run: RunHost, args: dict[str, Any]) -> bool:
     name = str(args["name"])
-    device, kind, signal = await _signal(run, name)
+    device, kind, signal = await signal_of(run, name)
     if kind == "io":
         block = cast(IOClient, await run.read_device(device, "io"))
         try:
@@ -166,6 +166,35 @@ async def get_io(run: RunHost, args: dict[str, Any]) -> bool:
     if index >= len(values):
         raise CallRefused(f"{device} has no {signal}", "unknown_io")
     return bool(values[index])
+
+
+async def set_analog(run: RunHost, args: dict[str, Any]) -> None:
+    name = str(args["name"])
+    device, kind, signal = await signal_of(run, name)
+    if kind != "io":
+        raise CallRefused(f"{device} has no analog outputs", "unknown_io")
+    block = cast(IOClient, await run.device(device, "io"))
+    try:
+        await block.write(signal, SignalWrite(value=float(args["value"])))
+    except (NotFound, InvalidValue) as exc:
+        raise CallRefused(f"{device}: {exc.message}", exc.code) from None
+
+
+async def get_analog(run: RunHost, args: dict[str, Any]) -> float:
+    name = str(args["name"])
+    device, kind, signal = await signal_of(run, name)
+    if kind != "io":
+        raise CallRefused(f"{device} has no analog signals", "unknown_io")
+    block = cast(IOClient, await run.read_device(device, "io"))
+    try:
+        reading = await block.read(signal)
+    except NotFound as exc:
+        raise CallRefused(f"{device}: {exc.message}", exc.code) from None
+    if reading.value is None:
+        raise CallRefused(f"{name} is unknown: {device} does not answer", "device_disconnected")
+    if isinstance(reading.value, bool):
+        raise CallRefused(f"{name} is a digital signal", "not_analog")
+    return reading.value
 
 
 async def get_stored(run: RunHost, args: dict[str, Any]) -> dict[str, Any]:

@@ -71,6 +71,7 @@ class RunHost:
         self.commanded: list[str] = []  # every device the run took or used a lease of
         self.robots: list[str] = []  # ... of which the robots
         self.speed = 0.5
+        self.gripper_force: dict[str, float] = {}  # N, set by a block for the following closes
         # Named on each move: the motion service refuses the run's moves once it is stopped,
         # even one whose request is still on its way when the stop arrives.
         self.caller = f"run-{uuid.uuid4().hex}"

@@ -9,6 +9,7 @@ from typing import Any
 from sandbox.library.base import (
     bool_arg,
     host,
+    number_arg,
     sandbox_function,
     text_arg,
 )
@@ -38,3 +39,18 @@ def wait_for_input(name: str, value: Any, timeout: Any) -> None:
     """Wait until the input reads `value`; fail after `timeout` seconds."""
     wanted = bool_arg(value, "value")
     poll_until(lambda: get_input(name) is wanted, timeout, f"{name} did not turn {wanted}")
+
+
+@sandbox_function
+def set_analog_output(name: str, value: Any) -> None:
+    """Set an analog output to a value in its unit (within its range)."""
+    host().call(
+        "io.set_analog",
+        {"name": text_arg(name, "output name"), "value": number_arg(value, "value")},
+    )
+
+
+@sandbox_function
+def get_analog(name: str) -> float:
+    """An analog input or output, in its unit."""
+    return float(host().call("io.get_analog", {"name": text_arg(name, "signal name")}))
