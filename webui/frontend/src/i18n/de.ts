@@ -143,6 +143,13 @@ export const de: Catalogue = {
   "io.off": "AUS",
   "io.set": "Setzen",
   "io.disconnected": "antwortet nicht",
+  "gripper.title": "Greifer",
+  "gripper.disconnected": "antwortet nicht",
+  "gripper.opening": "offen {width}",
+  "gripper.holds": "hält ein Teil",
+  "gripper.activate": "Aktivieren",
+  "gripper.open": "Öffnen",
+  "gripper.close": "Schließen",
   "auth.title": "Anmelden",
   "auth.setup_title": "OpenPendant einrichten",
   "auth.setup_hint": "Legen Sie den Administrator an. Es gibt kein Standardpasswort: wählen Sie eines mit mindestens 10 Zeichen.",
@@ -357,6 +364,8 @@ export const de: Catalogue = {
   "program.choices.no_waypoints": "(keiner)",
   "program.choices.no_inputs": "(keine)",
   "program.choices.no_outputs": "(keine)",
+  "program.choices.no_analogs": "(keine)",
+  "program.choices.no_analog_outputs": "(keine)",
   // name-dialog.ts
   "program.name_dialog.save": "Speichern",
   "program.name_dialog.name": "Name",
@@ -473,6 +482,7 @@ export const deBlocks: BlockWords = {
     "Waypoints & poses": "Wegpunkte & Posen",
     Time: "Zeit",
     "I/O": "E/A",
+    Gripper: "Greifer",
     "Stored variables": "Gespeichert",
     Program: "Programm",
     Variables: "Variablen",
@@ -489,6 +499,31 @@ export const deBlocks: BlockWords = {
       message0: "warte auf Eingang %1 = %2 %3 max. %4 s",
       tooltip: "Wartet auf einen digitalen Eingang; nach der Zeit schlägt das Programm fehl.",
       options: { STATE: { TRUE: "an", FALSE: "aus" } },
+    },
+    io_set_analog: {
+      message0: "Analogausgang %1 = %2",
+      tooltip: "Setzt einen Analogausgang auf einen Wert in seiner Einheit (in seinem Bereich).",
+    },
+    io_get_analog: { message0: "Analogwert %1", tooltip: "Ein analoger Ein- oder Ausgang in seiner Einheit." },
+    gripper_open: {
+      message0: "Greifer %1 öffnen",
+      tooltip: "Öffnet den Greifer ganz; das Programm läuft weiter, wenn die Finger stehen.",
+    },
+    gripper_close: {
+      message0: "Greifer %1 schließen",
+      tooltip: "Schließt den Greifer, bis er zu ist oder ein Teil hält; dann läuft das Programm weiter.",
+    },
+    gripper_set_force: {
+      message0: "Greifkraft von %1 = %2 N",
+      tooltip: "Die Kraft der folgenden Schließbewegungen dieses Greifers, in Newton.",
+    },
+    gripper_wait_grip: {
+      message0: "warte bis Greifer %1 ein Teil hält %2 max. %3 s",
+      tooltip: "Wartet, bis der Greifer ein Teil meldet; nach der Zeit schlägt das Programm fehl.",
+    },
+    gripper_holds_part: {
+      message0: "Greifer %1 hält ein Teil",
+      tooltip: "Wahr, solange der Greifer ein Teil zwischen den Fingern meldet.",
     },
     waypoint_get: { message0: "Wegpunkt %1", tooltip: "Ein geteachter Wegpunkt." },
     pose_create: {

@@ -17,6 +17,7 @@ import type { PowerCommand } from "../components/jog-header";
 import type { RobotModel } from "../components/robot-view";
 import type { MoveProgress, Waypoint } from "../components/waypoint-list";
 import "../components/clearance-chip";
+import "../components/gripper-card";
 import "../components/jog-header";
 import "../components/jog-options";
 import "../components/jog-pad";
@@ -277,6 +278,7 @@ export class OpJogPanel extends LitElement {
               ${t("jog.tool_note")}</p>` : ""}
           ${!mine ? html`<p class="muted">${t("jog.control.take_to_jog_hint")}</p>`
             : !state?.flags.ready ? html`<p class="muted">${t("jog.enable_to_jog_hint")}</p>` : ""}
+          <op-gripper-card></op-gripper-card>
           <section class="card">
             <h2>${t("jog.mouse.title")}</h2>
             <op-mouse-card .mice=${mice} device=${jog.mouse} ?on=${jog.mouseOn}

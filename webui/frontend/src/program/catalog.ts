@@ -19,13 +19,15 @@ export interface BlockCatalog {
   words?: RuntimeWords;
 }
 
-export type ChoiceKind = "robots" | "waypoints" | "inputs" | "outputs";
+export type ChoiceKind = "robots" | "waypoints" | "inputs" | "outputs" | "analogs" | "analog_outputs";
 
 const EMPTY_LABEL: Record<ChoiceKind, StringKey> = {
   robots: "program.choices.no_robots",
   waypoints: "program.choices.no_waypoints",
   inputs: "program.choices.no_inputs",
   outputs: "program.choices.no_outputs",
+  analogs: "program.choices.no_analogs",
+  analog_outputs: "program.choices.no_analog_outputs",
 };
 
 /** What the runtime has now; the panel keeps these current. */
@@ -34,6 +36,8 @@ export const choices: Record<ChoiceKind, string[]> = {
   waypoints: [],
   inputs: [],
   outputs: [],
+  analogs: [],
+  analog_outputs: [],
 };
 
 // Names used by loaded programs stay selectable even when the system no longer has them:
@@ -43,6 +47,8 @@ const used: Record<ChoiceKind, Set<string>> = {
   waypoints: new Set(),
   inputs: new Set(),
   outputs: new Set(),
+  analogs: new Set(),
+  analog_outputs: new Set(),
 };
 
 const dynamicFields = new Map<string, ChoiceKind>(); // "<block type>/<field name>" -> kind

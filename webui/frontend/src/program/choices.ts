@@ -1,5 +1,5 @@
 // What the dropdowns of the robot, I/O and waypoint blocks offer: the robots added, the
-// digital inputs and outputs each has, the waypoints taught. Waypoints taught, renamed or
+// digital inputs and outputs each has, the analog signals of the I/O blocks, the waypoints taught. Waypoints taught, renamed or
 // deleted anywhere reach them at once over the waypoint feed.
 
 import { api } from "../api";
@@ -41,6 +41,8 @@ export async function refreshChoices(): Promise<void> {
   );
   const inputs: string[] = [];
   const outputs: string[] = [];
+  const analogs: string[] = [];
+  const analogOutputs: string[] = [];
   for (const d of details) {
     const info = d?.info?.info;
     if (!d || !info) continue;
@@ -49,6 +51,8 @@ export async function refreshChoices(): Promise<void> {
       for (const s of signals) {
         if (s.kind === "digital_input") inputs.push(`${d.local_name}.${s.name}`);
         if (s.kind === "digital_output") outputs.push(`${d.local_name}.${s.name}`);
+        if (s.kind.startsWith("analog")) analogs.push(`${d.local_name}.${s.name}`);
+        if (s.kind === "analog_output") analogOutputs.push(`${d.local_name}.${s.name}`);
       }
       continue;
     }
@@ -57,6 +61,8 @@ export async function refreshChoices(): Promise<void> {
   }
   choices.inputs = inputs;
   choices.outputs = outputs;
+  choices.analogs = analogs;
+  choices.analog_outputs = analogOutputs;
   const lists = await Promise.all(
     ["joint_waypoint", "pose_waypoint"].map((type) =>
       api<{ name: string }[]>("GET", `/api/variables?type=${type}`).catch(() => []),
