@@ -75,7 +75,17 @@ class DeviceSpec(BaseModel):
 
 
 def default_devices() -> list[DeviceSpec]:
-    return [DeviceSpec(driver="sim-robot", name="sim-ur5", options={"model": "ur5"})]
+    """The simulated cell `make run` starts: a UR5, its I/O block and a Robotiq gripper
+    (the last two on pymodbus's server, driven over the real Modbus protocol)."""
+    return [
+        DeviceSpec(driver="sim-robot", name="sim-ur5", options={"model": "ur5"}),
+        DeviceSpec(driver="modbus-io", name="sim-io", options={"simulate": True}),
+        DeviceSpec(
+            driver="modbus-gripper",
+            name="sim-gripper",
+            options={"simulate": True, "profile": "robotiq-2f-85"},
+        ),
+    ]
 
 
 class RuntimeSettings(BaseSettings):

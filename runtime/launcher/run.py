@@ -141,7 +141,7 @@ def _device_children(
         if driver is None:
             log.error("devices: no driver %r is installed; %s not started", spec.driver, spec.name)
             continue
-        if driver.simulated and not settings.sim:
+        if (driver.simulated or spec.options.get("simulate") is True) and not settings.sim:
             continue
         children.append(
             Child(

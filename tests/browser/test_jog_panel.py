@@ -1,17 +1,18 @@
 """The Jog panel by touch: take control, enable, hold a jog button (the robot moves while the
 finger is down and stops when it lifts), teach a waypoint, move away, hold "move to" until it
-arrives, and a live 3D view of the robot."""
+arrives, a live 3D view of the robot, and a gripper opened and closed beside the buttons."""
 
 from __future__ import annotations
 
 import time
 from pathlib import Path
 
+import httpx
 import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, expect
 
-from runtime.bench.harness.processes import STILL, Runtime, wait_for
+from runtime.bench.harness.processes import STILL, DriverProc, Runtime, wait_for
 from tests.browser.conftest import (
     Finger,
     PageErrors,
@@ -154,3 +155,41 @@ def test_without_control_the_pad_does_nothing(
     plus = page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus] button")
     expect(plus).to_be_disabled()
     assert fits_the_screen(page)
+
+
+def test_the_gripper_is_activated_closed_on_a_part_and_opened_from_the_jog_panel(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    """A simulated Robotiq 2F-85 (on pymodbus's server) beside the jog buttons."""
+    device = DriverProc(runtime.home, "modbus-gripper", "sim-gripper", "--simulate")
+    try:
+        url = device.wait_ready()
+        added = runtime.api("POST", "/devices", json={"url": url, "local_name": "gripper"})
+        assert added.status_code in (200, 201), added.text
+        page = tablet.new_page()
+        errors = PageErrors(page)
+        page.goto(f"{runtime.url}/#/jog")
+        card = page.locator("[data-testid=gripper][data-name=gripper]")
+        expect(card).to_be_visible(timeout=15_000)
+        page.get_by_test_id("gripper-control-gripper").tap()
+        page.get_by_test_id("gripper-activate-gripper").tap()
+        close = page.get_by_test_id("gripper-close-gripper")
+        expect(close).to_be_enabled(timeout=10_000)
+        httpx.put(f"{url}/sim/object", json={"width": 0.03}, timeout=5)
+        close.tap()
+        expect(card).to_have_attribute("data-holds", "true", timeout=10_000)
+        expect(page.get_by_test_id("gripper-holds")).to_be_visible()
+        expect(page.get_by_test_id("gripper-reading")).to_contain_text("30")  # mm open
+        page.get_by_test_id("gripper-open-gripper").tap()
+        expect(card).to_have_attribute("data-holds", "false", timeout=10_000)
+        wait_for(
+            lambda: httpx.get(f"{url}/sim/fingers", timeout=5).json()["width"] > 0.0849,
+            10,
+            what="the fingers fully open",
+        )
+        page.get_by_test_id("gripper-release-gripper").tap()
+        expect(page.get_by_test_id("gripper-control-gripper")).to_be_visible()
+        assert errors.errors == []
+    finally:
+        runtime.api("DELETE", "/devices/gripper")
+        device.stop()

@@ -196,7 +196,7 @@ def test_a_bad_config_file_stops_start_up_with_its_reason(home: Path) -> None:
     config.write_text("port: 8080\ndevices:\n  - {driver: sim-robot, nmae: typo}\n")
     result = subprocess.run(
         [sys.executable, "-m", "runtime.cli", "run", "--config", str(config)],
-        env=child_env(home),
+        env=child_env(home, whole_cell=True),
         capture_output=True,
         text=True,
         timeout=60,

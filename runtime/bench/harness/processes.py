@@ -36,12 +36,20 @@ STILL = 1e-6
 
 # Every process a test starts does discovery on loopback only (DESIGN.md §5, §8).
 LOOPBACK_ENV = {"OPENPENDANT_DISCOVERY__INTERFACES": '["127.0.0.1"]'}
+# Of the default cell, the runtimes of tests and benchmarks start just the robot: most need
+# no more, and two fewer processes per runtime keep the suite's time (test_modbus_runtime
+# starts the whole cell).
+ROBOT_ONLY_ENV = {"OPENPENDANT_DEVICES": json.dumps([default_devices()[0].model_dump()])}
 
 
-def child_env(home: Path, **extra: str) -> dict[str, str]:
+def child_env(home: Path, *, whole_cell: bool = False, **extra: str) -> dict[str, str]:
+    """The environment of a process a test starts; `whole_cell`: the configured devices
+    (by default or in a config file), not just the robot."""
     env = dict(os.environ)
     env.pop("OPENPENDANT_SETTINGS_JSON", None)
     env.update(LOOPBACK_ENV)
+    if not whole_cell:
+        env.update(ROBOT_ONLY_ENV)
     env["XDG_DATA_HOME"] = str(home)
     env["PYTHONUNBUFFERED"] = "1"
     env.update(extra)
