@@ -18,7 +18,13 @@ import httpx
 import pytest
 from websockets.sync.client import connect
 
-from runtime.bench.harness.processes import Runtime, child_env, free_port, wait_for
+from runtime.bench.harness.processes import (
+    Runtime,
+    child_env,
+    free_port,
+    wait_for,
+    whole_cell_env,
+)
 
 
 @pytest.fixture(scope="module")
@@ -196,7 +202,7 @@ def test_a_bad_config_file_stops_start_up_with_its_reason(home: Path) -> None:
     config.write_text("port: 8080\ndevices:\n  - {driver: sim-robot, nmae: typo}\n")
     result = subprocess.run(
         [sys.executable, "-m", "runtime.cli", "run", "--config", str(config)],
-        env=child_env(home, whole_cell=True),
+        env=whole_cell_env(home),
         capture_output=True,
         text=True,
         timeout=60,

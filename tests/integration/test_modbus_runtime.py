@@ -11,7 +11,7 @@ from typing import Any
 import httpx
 import pytest
 
-from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
+from runtime.bench.harness.processes import DriverProc, Runtime, wait_for, whole_cell_env
 from runtime.kit.settings import default_devices
 
 
@@ -200,7 +200,7 @@ def test_a_simulated_gripper_is_commanded_with_control_and_by_the_gripper_blocks
 
 def test_the_default_cell_has_a_robot_an_io_block_and_a_gripper(tmp_path: Path) -> None:
     """What `make run` starts (the settings' default devices): each detected, by its kind."""
-    runtime = Runtime(tmp_path, env=child_env(tmp_path, whole_cell=True))
+    runtime = Runtime(tmp_path, env=whole_cell_env(tmp_path))
     try:
         runtime.wait_ready()
 

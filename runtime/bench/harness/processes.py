@@ -42,17 +42,23 @@ LOOPBACK_ENV = {"OPENPENDANT_DISCOVERY__INTERFACES": '["127.0.0.1"]'}
 ROBOT_ONLY_ENV = {"OPENPENDANT_DEVICES": json.dumps([default_devices()[0].model_dump()])}
 
 
-def child_env(home: Path, *, whole_cell: bool = False, **extra: str) -> dict[str, str]:
-    """The environment of a process a test starts; `whole_cell`: the configured devices
-    (by default or in a config file), not just the robot."""
+def child_env(home: Path, **extra: str) -> dict[str, str]:
     env = dict(os.environ)
     env.pop("OPENPENDANT_SETTINGS_JSON", None)
     env.update(LOOPBACK_ENV)
-    if not whole_cell:
-        env.update(ROBOT_ONLY_ENV)
+    env.update(ROBOT_ONLY_ENV)
     env["XDG_DATA_HOME"] = str(home)
     env["PYTHONUNBUFFERED"] = "1"
     env.update(extra)
+    return env
+
+
+def whole_cell_env(home: Path, **extra: str) -> dict[str, str]:
+    """child_env, with the configured devices (by default or in a config file) rather than
+    just the robot."""
+    env = child_env(home, **extra)
+    if "OPENPENDANT_DEVICES" not in extra:
+        del env["OPENPENDANT_DEVICES"]
     return env
 
 
