@@ -146,6 +146,10 @@ def _gripper(block: Block, g: Generator) -> str:
     return py_string(_choice(block, g, "GRIPPER"))
 
 
+def gripper_activate(block: Block, g: Generator) -> list[str]:
+    return [f"gripper_activate({_gripper(block, g)})"]
+
+
 def gripper_open(block: Block, g: Generator) -> list[str]:
     return [f"gripper_open({_gripper(block, g)})"]
 

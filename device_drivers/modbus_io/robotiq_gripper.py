@@ -109,7 +109,10 @@ class RobotiqGripper(GripperDriver):
     async def _go(self, count: int, motion: GripperMotion) -> GripperState:
         status = self.status or await self._read_status()
         if status.activation != robotiq.ACTIVE:
-            raise InvalidValue("activate the gripper first", code="not_activated")
+            raise InvalidValue(
+                "activate the gripper first (Activate in the Jog panel, or the activate block)",
+                code="not_activated",
+            )
         speed = motion.speed or self.speed
         force = motion.force or self.force
         request = Request(

@@ -38,6 +38,20 @@ async def _motion(run: RunHost, name: str, close: bool) -> None:
         raise CallRefused(f"{name}: {state.fault}", "gripper_fault")
 
 
+async def gripper_activate(run: RunHost, args: dict[str, Any]) -> None:
+    name = str(args["gripper"])
+    client = await _gripper(run, args, command=True)
+    state = (await client.ready()).current()
+    if state.activated:
+        return  # a second activation would move the fingers for nothing
+    try:
+        state = await client.activate()
+    except OpenPendantError as exc:
+        raise CallRefused(f"{name}: {exc.message}", exc.code) from None
+    if state.fault:
+        raise CallRefused(f"{name}: {state.fault}", "gripper_fault")
+
+
 async def gripper_open(run: RunHost, args: dict[str, Any]) -> None:
     await _motion(run, str(args["gripper"]), close=False)
 

@@ -10,6 +10,12 @@ from sandbox.library.timing import poll_until
 
 
 @sandbox_function
+def gripper_activate(gripper: str) -> None:
+    """Make the gripper ready after power-up; nothing happens if it already is."""
+    host().call("gripper.activate", {"gripper": text_arg(gripper, "gripper")})
+
+
+@sandbox_function
 def gripper_open(gripper: str) -> None:
     """Open the gripper fully; returns when its fingers have stopped."""
     host().call("gripper.open", {"gripper": text_arg(gripper, "gripper")})

@@ -505,6 +505,10 @@ export const deBlocks: BlockWords = {
       tooltip: "Setzt einen Analogausgang auf einen Wert in seiner Einheit (in seinem Bereich).",
     },
     io_get_analog: { message0: "Analogwert %1", tooltip: "Ein analoger Ein- oder Ausgang in seiner Einheit." },
+    gripper_activate: {
+      message0: "Greifer %1 aktivieren",
+      tooltip: "Macht den Greifer nach dem Einschalten bereit; ist er es schon, geschieht nichts.",
+    },
     gripper_open: {
       message0: "Greifer %1 öffnen",
       tooltip: "Öffnet den Greifer ganz; das Programm läuft weiter, wenn die Finger stehen.",
