@@ -15,6 +15,7 @@ from device_drivers.modbus_io.driver import ModbusIODriver
 from device_drivers.modbus_io.link import Address, ModbusLink, Parity, tcp_address
 from device_drivers.modbus_io.registers import load_map
 from device_drivers.modbus_io.simulator import ModbusSimulator
+from device_drivers.sim_cell.link import CellClient
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import IOState, SignalWrite
 from runtime.kit.errors import InvalidValue, NotFound
@@ -53,6 +54,11 @@ class LinkOptions(BaseModel):
 
 class ModbusIOOptions(LinkOptions):
     map: Path | None = Field(default=None, description="register map YAML (default: cell I/O)")
+    cell: str = Field(
+        default="",
+        max_length=64,
+        description="simulate: the simulated robot whose cell's sensors set inputs of their names",
+    )
 
     def default_name(self) -> str:
         return "sim-io" if self.simulate else "io"
@@ -71,7 +77,8 @@ def create(name: str, uuid: str, options: ModbusIOOptions) -> ModbusIODriver:
     simulator = None
     address = options.link_address()
     if options.simulate:
-        simulator = ModbusSimulator(registers, "127.0.0.1", free_port())
+        cell = CellClient(options.cell) if options.cell else None
+        simulator = ModbusSimulator(registers, "127.0.0.1", free_port(), cell=cell)
         address = simulator.address
     identity = DeviceIdentity(uuid=uuid, kind="io", model=registers.model[:64], name=name)
     link = ModbusLink(address, registers.unit_id, options.timeout)

@@ -18,6 +18,7 @@ from device_drivers.modbus_io.entry import LinkOptions, free_port
 from device_drivers.modbus_io.link import ModbusLink
 from device_drivers.modbus_io.robotiq_gripper import RobotiqGripper
 from device_drivers.modbus_io.sim_grippers import DigitalGripperSimulator, RobotiqSimulator
+from device_drivers.sim_cell.link import CellClient
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.gripper import GripperDriver, GripperState
 from runtime.paths import MODBUS_MAPS_DIR
@@ -31,6 +32,14 @@ class ModbusGripperOptions(LinkOptions):
     map: Path | None = Field(
         default=None, description="register map of a digital gripper (default: close/open/gripped)"
     )
+    mounted_on: str = Field(
+        default="",
+        max_length=64,
+        description="simulate: the simulated robot it is on (it picks that robot's parts)",
+    )
+
+    def cell(self) -> CellClient | None:
+        return CellClient(self.mounted_on) if self.simulate and self.mounted_on else None
 
     def default_name(self) -> str:
         return "sim-gripper" if self.simulate else "gripper"
@@ -42,7 +51,7 @@ def _robotiq(identity: DeviceIdentity, options: ModbusGripperOptions) -> Robotiq
     simulator = None
     address = options.link_address()
     if options.simulate:
-        simulator = RobotiqSimulator(profile, "127.0.0.1", free_port())
+        simulator = RobotiqSimulator(profile, "127.0.0.1", free_port(), cell=options.cell())
         address = simulator.address
     link = ModbusLink(address, unit_id, options.timeout)
     return RobotiqGripper(
@@ -62,7 +71,12 @@ def _digital(identity: DeviceIdentity, options: ModbusGripperOptions) -> Digital
     address = options.link_address()
     if options.simulate:
         simulator = DigitalGripperSimulator(
-            registers, registers.stroke, registers.move_time, host="127.0.0.1", port=free_port()
+            registers,
+            registers.stroke,
+            registers.move_time,
+            host="127.0.0.1",
+            port=free_port(),
+            cell=options.cell(),
         )
         address = simulator.address
     link = ModbusLink(address, registers.unit_id, options.timeout)

@@ -1,7 +1,7 @@
 """Simulated grippers on the simulated Modbus device: a Robotiq 2F that speaks its register
-protocol, and a gripper on two outputs with grip and open inputs. Their fingers are `Jaws`;
-an object is put between them by a test, or by the simulated cell when the fingers close
-around a part."""
+protocol, and a gripper on two outputs with grip and open inputs. Their fingers are `Jaws`.
+Mounted on a simulated robot (`cell`), closing grasps the part at its TCP in the simulated
+cell and opening lets it fall; otherwise a test puts an object between the fingers."""
 
 from __future__ import annotations
 
@@ -11,6 +11,21 @@ from device_drivers.modbus_io.link import Table
 from device_drivers.modbus_io.registers import Register, RegisterMap
 from device_drivers.modbus_io.robotiq import Profile, Request, Status
 from device_drivers.modbus_io.simulator import ModbusSimulator
+from device_drivers.sim_cell.link import CellClient
+
+
+async def _fingers_move(jaws: Jaws, cell: CellClient | None, closing: bool) -> None:
+    """Closing, grasp whatever the cell has between the fingers; opening, let it go."""
+    if cell is None:
+        return
+    if closing:
+        answer = await cell.ask("grasp", opening=jaws.at().width)
+        part = (answer or {}).get("part")
+        jaws.place(float(part["size"][1]) if part else None)
+    else:
+        await cell.ask("release")
+        jaws.place(None)
+
 
 ACTIVATION_TIME = 0.3  # s; a real 2F takes a few seconds, tests need not wait for that
 
@@ -34,16 +49,22 @@ def _robotiq_map(profile: Profile) -> RegisterMap:
 
 class RobotiqSimulator(ModbusSimulator):
     def __init__(
-        self, profile: Profile, host: str = "127.0.0.1", port: int = 5020, *, rtu: bool = False
+        self,
+        profile: Profile,
+        host: str = "127.0.0.1",
+        port: int = 5020,
+        *,
+        rtu: bool = False,
+        cell: CellClient | None = None,
     ) -> None:
-        super().__init__(_robotiq_map(profile), host, port, rtu=rtu)
+        super().__init__(_robotiq_map(profile), host, port, rtu=rtu, cell=cell)
         self.profile = profile
         self.jaws = Jaws(profile.stroke, profile.speed[1])
         self.request = Request()
         self.activated_at: float | None = None  # when the activation finishes
         self.fault = 0
 
-    def _written(self, table: Table, address: int) -> None:
+    async def _written(self, table: Table, address: int) -> None:
         first = robotiq.REQUEST_ADDRESS
         if table != "holding_register" or not first <= address < first + robotiq.WORDS:
             return
@@ -57,6 +78,7 @@ class RobotiqSimulator(ModbusSimulator):
         if not previous.action & robotiq.ACT:  # the rising edge: activation begins
             self.activated_at = self.jaws.clock() + ACTIVATION_TIME
             self.fault = 0
+            await _fingers_move(self.jaws, self.cell, closing=False)
             self.jaws.go(self.profile.stroke, self.profile.speed[1])
             return
         if not self._active():
@@ -64,6 +86,7 @@ class RobotiqSimulator(ModbusSimulator):
             return
         if self.request.action & robotiq.GTO:
             target = robotiq.count_to_width(self.request.position, self.profile.stroke)
+            await _fingers_move(self.jaws, self.cell, target < self.jaws.at().width)
             low, high = self.profile.speed
             self.jaws.go(target, low + (high - low) * self.request.speed / 255)
         else:
@@ -117,14 +140,16 @@ class DigitalGripperSimulator(ModbusSimulator):
         self.jaws = Jaws(stroke, self.speed)
         self.names = {s.name for s in registers.signals}
 
-    def _written(self, table: Table, address: int) -> None:
+    async def _written(self, table: Table, address: int) -> None:
         if table != "coil":
             return
         closing = bool(self.get("close"))
         opening = bool(self.get("open")) if "open" in self.names else not closing
         if closing and not opening:
+            await _fingers_move(self.jaws, self.cell, closing=True)
             self.jaws.go(0.0, self.speed)
         elif opening and not closing:
+            await _fingers_move(self.jaws, self.cell, closing=False)
             self.jaws.go(self.jaws.stroke, self.speed)
 
     def _reading(self, table: Table, address: int) -> None:

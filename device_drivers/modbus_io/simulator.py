@@ -16,9 +16,11 @@ from pymodbus.server import ModbusSerialServer, ModbusTcpServer
 from pymodbus.simulator import DataType, SimData, SimDevice
 
 from device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
-from device_drivers.modbus_io.link import Address, Table
+from device_drivers.modbus_io.link import Address, Table, poll_forever
 from device_drivers.modbus_io.registers import KIND, RegisterMap
+from device_drivers.sim_cell.link import CellClient
 
+SENSE_PERIOD = 0.05  # s between looks at the simulated cell's presence sensors
 # Function code -> (table, writes)
 FUNCTIONS: dict[int, tuple[Table, bool]] = {
     1: ("coil", False),
@@ -44,8 +46,11 @@ class ModbusSimulator:
         port: int = 5020,
         *,
         rtu: bool = False,
+        cell: CellClient | None = None,
     ) -> None:
         self.map = registers
+        # The simulated cell whose presence sensors drive the inputs of the same names.
+        self.cell = cell
         self.host, self.port, self.rtu = host, port, rtu
         # What the device holds, by table: one int per register, one 0/1 per coil or input.
         self.data: dict[Table, list[int]] = {table: [0] * _size(registers, table) for table in KIND}
@@ -54,6 +59,7 @@ class ModbusSimulator:
         self.requests: list[tuple[int, int]] = []  # (function code, address), in order
         self._server: ModbusTcpServer | ModbusSerialServer | None = None
         self._task: asyncio.Task[Any] | None = None
+        self._sensing: asyncio.Task[None] | None = None
 
     def _device(self) -> SimDevice:
         def bits(table: Table) -> list[SimData]:
@@ -94,7 +100,7 @@ class ModbusSimulator:
         if writes and set_values is not None:
             for i, v in enumerate(set_values):
                 held[address + i] = int(v)
-            self._written(table, address)
+            await self._written(table, address)
             return None
         self._reading(table, address)
         bitwise = table in ("coil", "discrete_input")
@@ -110,7 +116,7 @@ class ModbusSimulator:
                 current_registers[a - start_address] = held[a]
         return None
 
-    def _written(self, table: Table, address: int) -> None:
+    async def _written(self, table: Table, address: int) -> None:
         """After a write from `address` on: what a machine does about it."""
 
     def _reading(self, table: Table, address: int) -> None:
@@ -158,11 +164,26 @@ class ModbusSimulator:
             with contextlib.suppress(OSError):
                 _, writer = await asyncio.open_connection(self.host, self.port)
                 writer.close()
+                if self.cell is not None:
+                    self._sensing = asyncio.create_task(poll_forever(SENSE_PERIOD, self._sense))
                 return
             await asyncio.sleep(0.02)
         raise RuntimeError(f"the Modbus simulator did not listen on {self.host}:{self.port}")
 
+    async def _sense(self) -> None:
+        assert self.cell is not None
+        answer = await self.cell.ask("sensed")
+        inputs = {s.name for s in self.map.signals if s.table == "discrete_input"}
+        for name, seen in ((answer or {}).get("sensors") or {}).items():
+            if name in inputs:
+                self.set(name, bool(seen))
+
     async def stop(self) -> None:
+        if self._sensing is not None:
+            self._sensing.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._sensing
+            self._sensing = None
         if self._server is not None:
             await self._server.shutdown()  # type: ignore[no-untyped-call]
         if self._task is not None:

@@ -10,7 +10,10 @@ from collections import deque
 
 import numpy as np
 
+from device_drivers.sim_cell.link import CellServer
+from device_drivers.sim_cell.world import World
 from device_drivers.sim_robot.core import CYCLE, SimCore
+from runtime.interfaces.common import Pose
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.limits import CheckedTrajectory, FloatArray
 from runtime.interfaces.robot import (
@@ -25,6 +28,7 @@ from runtime.kit.errors import RobotError
 from runtime.robotics.kinematics import Kinematics
 
 log = logging.getLogger(__name__)
+TOOL_OPENING = 0.1  # m: what the controller's own tool output opens (a generic gripper)
 
 
 class LoopTimer:
@@ -67,14 +71,28 @@ class SimRobot(RobotDriver):
         self.timer = LoopTimer()
         self._running = threading.Event()
         self._thread: threading.Thread | None = None
+        # The parts around it, which its tool and a simulated gripper on it pick.
+        self.world = World(self._tcp)
+        self.cell = CellServer(self.world, identity.name)
+
+    def _tcp(self) -> Pose:
+        with self.lock:
+            position = self.core.tracker.position.copy()
+            kinematics = self.core.kinematics
+        return kinematics.tcp_pose(position)
 
     async def start(self) -> None:
         self._running.set()
         self._thread = threading.Thread(target=self._loop, name="sim-control", daemon=True)
         self._thread.start()
+        try:
+            await self.cell.start()
+        except OSError as exc:  # another simulated robot of this name and data directory
+            log.warning("no simulated cell for %s: %s", self.identity.name, exc)
 
     async def shutdown(self) -> None:
         await self.halt()
+        await self.cell.stop()
         self._running.clear()
         if self._thread is not None:
             self._thread.join(timeout=1.0)
@@ -175,6 +193,10 @@ class SimRobot(RobotDriver):
     async def _set_tool(self, open_: bool) -> None:
         with self.lock:
             self.core.tool_open = open_
+        if open_:
+            self.world.release()
+        else:
+            self.world.grasp(TOOL_OPENING)
 
     async def _set_digital_output(self, index: int, value: bool) -> None:
         with self.lock:

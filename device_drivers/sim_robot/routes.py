@@ -8,6 +8,7 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query, Response
 from pydantic import Field
 
+from device_drivers.sim_cell.world import CellSetup, Part
 from device_drivers.sim_robot.driver import SimRobot
 from runtime.interfaces.common import Strict
 from runtime.interfaces.robot import OperationalMode, RobotState
@@ -35,6 +36,21 @@ class PlaceRequest(Strict):
 
 def sim_router(robot: SimRobot) -> APIRouter:
     router = APIRouter(prefix="/sim")
+
+    @router.get("/cell/parts")
+    async def parts() -> list[Part]:
+        """Every part's true pose (held ones where the TCP carries them)."""
+        return robot.world.snapshot()
+
+    @router.put("/cell")
+    async def cell(body: CellSetup) -> list[Part]:
+        """Lay out the table: the parts and the presence sensors."""
+        robot.world.replace(body)
+        return robot.world.snapshot()
+
+    @router.get("/cell/sensors")
+    async def sensors() -> dict[str, bool]:
+        return robot.world.sensed()
 
     @router.post("/estop")
     async def estop(body: EstopRequest) -> RobotState:

@@ -75,15 +75,18 @@ class DeviceSpec(BaseModel):
 
 
 def default_devices() -> list[DeviceSpec]:
-    """The simulated cell `make run` starts: a UR5, its I/O block and a Robotiq gripper
+    """The simulated cell `make run` starts: a UR5 with parts on its table, its I/O block
+    (whose `part_present` sees the first part's place) and a Robotiq gripper on its flange
     (the last two on pymodbus's server, driven over the real Modbus protocol)."""
     return [
         DeviceSpec(driver="sim-robot", name="sim-ur5", options={"model": "ur5"}),
-        DeviceSpec(driver="modbus-io", name="sim-io", options={"simulate": True}),
+        DeviceSpec(
+            driver="modbus-io", name="sim-io", options={"simulate": True, "cell": "sim-ur5"}
+        ),
         DeviceSpec(
             driver="modbus-gripper",
             name="sim-gripper",
-            options={"simulate": True, "profile": "robotiq-2f-85"},
+            options={"simulate": True, "profile": "robotiq-2f-85", "mounted_on": "sim-ur5"},
         ),
     ]
 

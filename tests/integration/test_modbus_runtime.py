@@ -5,14 +5,12 @@ commanded through the device manager with control and by programs' blocks."""
 from __future__ import annotations
 
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
 
-from runtime.bench.harness.processes import DriverProc, Runtime, wait_for, whole_cell_env
-from runtime.kit.settings import default_devices
+from runtime.bench.harness.processes import DriverProc, Runtime, wait_for
 
 
 @pytest.fixture(scope="module")
@@ -196,20 +194,3 @@ def test_a_simulated_gripper_is_commanded_with_control_and_by_the_gripper_blocks
         runtime, "grip_empty", "gripper_close('gripper')\ngripper_wait_for_grip('gripper', 0.5)\n"
     )
     assert empty["error"]["code"] == "timeout" and "did not grip" in empty["error"]["message"]
-
-
-def test_the_default_cell_has_a_robot_an_io_block_and_a_gripper(tmp_path: Path) -> None:
-    """What `make run` starts (the settings' default devices): each detected, by its kind."""
-    runtime = Runtime(tmp_path, env=whole_cell_env(tmp_path))
-    try:
-        runtime.wait_ready()
-
-        def kinds() -> dict[str, str]:
-            found = runtime.api("GET", "/devices/detected").json()
-            return {d["name"]: d["kind"] for d in found}
-
-        wanted = {"sim-ur5": "robot", "sim-io": "io", "sim-gripper": "gripper"}
-        wait_for(lambda: wanted.items() <= kinds().items(), 20, what="the default cell")
-        assert {d.name for d in default_devices()} == set(wanted)
-    finally:
-        runtime.stop()
