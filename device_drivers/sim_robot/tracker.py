@@ -129,6 +129,15 @@ class JointTracker:
             np.where(near, speed, self.max_velocity),
         )
 
+    def step_toward(self, target: FloatArray, max_velocity: FloatArray) -> None:
+        """Toward `target`, to stop there, no joint faster than `max_velocity` (a point-to-
+        point move: each joint on its own profile)."""
+        n = len(target)
+        clipped = np.clip(target, self.lower, self.upper)
+        self._run(
+            [_POSITION] * n, clipped, np.zeros(n), np.minimum(max_velocity, self.max_velocity)
+        )
+
     def step_position(
         self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray | None = None
     ) -> None:

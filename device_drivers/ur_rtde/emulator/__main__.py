@@ -1,0 +1,43 @@
+"""`python -m device_drivers.ur_rtde.emulator --host 127.0.0.2 [--model ur5]`: an emulated
+UR controller until interrupted. It runs in a process of its own: ur-rtde's calls block
+in C++ holding Python's interpreter lock, so a client and the emulator cannot share one."""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import logging
+import signal
+import sys
+
+from device_drivers.ur_rtde.emulator.controller import Controller
+from device_drivers.ur_rtde.emulator.servers import Emulator
+from runtime.robotics.robot_info import available_models, load_robot_info
+
+
+async def serve(host: str, model: str) -> None:
+    emulator = Emulator(Controller(load_robot_info(model)), host)
+    await emulator.start()
+    print(f"UR emulator ready on {host}", flush=True)
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, stop.set)
+    await stop.wait()
+    await emulator.stop()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m device_drivers.ur_rtde.emulator")
+    parser.add_argument("--host", default="127.0.0.2", help="the address to serve on")
+    parser.add_argument("--model", default="ur5", help=", ".join(available_models()))
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
+    with contextlib.suppress(KeyboardInterrupt):
+        asyncio.run(serve(args.host, args.model))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
