@@ -20,6 +20,14 @@ PLUGIN = Plugin(
             simulated=True,
         ),
         Driver(
+            "ur-rtde",
+            "robot",
+            "device_drivers.ur_rtde.entry:create",
+            options="device_drivers.ur_rtde.entry:UROptions",
+            description="a Universal Robots arm over RTDE (ur-rtde)",
+            realtime=True,
+        ),
+        Driver(
             "spacemouse",
             "input",
             "device_drivers.spacemouse.entry:create",

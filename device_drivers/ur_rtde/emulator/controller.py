@@ -114,6 +114,17 @@ class Controller:
             elif self.safety_mode == SYSTEM_EMERGENCY_STOP:
                 self.safety_mode = NORMAL  # power on and brake release bring it back
 
+    def reset(self) -> None:
+        """Powered, in normal mode, no program running, the arm at rest where it is."""
+        with self.lock:
+            self._program_stops()
+            self.robot_mode, self.safety_mode = RUNNING, NORMAL
+            self.digital_inputs = self.digital_outputs = 0
+            self.speed_fraction = 1.0
+            self.watchdog_hz = None
+            self.in_int = [0] * 48
+            self.tracker.place(self.tracker.position)
+
     def _program_stops(self) -> None:
         self.runtime_state = STOPPED
         self.executing = self.move_blocking = False

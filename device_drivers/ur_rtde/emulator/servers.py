@@ -214,11 +214,14 @@ class Emulator:
 
     def world(self, command: str) -> str:
         """What happens around the robot (tests only; a real dashboard knows none of it):
-        `protective stop`, `estop on|off`, `digital input N on|off`, `state`."""
+        `protective stop`, `estop on|off`, `digital input N on|off`, `reset` (powered,
+        normal, no program, nothing held), `state`."""
         c = self.controller
         words = command.split()
         if command == "protective stop":
             c.protective_stop()
+        elif command == "reset":
+            c.reset()
         elif words[:1] == ["estop"] and words[1:] in (["on"], ["off"]):
             c.emergency_stop(words[1] == "on")
         elif words[:2] == ["digital", "input"] and len(words) == 4 and words[2].isdigit():

@@ -1,0 +1,450 @@
+"""A Universal Robots arm through ur-rtde. A control thread runs at the controller's pace
+(8 ms): it reads the state, sends the current mode's command and feeds the RTDE watchdog,
+so a runtime that dies stops the robot within the watchdog's period. One package per cycle:
+the controller applies the registers once per 2 ms, so a kick sent right after a speedJ
+would replace it before the script saw it.
+
+- Jogging and velocity streams: speedJ, stopped (stopJ) when the stream's timeout lapses.
+- Trajectories: servoJ streaming of the planned, limit-checked trajectory, sampled on its
+  own clock at the speed override (the same time scaling as the simulated robot's, so a
+  pause is a controlled stop along the path). servoJ rather than moveJ with blends: the
+  runtime plans the timing and checks collisions along that exact path; moveJ would let the
+  controller re-time and blend it.
+- Position streams: servoJ.
+- A lost connection, a protective stop or an E-stop halts everything and is an error until
+  reset; nothing resumes by itself. The link is made again on its own."""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import itertools
+import logging
+import queue
+import threading
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from device_drivers.sim_robot.reference import TrajectoryReference
+from device_drivers.sim_robot.scaling import TimeScaling
+from device_drivers.ur_rtde.link import RUNNING, Reading, URLink
+from runtime.interfaces.device import DeviceIdentity
+from runtime.interfaces.limits import CheckedTrajectory, FloatArray
+from runtime.interfaces.robot import (
+    CommandMode,
+    OperationalMode,
+    RobotFlags,
+    RobotInfo,
+    RobotState,
+    TrajectoryState,
+    TrajectoryStatus,
+)
+from runtime.interfaces.robot_driver import RobotDriver, RobotStatus
+from runtime.kit.errors import NotFound, RobotError
+from runtime.robotics.kinematics import Kinematics
+
+log = logging.getLogger(__name__)
+CYCLE = 0.008  # s: servoJ's time per command, and the control thread's period
+RECONNECT_AFTER = 1.0  # s between attempts
+STOP_DECELERATION = 2.0  # rad/s² for stopJ
+
+
+class Running:
+    def __init__(self, trajectory_id: str, trajectory: CheckedTrajectory) -> None:
+        self.id = trajectory_id
+        self.reference = TrajectoryReference(trajectory)
+        self.t = 0.0
+        self.state = TrajectoryState.running
+        self.message = ""
+
+    def status(self) -> TrajectoryStatus:
+        duration = self.reference.duration
+        progress = 1.0 if duration == 0 else min(self.t / duration, 1.0)
+        return TrajectoryStatus(
+            id=self.id, state=self.state, progress=progress, message=self.message
+        )
+
+
+class URDriver(RobotDriver):
+    def __init__(
+        self,
+        identity: DeviceIdentity,
+        info: RobotInfo,
+        host: str,
+        *,
+        frequency: float = -1.0,
+        watchdog_hz: float = 10.0,
+        lookahead: float = 0.1,
+        gain: float = 300.0,
+        connect: Callable[[str, float], URLink] = URLink,
+    ) -> None:
+        super().__init__(identity, info)
+        self.host, self.frequency = host, frequency
+        self.watchdog_hz, self.lookahead, self.gain = watchdog_hz, lookahead, gain
+        self.connect = connect
+        self.kinematics = Kinematics(info)
+        self.lock = threading.RLock()
+        self.link: URLink | None = None
+        self.reading: Reading | None = None
+        self.enabled = False
+        self.error_message = "not connected yet"
+        self.error = True
+        self.mode = CommandMode.halt
+        self.speed_ratio = 1.0
+        self.stream: tuple[CommandMode, FloatArray | None, FloatArray | None, float] | None = None
+        self.trajectory: Running | None = None
+        self._finished: dict[str, TrajectoryStatus] = {}
+        self._ids = itertools.count(1)
+        joints = info.joints
+        self.scaling = TimeScaling(
+            np.array([j.max_acceleration for j in joints]),
+            np.array([j.max_jerk or np.inf for j in joints]),
+        )
+        self.seqno = 0
+        self._ever_connected = False
+        self._moving = False  # a motion command went out since the last stop
+        self._running = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._requests: queue.Queue[
+            tuple[Callable[[URLink], None], concurrent.futures.Future[None]]
+        ] = queue.Queue()
+        self.cycles = 0
+
+    # The control thread -------------------------------------------------------------------
+
+    async def start(self) -> None:
+        self._running.set()
+        self._thread = threading.Thread(target=self._loop, name="ur-control", daemon=True)
+        self._thread.start()
+
+    async def shutdown(self) -> None:
+        await self.halt()
+        self._running.clear()
+        if self._thread is not None:
+            self._thread.join(timeout=3.0)
+        with self.lock:
+            if self.link is not None:
+                self.link.close()
+                self.link = None
+
+    def _loop(self) -> None:
+        next_at = time.monotonic()
+        last_attempt = -RECONNECT_AFTER
+        while self._running.is_set():
+            if self.link is None and time.monotonic() - last_attempt >= RECONNECT_AFTER:
+                last_attempt = time.monotonic()
+                self._try_connect()
+            if self.link is not None:
+                self._serve_requests(self.link)
+            if self.link is not None:
+                try:
+                    self._cycle()
+                except Exception as exc:
+                    self._lost(f"the connection to the robot failed: {exc}")
+            next_at += CYCLE
+            delay = next_at - time.monotonic()
+            if delay < -CYCLE:
+                next_at, delay = time.monotonic(), 0.0
+            time.sleep(max(delay, 0.0))
+
+    def _serve_requests(self, link: URLink) -> None:
+        while not self._requests.empty():
+            work, done = self._requests.get_nowait()
+            try:
+                work(link)
+            except Exception as exc:
+                done.set_exception(exc)
+            else:
+                done.set_result(None)
+
+    def _try_connect(self) -> None:
+        try:
+            link = self.connect(self.host, self.frequency)
+            link.control.setWatchdog(self.watchdog_hz)
+        except Exception as exc:
+            with self.lock:
+                self.error, self.error_message = (
+                    True,
+                    f"cannot reach the robot at {self.host}: {exc}",
+                )
+            return
+        with self.lock:
+            self.link = link
+            self.reading = link.read()
+            if self._ever_connected:
+                self.error_message = "the connection was lost and is back: reset errors to go on"
+            else:
+                self.error, self.error_message = False, ""
+            self._ever_connected = True
+            log.info("connected to %s", self.host)
+
+    def _lost(self, why: str) -> None:
+        log.warning("%s", why)
+        with self.lock:
+            link, self.link = self.link, None
+            self._fault(why)
+        if link is not None:
+            link.close()
+        while not self._requests.empty():
+            _, done = self._requests.get_nowait()
+            done.set_exception(RobotError(why, code="disconnected"))
+
+    def _fault(self, message: str) -> None:
+        """Halted, and an error until reset: never resumed by itself."""
+        self.error, self.error_message = True, message
+        self.enabled = False
+        self._end(TrajectoryState.failed, message)
+        self.stream = None
+        self.mode = CommandMode.halt
+
+    def _cycle(self) -> None:
+        with self.lock:
+            link = self.link
+            assert link is not None
+            if not link.connected:
+                raise RobotError("the controller stopped answering")
+            reading = self.reading = link.read()
+            self.seqno += 1
+            self.cycles += 1
+            if reading.estop and not self.error:
+                self._fault("E-stop: release it, then power on and reset errors")
+            elif reading.protective_stop and not self.error:
+                self._fault("protective stop: make the cell safe, then reset errors")
+            elif self.enabled and not reading.program_running and not self.error:
+                self._fault(
+                    "the control program stopped on the robot (watchdog, or stopped on its pendant)"
+                )
+            self._command(link, reading)
+
+    def _command(self, link: URLink, reading: Reading) -> None:
+        control = link.control
+        if not self._ready(reading) or self.mode is CommandMode.halt:
+            self._stop(link)
+            return
+        if self.mode is CommandMode.trajectory:
+            self._advance(link)
+            return
+        stream = self.stream
+        if stream is None or stream[0] is not self.mode or time.monotonic() > stream[3]:
+            self.stream = None
+            self._stop(link)
+            return
+        _, velocity, position, _ = stream
+        if position is not None:
+            control.servoJ(position.tolist(), 0.0, 0.0, CYCLE, self.lookahead, self.gain)
+        elif velocity is not None:
+            scale = self.speed_ratio if self.mode is CommandMode.jog else 1.0
+            control.speedJ((velocity * scale).tolist(), self._acceleration(), CYCLE)
+        self._moving = True
+
+    def _stop(self, link: URLink) -> None:
+        if self._moving:
+            link.control.stopJ(STOP_DECELERATION, True)
+            self._moving = False
+        else:
+            link.control.kickWatchdog()
+
+    def _acceleration(self) -> float:
+        return float(min(j.max_acceleration for j in self.info.joints))
+
+    def _advance(self, link: URLink) -> None:
+        running = self.trajectory
+        if running is None:
+            self._stop(link)
+            return
+        _, planned, planned_acceleration = running.reference.sample_with_acceleration(running.t)
+        target = 0.0 if running.state is TrajectoryState.paused else self.speed_ratio
+        before = self.scaling.rate
+        self.scaling.step(target, planned, planned_acceleration, CYCLE)
+        running.t += CYCLE * 0.5 * (before + self.scaling.rate)
+        position, _, _ = running.reference.sample_with_acceleration(running.t)
+        link.control.servoJ(position.tolist(), 0.0, 0.0, CYCLE, self.lookahead, self.gain)
+        self._moving = True
+        reading = self.reading
+        if (
+            running.t >= running.reference.duration
+            and reading is not None
+            and np.abs(np.array(reading.q) - running.reference.end).max() < 1e-4
+        ):
+            self._end(TrajectoryState.finished)
+            self._stop(link)
+
+    def _ready(self, reading: Reading) -> bool:
+        return (
+            self.enabled
+            and not self.error
+            and reading.robot_mode == RUNNING
+            and reading.program_running
+            and not reading.estop
+            and not reading.protective_stop
+        )
+
+    def _end(self, state: TrajectoryState, message: str = "") -> None:
+        running = self.trajectory
+        if running is None:
+            return
+        running.state, running.message = state, message
+        self._finished[running.id] = running.status()
+        while len(self._finished) > 32:
+            self._finished.pop(next(iter(self._finished)))
+        self.trajectory = None
+
+    # State ----------------------------------------------------------------------------------
+
+    def _flags(self) -> RobotFlags:
+        reading = self.reading
+        connected = self.link is not None and reading is not None
+        return RobotFlags(
+            enabled=self.enabled,
+            ready=connected and reading is not None and self._ready(reading),
+            error=self.error,
+            estop=bool(reading and reading.estop),
+            homed=True,
+            communication_failure=not connected,
+            trajectory_running=self.trajectory is not None,
+        )
+
+    def state(self) -> RobotState:
+        with self.lock:
+            reading = self.reading
+            q = reading.q if reading else list(self.info.home)
+            qd = reading.qd if reading else [0.0] * len(q)
+            n_in, n_out = self.info.digital_inputs, self.info.digital_outputs
+            return RobotState(
+                seqno=self.seqno,
+                ts=time.time(),
+                command_mode=self.mode,
+                operational_mode=OperationalMode.auto,
+                flags=self._flags(),
+                joint_position=q,
+                joint_velocity=qd,
+                joint_position_command=q,
+                tcp_pose=self.kinematics.tcp_pose(np.array(q)),
+                speed_ratio=self.speed_ratio,
+                error_message=self.error_message if self.error else "",
+                trajectory=self.trajectory.status() if self.trajectory else None,
+                tool_open=None if reading is None else not bool(reading.digital_outputs >> 16 & 1),
+                digital_inputs=[
+                    bool(reading and reading.digital_inputs >> i & 1) for i in range(n_in)
+                ],
+                digital_outputs=[
+                    bool(reading and reading.digital_outputs >> i & 1) for i in range(n_out)
+                ],
+            )
+
+    def status(self) -> RobotStatus:
+        with self.lock:
+            q = self.reading.q if self.reading else list(self.info.home)
+            return RobotStatus(self._flags(), self.mode, self.error_message, q)
+
+    async def trajectory_status(self, trajectory_id: str) -> TrajectoryStatus:
+        with self.lock:
+            if self.trajectory is not None and self.trajectory.id == trajectory_id:
+                return self.trajectory.status()
+            if trajectory_id in self._finished:
+                return self._finished[trajectory_id]
+        raise NotFound(f"no trajectory {trajectory_id!r}")
+
+    # Hooks ----------------------------------------------------------------------------------
+
+    def _link(self) -> URLink:
+        if self.link is None:
+            raise RobotError(f"not connected to the robot at {self.host}", code="disconnected")
+        return self.link
+
+    async def _in_control_thread(self, work: Callable[[URLink], None]) -> None:
+        """ur-rtde's control interface takes one command at a time: every call that is not
+        the cycle's own goes through the control thread, between two cycles."""
+        self._link()
+        done: concurrent.futures.Future[None] = concurrent.futures.Future()
+        self._requests.put((work, done))
+        await asyncio.wrap_future(done)
+
+    async def _enable(self) -> None:
+        def power_and_script(link: URLink) -> None:
+            link.power_up()
+            link.run_script()
+            link.control.setWatchdog(self.watchdog_hz)
+            with self.lock:
+                self.enabled = True
+
+        await self._in_control_thread(power_and_script)
+
+    async def _disable(self) -> None:
+        with self.lock:
+            self.enabled = False
+            self._halt_now("disabled")
+
+    async def _reset_errors(self) -> None:
+        with self.lock:
+            reading = self.reading
+            self._link()
+        if reading is not None and reading.estop:
+            raise RobotError("release the E-stop before resetting errors", code="estop")
+        if reading is not None and reading.protective_stop:
+            await self._in_control_thread(URLink.unlock)
+        with self.lock:
+            self.error, self.error_message = False, ""
+
+    def _halt_now(self, reason: str) -> None:
+        self.stream = None
+        self._end(TrajectoryState.aborted, reason)
+        self.mode = CommandMode.halt
+
+    async def _halt(self) -> None:
+        with self.lock:
+            self._halt_now("halted")
+
+    async def _set_command_mode(self, mode: CommandMode) -> None:
+        with self.lock:
+            if mode is not self.mode:
+                self._halt_now(f"mode changed to {mode.value}")
+                self.mode = mode
+
+    async def _set_speed_ratio(self, ratio: float) -> None:
+        with self.lock:
+            self.speed_ratio = ratio
+
+    async def _jog_joint(self, velocity: FloatArray, timeout: float) -> None:
+        with self.lock:
+            self.stream = (CommandMode.jog, velocity, None, time.monotonic() + timeout)
+
+    async def _velocity_command(self, velocity: FloatArray, timeout: float) -> None:
+        with self.lock:
+            self.stream = (CommandMode.velocity_command, velocity, None, time.monotonic() + timeout)
+
+    async def _position_command(
+        self, position: FloatArray, velocity: FloatArray | None, timeout: float
+    ) -> None:
+        with self.lock:
+            self.stream = (CommandMode.position_command, None, position, time.monotonic() + timeout)
+
+    async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str:
+        with self.lock:
+            if self.trajectory is not None:
+                raise RobotError("a trajectory is already running", code="busy")
+            trajectory_id = f"traj-{next(self._ids)}"
+            self.trajectory = Running(trajectory_id, trajectory)
+            self.scaling.rate, self.scaling.rate_speed = self.speed_ratio, 0.0
+            return trajectory_id
+
+    async def _pause_trajectory(self, paused: bool) -> TrajectoryStatus:
+        with self.lock:
+            running = self.trajectory
+            if running is None:
+                raise RobotError("no trajectory is running", code="not_running")
+            running.state = TrajectoryState.paused if paused else TrajectoryState.running
+            return running.status()
+
+    async def _set_digital_output(self, index: int, value: bool) -> None:
+        await self._in_control_thread(
+            lambda link: link.set_outputs(lambda io: io.setStandardDigitalOut(index, value))
+        )
+
+    async def _set_tool(self, open_: bool) -> None:
+        # The tool connector's output 0 closes the gripper (the common wiring).
+        await self._in_control_thread(
+            lambda link: link.set_outputs(lambda io: io.setToolDigitalOut(0, not open_))
+        )

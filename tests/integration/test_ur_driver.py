@@ -1,0 +1,295 @@
+"""The UR driver (ur-rtde underneath) against the controller emulator (issue 16, must-show
+2): the state mapped, a jog that stops when its commands stop, a trajectory executed on its
+planned path, a halt, a protective stop becoming a fault until reset, a lost connection
+coming back with nothing moving, and the watchdog stopping the arm when the driver's
+process dies."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import numpy as np
+import pytest
+
+from device_drivers.ur_rtde.driver import URDriver
+from runtime.interfaces.device import DeviceIdentity
+from runtime.interfaces.robot import (
+    CommandMode,
+    CommandModeRequest,
+    JogJointCommand,
+    JointTrajectory,
+    TrajectoryState,
+    TrajectoryWaypoint,
+)
+from runtime.kit.errors import RobotError
+from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.robot_info import load_robot_info
+
+HOST = "127.0.0.4"
+UR5 = load_robot_info("ur5")
+
+
+def world(command: str) -> str:
+    with socket.create_connection((HOST, 29999), timeout=5) as s:
+        f = s.makefile("rw")
+        f.readline()
+        f.write(f"emulator {command}\n")
+        f.flush()
+        return f.readline().strip()
+
+
+def emulated() -> dict[str, Any]:
+    state: dict[str, Any] = json.loads(world("state"))
+    return state
+
+
+def start_emulator() -> subprocess.Popen[str]:
+    proc = subprocess.Popen(
+        [sys.executable, "-u", "-m", "device_drivers.ur_rtde.emulator", "--host", HOST],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+    assert proc.stdout is not None
+    assert "ready" in proc.stdout.readline()
+    return proc
+
+
+def stop_emulator(proc: subprocess.Popen[str]) -> None:
+    proc.terminate()
+    proc.communicate(timeout=10)
+
+
+class Emulator:
+    """The emulator process, started again by a test that stops it."""
+
+    def __init__(self) -> None:
+        self.proc = start_emulator()
+
+    def alive(self) -> subprocess.Popen[str]:
+        if self.proc.poll() is not None:
+            self.proc = start_emulator()
+        return self.proc
+
+
+@pytest.fixture(scope="module")
+def running() -> Iterator[Emulator]:
+    emulator = Emulator()
+    yield emulator
+    if emulator.proc.poll() is None:
+        stop_emulator(emulator.proc)
+
+
+@pytest.fixture
+def emulator(running: Emulator) -> subprocess.Popen[str]:
+    """The emulator, its arm at rest, nothing stopped (each test leaves what it did)."""
+    proc = running.alive()
+    world("estop off")
+    world("reset")
+    return proc
+
+
+def until(check: Callable[[], bool], timeout: float = 10.0, what: str = "condition") -> None:
+    deadline = time.monotonic() + timeout
+    while not check():
+        assert time.monotonic() < deadline, f"{what}: not within {timeout} s"
+        time.sleep(0.01)
+
+
+class Driven:
+    """A driver on its own loop in this thread (its control thread runs beside it)."""
+
+    def __init__(self) -> None:
+        identity = DeviceIdentity(uuid="ur-1", kind="robot", model=UR5.model, name="ur")
+        self.driver = URDriver(identity, UR5, HOST)
+        self.loop = asyncio.new_event_loop()
+        self.run(self.driver.start())
+
+    def run(self, work: Any) -> Any:
+        return self.loop.run_until_complete(work)
+
+    def close(self) -> None:
+        self.run(self.driver.shutdown())
+        self.loop.close()
+
+    def ready(self) -> None:
+        until(lambda: not self.driver.state().flags.communication_failure, what="connected")
+        if self.driver.state().flags.error:
+            self.run(self.driver.reset_errors())
+        self.run(self.driver.enable())
+        until(lambda: self.driver.state().flags.ready, what="ready")
+
+
+@pytest.fixture
+def driven(emulator: subprocess.Popen[str]) -> Iterator[Driven]:
+    d = Driven()
+    yield d
+    d.close()
+
+
+def test_the_state_follows_the_controller(driven: Driven) -> None:
+    until(lambda: not driven.driver.state().flags.communication_failure, what="connected")
+    state = driven.driver.state()
+    assert not state.flags.error and not state.flags.enabled
+    assert np.allclose(state.joint_position, emulated()["q"], atol=1e-9)
+    driven.ready()
+    world("digital input 1 on")
+    until(lambda: driven.driver.state().digital_inputs[1], what="DI1 seen")
+    assert emulated()["watchdog_hz"] == 10.0  # set on connecting: a dead driver stops it
+
+
+def test_a_jog_moves_while_commanded_and_stops_after_its_timeout(driven: Driven) -> None:
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+    start = d.state().joint_position[0]
+    velocity = [0.2, 0, 0, 0, 0, 0]
+    for _ in range(30):  # 0.3 s of presses at 100 Hz
+        driven.run(d.jog_joint(JogJointCommand(velocity=velocity, timeout=0.1)))
+        time.sleep(0.01)
+    until(lambda: abs(emulated()["qd"][0]) < 1e-6, 5, "stopped once the commands stopped")
+    assert d.state().joint_position[0] > start + 0.02
+    assert emulated()["runtime_state"] == 2  # stopped by the driver, not by the watchdog
+
+
+def test_a_trajectory_runs_on_its_planned_path_and_a_halt_stops_the_next(driven: Driven) -> None:
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory)))
+    start = np.array(d.state().joint_position)
+    offsets = np.array([0.4, -0.3, 0.3, 0.2, 0.3, -0.4])
+    times = np.linspace(0.2, 2.0, 10)
+    waypoints = [
+        TrajectoryWaypoint(time_from_start=float(t), position=(start + offsets * t / 2.0).tolist())
+        for t in times
+    ]
+    accepted = driven.run(d.execute_trajectory(JointTrajectory(waypoints=waypoints)))
+    seen: list[list[float]] = []
+    deadline = time.monotonic() + 10
+    while driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.running:
+        seen.append(d.state().joint_position)
+        assert time.monotonic() < deadline
+        time.sleep(0.005)
+    assert driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.finished
+    assert np.abs(np.array(emulated()["q"]) - (start + offsets)).max() < 1e-3
+    # Every position the controller reported lies within 1 mm (at the TCP) of the plan.
+    kinematics = Kinematics(UR5)
+    planned = np.array(
+        [kinematics.tcp_pose(start + offsets * s).position for s in np.linspace(0, 1, 2001)]
+    )
+    gaps = [
+        np.linalg.norm(planned - np.array(kinematics.tcp_pose(np.array(q)).position), axis=1).min()
+        for q in seen
+    ]
+    assert max(gaps) < 1e-3, max(gaps)
+
+    back = [TrajectoryWaypoint(time_from_start=2.0, position=start.tolist())]
+    accepted = driven.run(d.execute_trajectory(JointTrajectory(waypoints=back)))
+    until(lambda: abs(emulated()["qd"][0]) > 0.05, 5, "moving back")
+    driven.run(d.halt())
+    assert driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.aborted
+    until(lambda: max(abs(v) for v in emulated()["qd"]) < 1e-6, 5, "halted")
+
+
+def test_a_protective_stop_is_a_fault_until_reset_and_nothing_resumes(driven: Driven) -> None:
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+    press = JogJointCommand(velocity=[0.2, 0, 0, 0, 0, 0], timeout=1.0)
+    driven.run(d.jog_joint(press))
+    until(lambda: emulated()["qd"][0] > 0.1, 5, "jogging")
+    world("protective stop")
+    until(lambda: d.state().flags.error, 5, "the fault seen")
+    state = d.state()
+    assert "protective stop" in state.error_message and not state.flags.ready
+    assert state.command_mode is CommandMode.halt
+    until(lambda: max(abs(v) for v in emulated()["qd"]) < 1e-6, 5, "halted")
+    driven.run(d.reset_errors())  # unlocks it through the dashboard
+    until(lambda: emulated()["safety_mode"] == 1, 5, "unlocked")
+    # Within the first press's timeout: neither it nor a new one moves the arm (halted,
+    # disabled) until the user enables it again.
+    with pytest.raises(RobotError):
+        driven.run(d.jog_joint(press))
+    time.sleep(0.1)
+    assert max(abs(v) for v in emulated()["qd"]) < 1e-6
+    driven.run(d.enable())  # the control script again
+    until(lambda: d.state().flags.ready, 5, "ready again")
+    assert emulated()["runtime_state"] == 2
+
+
+def test_a_lost_connection_comes_back_by_itself_and_nothing_moves(
+    emulator: subprocess.Popen[str],
+) -> None:
+    driven = Driven()
+    try:
+        driven.ready()
+        d = driven.driver
+        stop_emulator(emulator)
+        until(lambda: d.state().flags.communication_failure, 10, "the loss seen")
+        assert d.state().flags.error and not d.state().flags.enabled
+        again = start_emulator()
+        try:
+            until(lambda: not d.state().flags.communication_failure, 15, "reconnected")
+            state = d.state()
+            assert state.flags.error and "reset errors" in state.error_message
+            assert not state.flags.ready and not state.flags.enabled
+            time.sleep(0.2)  # connected for a while: still nothing commanded
+            assert max(abs(v) for v in emulated()["qd"]) < 1e-9
+            driven.ready()  # reset, enable: the user's decision
+            assert emulated()["runtime_state"] == 2
+        finally:
+            driven.close()
+            stop_emulator(again)
+    except BaseException:
+        driven.loop.close()
+        raise
+
+
+DRIVER_THAT_DIES = f"""
+import asyncio, time
+from device_drivers.ur_rtde.driver import URDriver
+from runtime.interfaces.device import DeviceIdentity
+from runtime.interfaces.robot import CommandMode, CommandModeRequest, JogJointCommand
+from runtime.robotics.robot_info import load_robot_info
+
+async def main():
+    info = load_robot_info("ur5")
+    d = URDriver(DeviceIdentity(uuid="u", kind="robot", model=info.model, name="ur"), info, {HOST!r})
+    await d.start()
+    while d.state().flags.communication_failure:
+        await asyncio.sleep(0.01)
+    await d.enable()
+    await d.set_command_mode(CommandModeRequest(mode=CommandMode.jog))
+    print("moving", flush=True)
+    while True:
+        await d.jog_joint(JogJointCommand(velocity=[0.1, 0, 0, 0, 0, 0], timeout=0.2))
+        await asyncio.sleep(0.01)
+
+asyncio.run(main())
+"""
+
+
+def test_the_watchdog_stops_the_arm_when_the_drivers_process_dies(
+    emulator: subprocess.Popen[str],
+) -> None:
+    process = subprocess.Popen(
+        [sys.executable, "-c", DRIVER_THAT_DIES], stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert process.stdout is not None
+        assert process.stdout.readline().strip() == "moving"
+        until(lambda: emulated()["qd"][0] > 0.09, 5, "jogging")
+        process.kill()  # no goodbye, no stop
+        process.wait(5)
+        until(lambda: emulated()["runtime_state"] == 1, 5, "the program stopped")
+        until(lambda: abs(emulated()["qd"][0]) < 1e-6, 5, "the arm halted")
+    finally:
+        process.kill()
+        process.wait(5)
