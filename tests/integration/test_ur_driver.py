@@ -261,7 +261,8 @@ from runtime.robotics.robot_info import load_robot_info
 
 async def main():
     info = load_robot_info("ur5")
-    d = URDriver(DeviceIdentity(uuid="u", kind="robot", model=info.model, name="ur"), info, {HOST!r})
+    identity = DeviceIdentity(uuid="u", kind="robot", model=info.model, name="ur")
+    d = URDriver(identity, info, {HOST!r})
     await d.start()
     while d.state().flags.communication_failure:
         await asyncio.sleep(0.01)
