@@ -15,7 +15,7 @@ import socket
 from pathlib import Path
 from typing import Any
 
-from device_drivers.sim_cell.world import World
+from device_drivers.sim_cell.world import CellSetup, World
 from runtime.kit.settings import SETTINGS_ENV, load_settings, settings_from_env
 
 log = logging.getLogger(__name__)
@@ -68,6 +68,11 @@ class CellServer:
             return {"part": part.model_dump() if part else None}
         if op == "sensed":
             return {"sensors": self.world.sensed()}
+        if op == "parts":
+            return {"parts": [p.model_dump() for p in self.world.snapshot()]}
+        if op == "layout":  # a simulator without HTTP routes of its own (the UR emulator)
+            self.world.replace(CellSetup.model_validate(request.get("setup")))
+            return {"parts": [p.model_dump() for p in self.world.snapshot()]}
         return {"error": f"unknown op {op!r}"}
 
     async def _serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
@@ -75,7 +80,7 @@ class CellServer:
             while line := await reader.readline():
                 try:
                     reply = self.answer(json.loads(line))
-                except (ValueError, TypeError) as exc:
+                except (ValueError, TypeError) as exc:  # ValidationError is a ValueError
                     reply = {"error": str(exc)}
                 writer.write(json.dumps(reply).encode() + b"\n")
                 await writer.drain()
@@ -89,8 +94,9 @@ class CellClient:
     """A simulated device's side: asks the world of the robot named `robot`; without one
     (no such simulated robot running) every answer is None, as if nothing were there."""
 
-    def __init__(self, robot: str) -> None:
+    def __init__(self, robot: str, data_dir: Path | None = None) -> None:
         self.robot = robot
+        self.data_dir = data_dir  # None: this process's
         self._missing_said = False
 
     async def ask(self, op: str, **args: Any) -> dict[str, Any] | None:
@@ -98,7 +104,7 @@ class CellClient:
             async with asyncio.timeout(TIMEOUT):
                 sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
                 try:
-                    sock.connect(address(self.robot))  # at once or refused: it is local
+                    sock.connect(address(self.robot, self.data_dir))  # local: at once or refused
                 except OSError:
                     sock.close()
                     raise

@@ -106,6 +106,7 @@ class URDriver(RobotDriver):
         self._ever_connected = False
         self._moving = False  # a motion command went out since the last stop
         self._running = threading.Event()
+        self._wake = threading.Event()
         self._thread: threading.Thread | None = None
         self._requests: queue.Queue[
             tuple[Callable[[URLink], None], concurrent.futures.Future[None]]
@@ -147,7 +148,10 @@ class URDriver(RobotDriver):
             delay = next_at - time.monotonic()
             if delay < -CYCLE:
                 next_at, delay = time.monotonic(), 0.0
-            time.sleep(max(delay, 0.0))
+            # A new press or stream sample is sent at once, not at the next tick.
+            if self._wake.wait(max(delay, 0.0)):
+                self._wake.clear()
+                next_at = time.monotonic()
 
     def _serve_requests(self, link: URLink) -> None:
         while not self._requests.empty():
@@ -409,7 +413,10 @@ class URDriver(RobotDriver):
 
     async def _jog_joint(self, velocity: FloatArray, timeout: float) -> None:
         with self.lock:
+            fresh = self.stream is None
             self.stream = (CommandMode.jog, velocity, None, time.monotonic() + timeout)
+        if fresh:
+            self._wake.set()
 
     async def _velocity_command(self, velocity: FloatArray, timeout: float) -> None:
         with self.lock:

@@ -28,6 +28,7 @@ MODULES = (
     "program",
     "scale",
     "modbus",
+    "ur",
 )
 
 

@@ -11,20 +11,29 @@ import logging
 import signal
 import sys
 
+from device_drivers.sim_cell.link import CellServer
+from device_drivers.sim_cell.world import World
 from device_drivers.ur_rtde.emulator.controller import Controller
 from device_drivers.ur_rtde.emulator.servers import Emulator
 from runtime.robotics.robot_info import available_models, load_robot_info
 
 
-async def serve(host: str, model: str) -> None:
-    emulator = Emulator(Controller(load_robot_info(model)), host)
+async def serve(host: str, model: str, cell: str) -> None:
+    controller = Controller(load_robot_info(model))
+    emulator = Emulator(controller, host)
     await emulator.start()
+    world = None
+    if cell:  # parts on its table, for simulated grippers and sensors named after it
+        world = CellServer(World(controller.tcp), cell)
+        await world.start()
     print(f"UR emulator ready on {host}", flush=True)
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, stop.set)
     await stop.wait()
+    if world is not None:
+        await world.stop()
     await emulator.stop()
 
 
@@ -32,10 +41,13 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m device_drivers.ur_rtde.emulator")
     parser.add_argument("--host", default="127.0.0.2", help="the address to serve on")
     parser.add_argument("--model", default="ur5", help=", ".join(available_models()))
+    parser.add_argument(
+        "--cell", default="", help="serve a simulated cell under this name (see sim_cell)"
+    )
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(serve(args.host, args.model))
+        asyncio.run(serve(args.host, args.model, args.cell))
     return 0
 
 

@@ -77,6 +77,9 @@ class Controller:
         self.watchdog_hz: float | None = None
         self.last_kick = 0.0
         self.commands: list[int] = []  # every command code the script took, in order
+        # When each realtime command last began (monotonic: the same clock in every process
+        # of this computer, so a client can time its commands' way here).
+        self.started_at: dict[int, float] = {}
         self.scripts = 0  # control scripts received
         self._running = threading.Event()
         self._thread: threading.Thread | None = None
@@ -206,6 +209,7 @@ class Controller:
     def _realtime(self, cmd: int) -> None:
         if not self.commands or self.commands[-1] != cmd:  # once per run of cycles
             self.commands.append(cmd)
+            self.started_at[cmd] = time.monotonic()
         if cmd == SPEEDJ:
             self.motion = Motion("velocity", self.vector())
         elif cmd == SERVOJ:
@@ -299,6 +303,12 @@ class Controller:
                 time.sleep(delay)
             elif delay < -CYCLE:
                 deadline = time.perf_counter()
+
+    def tcp(self) -> Pose:
+        """The TCP in the base frame (the simulated cell's frame)."""
+        with self.lock:
+            q = self.tracker.position.copy()
+        return self.kinematics.tcp_pose(q)
 
     # What RTDE streams -------------------------------------------------------------------
 

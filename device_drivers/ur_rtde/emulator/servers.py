@@ -240,6 +240,7 @@ class Emulator:
                     "watchdog_hz": c.watchdog_hz,
                     "freedrive": c.freedrive,
                     "commands": c.commands[-50:],
+                    "started_at": c.started_at,
                     "scripts": c.scripts,
                 }
             )

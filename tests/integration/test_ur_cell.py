@@ -1,0 +1,113 @@
+"""Must-show 1, the UR half: the Blockly pick and place of test_sim_cell, unchanged, on a UR
+(the UR driver through ur-rtde to the controller emulator) with the simulated Modbus I/O
+block and Robotiq gripper mounted on it: the part ends at the place position."""
+
+from __future__ import annotations
+
+import asyncio
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from device_drivers.sim_cell.link import CellClient
+from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
+from tests.integration.test_sim_cell import pick_and_place_with_the_cells_devices, tcp_at
+from tests.support.programs import ABOVE_PICK, ABOVE_PLACE, PICK, PLACE, teach
+
+HOST = "127.0.0.5"
+CELL = "ur-emulated"
+
+
+def ask(runtime: Runtime, op: str, **args: Any) -> dict[str, Any]:
+    answer = asyncio.run(CellClient(CELL, runtime.data_dir).ask(op, **args))
+    assert answer is not None, f"no cell {CELL}"
+    return answer
+
+
+@pytest.fixture(scope="module")
+def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Runtime, str]]:
+    home: Path = tmp_path_factory.mktemp("ur-cell")
+    emulator = subprocess.Popen(
+        [sys.executable, "-u", "-m", "device_drivers.ur_rtde.emulator"]
+        + ["--host", HOST, "--cell", CELL],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=child_env(home),
+    )
+    runtime = Runtime(home, extra=["--no-sim"])
+    devices = [
+        ("robot", DriverProc(home, "ur-rtde", "ur", "--address", HOST, "--model", "ur5")),
+        ("cell_io", DriverProc(home, "modbus-io", "cell-io", "--simulate", "--cell", CELL)),
+        (
+            "gripper",
+            DriverProc(home, "modbus-gripper", "robotiq", "--simulate", "--mounted-on", CELL),
+        ),
+    ]
+    try:
+        assert emulator.stdout is not None and "ready" in emulator.stdout.readline()
+        runtime.wait_ready()
+        for local_name, device in devices:
+            url = device.wait_ready()
+            added = runtime.api("POST", "/devices", json={"url": url, "local_name": local_name})
+            assert added.status_code in (200, 201), added.text
+        teach(
+            runtime,
+            {"above_pick": ABOVE_PICK, "pick": PICK, "above_place": ABOVE_PLACE, "place": PLACE},
+        )
+        yield runtime, HOST
+    finally:
+        for _, device in devices:
+            device.stop()
+        runtime.stop()
+        emulator.terminate()
+        emulator.communicate(timeout=10)
+
+
+def test_the_blockly_pick_and_place_runs_unchanged_on_the_ur(cell: tuple[Runtime, str]) -> None:
+    runtime, _ = cell
+    pick = tcp_at(PICK)
+    ask(
+        runtime,
+        "layout",
+        setup={
+            "parts": [{"id": "cube", "size": [0.04, 0.04, 0.04], "pose": {"position": pick}}],
+            "sensors": {"part_present": {"position": pick, "radius": 0.03}},
+        },
+    )
+    wait_for(
+        lambda: (
+            runtime.api("GET", "/devices/robot/state").json().get("flags", {}).get("error") is False
+        ),
+        20,
+        what="the UR connected",
+    )
+    lease = runtime.api("POST", "/devices/robot/lease", json={"holder": "tests"}).json()["token"]
+    mine = {"X-Lease-Token": lease}
+    enabled = runtime.api("POST", "/jog/robots/robot/enable", headers=mine)
+    assert enabled.status_code == 200, enabled.text
+    saved = runtime.api(
+        "PUT", "/programs/ur_cycle", json={"workspace": pick_and_place_with_the_cells_devices()}
+    )
+    assert saved.status_code == 200, saved.text
+    started = runtime.api("POST", "/programs/ur_cycle/run", json={"leases": {"robot": lease}})
+    assert started.status_code == 202, started.text
+
+    def ended() -> dict[str, Any] | None:
+        status: dict[str, Any] = runtime.api("GET", "/programs/ur_cycle/status").json()
+        return status if status["state"] in ("finished", "error", "stopped") else None
+
+    final = wait_for(ended, 120, what="the cycle's end")
+    assert final["state"] == "finished", final.get("error")
+    part = next(p for p in ask(runtime, "parts")["parts"] if p["id"] == "cube")
+    x, y, z = part["pose"]["position"]
+    assert part["held"] is False
+    assert np.allclose([x, y], tcp_at(PLACE)[:2], atol=1e-3), (part, tcp_at(PLACE))
+    assert z == pytest.approx(0.02)
+    state = runtime.api("GET", "/devices/cell_io/state").json()
+    assert state["values"]["lamp_green"] is True
