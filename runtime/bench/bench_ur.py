@@ -6,15 +6,13 @@ runs (monotonic clocks: one clock for every process of the computer)."""
 from __future__ import annotations
 
 import asyncio
-import json
-import socket
-import subprocess
-import sys
 import time
+from typing import Any
 
 import numpy as np
 
 from device_drivers.ur_rtde.driver import URDriver
+from device_drivers.ur_rtde.emulator.control import emulated, start, stop
 from runtime.bench.runner import Figure
 from runtime.bench.stats import quick
 from runtime.interfaces.device import DeviceIdentity
@@ -26,14 +24,8 @@ HOST = "127.0.0.9"
 SPEEDJ = "9"
 
 
-def _emulated() -> dict[str, object]:
-    with socket.create_connection((HOST, 29999), timeout=5) as s:
-        f = s.makefile("rw")
-        f.readline()
-        f.write("emulator state\n")
-        f.flush()
-        state: dict[str, object] = json.loads(f.readline())
-        return state
+def _emulated() -> dict[str, Any]:
+    return emulated(HOST)
 
 
 async def _wait(check: object, timeout: float = 10.0) -> None:
@@ -72,7 +64,7 @@ async def _measure(presses: int, seconds: float) -> tuple[float, list[float]]:
         latencies = []
         for k in range(presses):
             sign = 1 if k % 2 == 0 else -1
-            before = _emulated()["started_at"].get(SPEEDJ, 0.0)  # type: ignore[attr-defined]
+            before = _emulated()["started_at"].get(SPEEDJ, 0.0)
             t0 = time.monotonic()
             await driver.jog_joint(
                 JogJointCommand(velocity=[0.05 * sign, 0, 0, 0, 0, 0], timeout=0.05)
@@ -80,30 +72,21 @@ async def _measure(presses: int, seconds: float) -> tuple[float, list[float]]:
             started = before
             while started == before:
                 await asyncio.sleep(0.001)
-                started = _emulated()["started_at"].get(SPEEDJ, 0.0)  # type: ignore[attr-defined]
+                started = _emulated()["started_at"].get(SPEEDJ, 0.0)
             latencies.append((float(started) - t0) * 1000)
-            await _wait(lambda: max(abs(v) for v in _emulated()["qd"]) < 1e-6)  # type: ignore[attr-defined]
+            await _wait(lambda: max(abs(v) for v in _emulated()["qd"]) < 1e-6)
         return rate, latencies
     finally:
         await driver.shutdown()
 
 
 def run() -> list[Figure]:
-    emulator = subprocess.Popen(
-        [sys.executable, "-u", "-m", "device_drivers.ur_rtde.emulator", "--host", HOST],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
-        text=True,
-    )
+    emulator = start(HOST)
     try:
-        assert emulator.stdout is not None
-        if "ready" not in emulator.stdout.readline():
-            raise RuntimeError(f"the UR emulator did not start on {HOST}")
         presses = 20 if quick() else 200
         rate, latencies = asyncio.run(_measure(presses, 1.0 if quick() else 3.0))
     finally:
-        emulator.terminate()
-        emulator.communicate(timeout=10)
+        stop(emulator)
     details = {"path": "URDriver → ur-rtde → RTDE on loopback → emulator (500 Hz e-Series)"}
     jog = {**details, "presses": presses, "note": "press to the first cycle running speedJ"}
     return [

@@ -7,8 +7,6 @@ process dies."""
 from __future__ import annotations
 
 import asyncio
-import json
-import socket
 import subprocess
 import sys
 import time
@@ -19,6 +17,7 @@ import numpy as np
 import pytest
 
 from device_drivers.ur_rtde.driver import URDriver
+from device_drivers.ur_rtde.emulator import control as emulator_control
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.robot import (
     CommandMode,
@@ -37,34 +36,26 @@ UR5 = load_robot_info("ur5")
 
 
 def world(command: str) -> str:
-    with socket.create_connection((HOST, 29999), timeout=5) as s:
-        f = s.makefile("rw")
-        f.readline()
-        f.write(f"emulator {command}\n")
-        f.flush()
-        return f.readline().strip()
+    return emulator_control.world(HOST, command)
 
 
 def emulated() -> dict[str, Any]:
-    state: dict[str, Any] = json.loads(world("state"))
-    return state
+    return emulator_control.emulated(HOST)
 
 
 def start_emulator() -> subprocess.Popen[str]:
-    proc = subprocess.Popen(
-        [sys.executable, "-u", "-m", "device_drivers.ur_rtde.emulator", "--host", HOST],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
-    assert proc.stdout is not None
-    assert "ready" in proc.stdout.readline()
-    return proc
+    return emulator_control.start(HOST)
 
 
 def stop_emulator(proc: subprocess.Popen[str]) -> None:
-    proc.terminate()
-    proc.communicate(timeout=10)
+    emulator_control.stop(proc)
+
+
+def until(check: Callable[[], bool], timeout: float = 10.0, what: str = "condition") -> None:
+    deadline = time.monotonic() + timeout
+    while not check():
+        assert time.monotonic() < deadline, f"{what}: not within {timeout} s"
+        time.sleep(0.01)
 
 
 class Emulator:
@@ -94,13 +85,6 @@ def emulator(running: Emulator) -> subprocess.Popen[str]:
     world("estop off")
     world("reset")
     return proc
-
-
-def until(check: Callable[[], bool], timeout: float = 10.0, what: str = "condition") -> None:
-    deadline = time.monotonic() + timeout
-    while not check():
-        assert time.monotonic() < deadline, f"{what}: not within {timeout} s"
-        time.sleep(0.01)
 
 
 class Driven:

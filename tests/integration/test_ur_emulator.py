@@ -7,8 +7,6 @@ its client dies."""
 
 from __future__ import annotations
 
-import json
-import socket
 import subprocess
 import sys
 import time
@@ -22,41 +20,25 @@ import rtde_io
 import rtde_receive
 from dashboard_client import DashboardClient
 
+from device_drivers.ur_rtde.emulator import control as control_
 from runtime.bench.harness.processes import wait_for
 
 HOST = "127.0.0.2"  # the emulator's own address: ur-rtde's ports are fixed
 
 
 def world(command: str) -> str:
-    """A line to the emulator's dashboard (`emulator …`: what happens around the robot)."""
-    with socket.create_connection((HOST, 29999), timeout=5) as s:
-        f = s.makefile("rw")
-        f.readline()  # greeting
-        f.write(f"emulator {command}\n")
-        f.flush()
-        return f.readline().strip()
+    return control_.world(HOST, command)
 
 
 def emulated() -> dict[str, Any]:
-    state: dict[str, Any] = json.loads(world("state"))
-    return state
+    return control_.emulated(HOST)
 
 
 @pytest.fixture(scope="module")
 def emulator() -> Iterator[subprocess.Popen[str]]:
-    proc = subprocess.Popen(
-        [sys.executable, "-u", "-m", "device_drivers.ur_rtde.emulator", "--host", HOST],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
-    try:
-        assert proc.stdout is not None
-        assert "ready" in proc.stdout.readline()
-        yield proc
-    finally:
-        proc.terminate()
-        proc.communicate(timeout=10)
+    proc = control_.start(HOST)
+    yield proc
+    control_.stop(proc)
 
 
 @pytest.fixture(scope="module")
