@@ -45,6 +45,9 @@ def main(argv: list[str] | None = None) -> int:
         "--cell", default="", help="serve a simulated cell under this name (see sim_cell)"
     )
     args = parser.parse_args(argv)
+    # Its control loop and the state streams are threads that must get the interpreter back
+    # within their 2 ms cycles (the default switch interval is 5 ms).
+    sys.setswitchinterval(0.0005)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
     with contextlib.suppress(KeyboardInterrupt):
         asyncio.run(serve(args.host, args.model, args.cell))
