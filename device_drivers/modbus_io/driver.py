@@ -7,15 +7,14 @@ before the silence is not shown as if it were still true."""
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
 import logging
 import math
 import time
 from collections.abc import Callable
 
 from device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
-from device_drivers.modbus_io.link import ModbusLink, Table, poll_forever
+from device_drivers.modbus_io.link import ModbusLink, Table
+from device_drivers.modbus_io.polled import Polled
 from device_drivers.modbus_io.registers import Register, RegisterMap
 from device_drivers.modbus_io.simulator import ModbusSimulator
 from runtime.interfaces.device import DeviceIdentity
@@ -34,7 +33,7 @@ log = logging.getLogger(__name__)
 Words = dict[tuple[Table, int], int]  # (table, address) -> register word or bit (0/1)
 
 
-class ModbusIODriver(IODriver):
+class ModbusIODriver(Polled, IODriver):
     def __init__(
         self,
         identity: DeviceIdentity,
@@ -56,7 +55,6 @@ class ModbusIODriver(IODriver):
         self.connected = False
         self.error = "not connected yet"
         self.seqno = 0
-        self._poller: asyncio.Task[None] | None = None
         # A simulated device this driver serves itself (`--simulate`), started first.
         self.simulator = simulator
 
@@ -103,20 +101,6 @@ class ModbusIODriver(IODriver):
         self._update(
             {r.name: self._value(r, words) for r in self.map.signals}, connected=True, error=""
         )
-
-    async def start(self) -> None:
-        if self.simulator is not None:
-            await self.simulator.start()
-        self._poller = asyncio.create_task(poll_forever(self.period, self.poll_once))
-
-    async def shutdown(self) -> None:
-        if self._poller is not None:
-            self._poller.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._poller
-        self.link.close()
-        if self.simulator is not None:
-            await self.simulator.stop()
 
     # The I/O interface --------------------------------------------------------------------
 

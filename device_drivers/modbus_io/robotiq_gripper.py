@@ -8,13 +8,13 @@ never the last ones read."""
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import dataclasses
 import time
 from collections.abc import Callable
 
 from device_drivers.modbus_io import robotiq
-from device_drivers.modbus_io.link import ModbusLink, poll_forever
+from device_drivers.modbus_io.link import ModbusLink
+from device_drivers.modbus_io.polled import Polled
 from device_drivers.modbus_io.robotiq import Profile, Request, Status
 from device_drivers.modbus_io.simulator import ModbusSimulator
 from runtime.interfaces.device import DeviceIdentity
@@ -30,7 +30,7 @@ class GripperFault(OpenPendantError):
     code = "gripper_fault"
 
 
-class RobotiqGripper(GripperDriver):
+class RobotiqGripper(Polled, GripperDriver):
     def __init__(
         self,
         identity: DeviceIdentity,
@@ -59,7 +59,6 @@ class RobotiqGripper(GripperDriver):
         self.speed = profile.speed[1]
         self.force = (profile.force[0] + profile.force[1]) / 2
         self.sent = Request()  # the last request the gripper confirmed holding
-        self._poller: asyncio.Task[None] | None = None
         self.simulator = simulator
 
     # The device ----------------------------------------------------------------------------
@@ -182,17 +181,3 @@ class RobotiqGripper(GripperDriver):
             object_detected=s.object in (robotiq.STOPPED_OPENING, robotiq.STOPPED_CLOSING),
             fault=robotiq.fault_text(s.fault),
         )
-
-    async def start(self) -> None:
-        if self.simulator is not None:
-            await self.simulator.start()
-        self._poller = asyncio.create_task(poll_forever(self.period, self.poll_once))
-
-    async def shutdown(self) -> None:
-        if self._poller is not None:
-            self._poller.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._poller
-        self.link.close()
-        if self.simulator is not None:
-            await self.simulator.stop()

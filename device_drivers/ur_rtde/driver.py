@@ -27,6 +27,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from device_drivers.sim_robot.core import RunningTrajectory
 from device_drivers.sim_robot.reference import TrajectoryReference
 from device_drivers.sim_robot.scaling import TimeScaling
 from device_drivers.ur_rtde.link import RUNNING, Reading, URLink
@@ -49,22 +50,6 @@ log = logging.getLogger(__name__)
 CYCLE = 0.008  # s: servoJ's time per command, and the control thread's period
 RECONNECT_AFTER = 1.0  # s between attempts
 STOP_DECELERATION = 2.0  # rad/s² for stopJ
-
-
-class Running:
-    def __init__(self, trajectory_id: str, trajectory: CheckedTrajectory) -> None:
-        self.id = trajectory_id
-        self.reference = TrajectoryReference(trajectory)
-        self.t = 0.0
-        self.state = TrajectoryState.running
-        self.message = ""
-
-    def status(self) -> TrajectoryStatus:
-        duration = self.reference.duration
-        progress = 1.0 if duration == 0 else min(self.t / duration, 1.0)
-        return TrajectoryStatus(
-            id=self.id, state=self.state, progress=progress, message=self.message
-        )
 
 
 class URDriver(RobotDriver):
@@ -94,7 +79,7 @@ class URDriver(RobotDriver):
         self.mode = CommandMode.halt
         self.speed_ratio = 1.0
         self.stream: tuple[CommandMode, FloatArray | None, FloatArray | None, float] | None = None
-        self.trajectory: Running | None = None
+        self.trajectory: RunningTrajectory | None = None
         self._finished: dict[str, TrajectoryStatus] = {}
         self._ids = itertools.count(1)
         joints = info.joints
@@ -433,7 +418,7 @@ class URDriver(RobotDriver):
             if self.trajectory is not None:
                 raise RobotError("a trajectory is already running", code="busy")
             trajectory_id = f"traj-{next(self._ids)}"
-            self.trajectory = Running(trajectory_id, trajectory)
+            self.trajectory = RunningTrajectory(trajectory_id, TrajectoryReference(trajectory))
             self.scaling.rate, self.scaling.rate_speed = self.speed_ratio, 0.0
             return trajectory_id
 

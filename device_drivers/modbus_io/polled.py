@@ -1,0 +1,37 @@
+"""What every polled Modbus device driver does on start and shutdown: its simulated device
+first (`--simulate`), then a poll at a steady rate; on shutdown the reverse."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from typing import TYPE_CHECKING
+
+from device_drivers.modbus_io.link import ModbusLink, poll_forever
+
+if TYPE_CHECKING:
+    from device_drivers.modbus_io.simulator import ModbusSimulator
+
+
+class Polled:
+    period: float
+    link: ModbusLink
+    simulator: ModbusSimulator | None
+    _poller: asyncio.Task[None] | None = None
+
+    async def poll_once(self) -> None:
+        raise NotImplementedError
+
+    async def start(self) -> None:
+        if self.simulator is not None:
+            await self.simulator.start()
+        self._poller = asyncio.create_task(poll_forever(self.period, self.poll_once))
+
+    async def shutdown(self) -> None:
+        if self._poller is not None:
+            self._poller.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._poller
+        self.link.close()
+        if self.simulator is not None:
+            await self.simulator.stop()
