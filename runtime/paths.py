@@ -10,6 +10,7 @@ from pathlib import Path
 
 import deploy
 from runtime.kit.errors import NotFound
+from runtime.robotics.dh_urdf import GENERATED_PACKAGE, generated_dir
 
 # Package data (deploy/robots), found the same in a source checkout and an installed runtime.
 DEPLOY_DIR = Path(deploy.__file__).resolve().parent
@@ -18,8 +19,7 @@ MODBUS_MAPS_DIR = DEPLOY_DIR / "modbus"  # register maps of Modbus I/O blocks
 
 
 @cache
-def package_roots() -> dict[str, Path]:
-    """URDF `package://` names and the folders they stand for."""
+def _installed_roots() -> dict[str, Path]:
     roots: dict[str, Path] = {}
     # The environment's site-packages first, then anything else on the path (PYTHONPATH).
     candidates = [sysconfig.get_paths()["purelib"], *site.getsitepackages(), *sys.path]
@@ -29,6 +29,12 @@ def package_roots() -> dict[str, Path]:
             roots["example-robot-data"] = share
             break
     return roots
+
+
+def package_roots() -> dict[str, Path]:
+    """URDF `package://` names and the folders they stand for."""
+    # URDFs made from DH parameters live in a cache named by the environment.
+    return {**_installed_roots(), GENERATED_PACKAGE: generated_dir()}
 
 
 def resolve_package_uri(uri: str, relative_to: Path | None = None) -> Path:

@@ -1,4 +1,5 @@
 import os
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -7,6 +8,8 @@ from runtime.bench.harness.processes import LOOPBACK_ENV
 
 # Anything started from a test (directly or by the runtime) does discovery on loopback only.
 os.environ.update(LOOPBACK_ENV)
+# URDFs made from DH parameters are cached (runtime/robotics/dh_urdf.py): not in the user's.
+os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="openpendant-test-cache-")
 
 
 @pytest.fixture

@@ -10,6 +10,7 @@ import yaml
 from runtime.interfaces.robot import RobotInfo
 from runtime.kit.errors import InvalidValue, NotFound
 from runtime.paths import ROBOTS_DIR, resolve_package_uri
+from runtime.robotics.dh_urdf import DHArm, dh_urdf, write_generated
 from runtime.robotics.kinematics import load_urdf_model, urdf_joint_limits
 
 
@@ -32,7 +33,9 @@ def find_robot_info(model_or_path: str, directory: Path = ROBOTS_DIR) -> Path:
 
 def load_robot_info(model_or_path: str, directory: Path = ROBOTS_DIR) -> RobotInfo:
     """Load and validate a robot-info YAML. Joint position and velocity limits that the
-    file leaves out are taken from the URDF; acceleration limits must be given."""
+    file leaves out are taken from the URDF; acceleration limits must be given. A file with
+    `dh` (DH parameters) instead of a `urdf` gets a URDF made from them (dh_urdf.py), and
+    then must give every joint's limits itself."""
     path = find_robot_info(model_or_path, directory)
     try:
         raw: Any = yaml.safe_load(path.read_text())
@@ -43,6 +46,8 @@ def load_robot_info(model_or_path: str, directory: Path = ROBOTS_DIR) -> RobotIn
     joints = raw.get("joints")
     if not isinstance(joints, list) or not all(isinstance(j, dict) for j in joints):
         raise InvalidValue(f"{path.name}: 'joints' must be a list of mappings")
+    if "dh" in raw:
+        raw["urdf"] = _urdf_from_dh(path.name, raw, joints)
     uri = str(raw.get("urdf", ""))
     urdf = resolve_package_uri(uri, relative_to=path.parent)
     if not uri.startswith("package://"):
@@ -59,3 +64,23 @@ def load_robot_info(model_or_path: str, directory: Path = ROBOTS_DIR) -> RobotIn
         return RobotInfo.model_validate(raw)
     except ValueError as exc:
         raise InvalidValue(f"{path.name}: {exc}") from exc
+
+
+def _urdf_from_dh(filename: str, raw: dict[str, Any], joints: list[dict[str, Any]]) -> str:
+    if "urdf" in raw:
+        raise InvalidValue(f"{filename}: give either 'urdf' or 'dh', not both")
+    try:
+        arm = DHArm.model_validate(raw.pop("dh"))
+        limits = [(float(j["lower"]), float(j["upper"]), float(j["max_velocity"])) for j in joints]
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InvalidValue(
+            f"{filename}: 'dh' needs base_radius and links, and every "
+            f"joint its lower, upper and max_velocity: {exc}"
+        ) from exc
+    if [link.joint for link in arm.links] != [str(j.get("name")) for j in joints]:
+        raise InvalidValue(f"{filename}: the DH links' joints must be the joints, in order")
+    links = (str(raw.get("base_link", "")), str(raw.get("flange_link", "")))
+    if not all(links):
+        raise InvalidValue(f"{filename}: 'dh' needs base_link and flange_link")
+    model = str(raw.get("model", Path(filename).stem))
+    return write_generated(model, dh_urdf(model, arm, links, limits))
