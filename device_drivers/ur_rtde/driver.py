@@ -63,7 +63,7 @@ class URDriver(RobotDriver):
         watchdog_hz: float = 10.0,
         lookahead: float = 0.1,
         gain: float = 300.0,
-        connect: Callable[[str, float], URLink] = URLink,
+        connect: Callable[[str, float, str], URLink] = URLink,
     ) -> None:
         super().__init__(identity, info)
         self.host, self.frequency = host, frequency
@@ -150,13 +150,14 @@ class URDriver(RobotDriver):
 
     def _try_connect(self) -> None:
         try:
-            link = self.connect(self.host, self.frequency)
+            link = self.connect(self.host, self.frequency, self.info.model)
             link.control.setWatchdog(self.watchdog_hz)
         except Exception as exc:
+            wrong = isinstance(exc, RobotError) and exc.code == "wrong_model"
             with self.lock:
                 self.error, self.error_message = (
                     True,
-                    f"cannot reach the robot at {self.host}: {exc}",
+                    str(exc) if wrong else f"cannot reach the robot at {self.host}: {exc}",
                 )
             return
         with self.lock:

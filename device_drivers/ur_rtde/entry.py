@@ -15,7 +15,9 @@ class UROptions(BaseModel):
 
     address: str = Field(default="", max_length=253, description="the controller's host name or IP")
     model: str = Field(
-        default="ur5", description=f"robot-info ({', '.join(available_models())}) or a YAML"
+        default="ur5e",
+        description=f"robot-info ({', '.join(available_models())}) or a YAML; checked against "
+        "the controller",
     )
     frequency: float = Field(default=-1.0, le=500, description="RTDE Hz (-1: the controller's)")
     watchdog_hz: float = Field(default=10.0, ge=1, le=125, description="stop below this rate")

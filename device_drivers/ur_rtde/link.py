@@ -16,6 +16,7 @@ import rtde_control
 import rtde_io
 import rtde_receive
 
+from device_drivers.ur_rtde.models import model_mismatch
 from runtime.kit.errors import RobotError
 
 log = logging.getLogger(__name__)
@@ -57,12 +58,24 @@ class Reading:
 
 
 class URLink:
-    def __init__(self, host: str, frequency: float) -> None:
+    def __init__(self, host: str, frequency: float, model: str) -> None:
+        """Refuses (RobotError `wrong_model`) a controller that is not the `model` arm,
+        before the control script is uploaded."""
         self.host = host
-        self.receive: Any = rtde_receive.RTDEReceiveInterface(host, frequency)
-        self.control: Any = rtde_control.RTDEControlInterface(host, frequency)
         self.dashboard: Any = dashboard_client.DashboardClient(host)
         self.dashboard.connect()
+        try:
+            wrong = model_mismatch(
+                model, self.dashboard.getRobotModel(), self.dashboard.polyscopeVersion()
+            )
+        except Exception:
+            self.dashboard.disconnect()
+            raise
+        if wrong is not None:
+            self.dashboard.disconnect()
+            raise RobotError(wrong, code="wrong_model")
+        self.receive: Any = rtde_receive.RTDEReceiveInterface(host, frequency)
+        self.control: Any = rtde_control.RTDEControlInterface(host, frequency)
 
     @property
     def connected(self) -> bool:

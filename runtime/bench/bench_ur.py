@@ -48,7 +48,7 @@ def _sampled_rate(receive: object, seconds: float) -> float:
 
 
 async def _measure(presses: int, seconds: float) -> tuple[float, list[float]]:
-    info = load_robot_info("ur5")
+    info = load_robot_info("ur5e")
     driver = URDriver(
         DeviceIdentity(uuid="bench-ur", kind="robot", model=info.model, name="ur"), info, HOST
     )

@@ -23,8 +23,8 @@ from tests.support.programs import ABOVE_PICK, ABOVE_PLACE, HOME, PICK, PLACE, t
 UR5 = Kinematics(load_robot_info("ur5"))
 
 
-def tcp_at(joints: list[float]) -> list[float]:
-    return list(UR5.tcp_pose(np.array(joints)).position)
+def tcp_at(joints: list[float], arm: Kinematics = UR5) -> list[float]:
+    return list(arm.tcp_pose(np.array(joints)).position)
 
 
 @pytest.fixture(scope="module")

@@ -16,10 +16,13 @@ import pytest
 
 from device_drivers.sim_cell.link import CellClient
 from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
+from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.robot_info import load_robot_info
 from tests.integration.test_sim_cell import pick_and_place_with_the_cells_devices, tcp_at
 from tests.support.programs import ABOVE_PICK, ABOVE_PLACE, PICK, PLACE, teach
 
 HOST = "127.0.0.5"
+UR5E = Kinematics(load_robot_info("ur5e"))  # the emulated arm
 CELL = "ur-emulated"
 
 
@@ -42,7 +45,7 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Runtime, st
     )
     runtime = Runtime(home, extra=["--no-sim"])
     devices = [
-        ("robot", DriverProc(home, "ur-rtde", "ur", "--address", HOST, "--model", "ur5")),
+        ("robot", DriverProc(home, "ur-rtde", "ur", "--address", HOST, "--model", "ur5e")),
         ("cell_io", DriverProc(home, "modbus-io", "cell-io", "--simulate", "--cell", CELL)),
         (
             "gripper",
@@ -71,7 +74,7 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Runtime, st
 
 def test_the_blockly_pick_and_place_runs_unchanged_on_the_ur(cell: tuple[Runtime, str]) -> None:
     runtime, _ = cell
-    pick = tcp_at(PICK)
+    pick = tcp_at(PICK, UR5E)
     ask(
         runtime,
         "layout",
@@ -107,7 +110,7 @@ def test_the_blockly_pick_and_place_runs_unchanged_on_the_ur(cell: tuple[Runtime
     part = next(p for p in ask(runtime, "parts")["parts"] if p["id"] == "cube")
     x, y, z = part["pose"]["position"]
     assert part["held"] is False
-    assert np.allclose([x, y], tcp_at(PLACE)[:2], atol=1e-3), (part, tcp_at(PLACE))
+    assert np.allclose([x, y], tcp_at(PLACE, UR5E)[:2], atol=1e-3), (part, tcp_at(PLACE, UR5E))
     assert z == pytest.approx(0.02)
     state = runtime.api("GET", "/devices/cell_io/state").json()
     assert state["values"]["lamp_green"] is True

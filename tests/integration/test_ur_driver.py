@@ -11,6 +11,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable, Iterator
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -18,6 +19,7 @@ import pytest
 
 from device_drivers.ur_rtde.driver import URDriver
 from device_drivers.ur_rtde.emulator import control as emulator_control
+from device_drivers.ur_rtde.link import PLAYING
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.robot import (
     CommandMode,
@@ -32,7 +34,7 @@ from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
 
 HOST = "127.0.0.4"
-UR5 = load_robot_info("ur5")
+UR5E = load_robot_info("ur5e")
 
 
 def world(command: str) -> str:
@@ -91,8 +93,8 @@ class Driven:
     """A driver on its own loop in this thread (its control thread runs beside it)."""
 
     def __init__(self) -> None:
-        identity = DeviceIdentity(uuid="ur-1", kind="robot", model=UR5.model, name="ur")
-        self.driver = URDriver(identity, UR5, HOST)
+        identity = DeviceIdentity(uuid="ur-1", kind="robot", model=UR5E.model, name="ur")
+        self.driver = URDriver(identity, UR5E, HOST)
         self.loop = asyncio.new_event_loop()
         self.run(self.driver.start())
 
@@ -116,6 +118,37 @@ def driven(emulator: subprocess.Popen[str]) -> Iterator[Driven]:
     d = Driven()
     yield d
     d.close()
+
+
+def refused(driver: URDriver, why: str) -> bool:
+    return why in driver.state().error_message
+
+
+def test_a_controller_that_is_another_arm_is_refused_before_the_script_goes_up(
+    emulator: subprocess.Popen[str],
+) -> None:
+    """The emulator is a UR5e (it says "UR5" on PolyScope 5); a driver started for a UR10e,
+    or for a CB3 UR5, neither uploads its script nor takes the arm: it says what is wrong."""
+    uploads = emulated()["scripts"]
+    for model, says in (("ur10e", "not a ur10e (e-Series)"), ("ur5", "not a ur5 (CB3)")):
+        info = load_robot_info(model)
+        identity = DeviceIdentity(uuid=f"ur-{model}", kind="robot", model=info.model, name=model)
+        driver = URDriver(identity, info, HOST)
+        loop = asyncio.new_event_loop()
+        loop.run_until_complete(driver.start())
+        try:
+            until(partial(refused, driver, says), what=f"{model} refused")
+            message = driver.state().error_message
+            assert "the controller is a UR5 (e-Series)" in message and "--model" in message
+            with pytest.raises(RobotError, match="reset errors first"):
+                loop.run_until_complete(driver.enable())
+            with pytest.raises(RobotError, match="not connected"):
+                loop.run_until_complete(driver.reset_errors())
+        finally:
+            loop.run_until_complete(driver.shutdown())
+            loop.close()
+    assert emulated()["scripts"] == uploads
+    assert emulated()["runtime_state"] != PLAYING
 
 
 def test_the_state_follows_the_controller(driven: Driven) -> None:
@@ -164,7 +197,7 @@ def test_a_trajectory_runs_on_its_planned_path_and_a_halt_stops_the_next(driven:
     assert driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.finished
     assert np.abs(np.array(emulated()["q"]) - (start + offsets)).max() < 1e-3
     # Every position the controller reported lies within 1 mm (at the TCP) of the plan.
-    kinematics = Kinematics(UR5)
+    kinematics = Kinematics(UR5E)
     planned = np.array(
         [kinematics.tcp_pose(start + offsets * s).position for s in np.linspace(0, 1, 2001)]
     )
@@ -244,7 +277,7 @@ from runtime.interfaces.robot import CommandMode, CommandModeRequest, JogJointCo
 from runtime.robotics.robot_info import load_robot_info
 
 async def main():
-    info = load_robot_info("ur5")
+    info = load_robot_info("ur5e")
     identity = DeviceIdentity(uuid="u", kind="robot", model=info.model, name="ur")
     d = URDriver(identity, info, {HOST!r})
     await d.start()

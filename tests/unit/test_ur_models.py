@@ -12,6 +12,7 @@ import pinocchio as pin
 import pytest
 import yaml
 
+from device_drivers.ur_rtde.models import model_mismatch
 from runtime.kit.errors import InvalidValue
 from runtime.paths import ROBOTS_DIR, resolve_package_uri
 from runtime.robotics import geometry
@@ -231,3 +232,27 @@ def test_a_bad_dh_value_is_refused(tmp_path: Path) -> None:
     raw["dh"]["links"][2]["radius"] = float("nan")
     with pytest.raises(InvalidValue, match="radius"):
         load_robot_info(str(write_info(tmp_path, dh=raw["dh"])))
+
+
+@pytest.mark.parametrize(
+    ("model", "reported", "polyscope", "refused"),
+    [
+        ("ur5e", "UR5", "URSoftware 5.11.1.108318 (Mar 22 2021)", None),
+        ("ur5", "UR5", "URSoftware 3.15.7.106331 (Jun 02 2021)", None),
+        ("ur20", "UR20", "URSoftware 5.15.0.12345 (Jan 01 2026)", None),
+        ("ur5", "UR5", "URSoftware 5.11.1.108318 (Mar 22 2021)", "a UR5 (e-Series), not a ur5"),
+        ("ur5e", "UR5", "URSoftware 3.15.7.106331 (Jun 02 2021)", "a UR5 (CB3), not a ur5e"),
+        ("ur10e", "UR16", "URSoftware 5.11.1.108318 (Mar 22 2021)", "a UR16 (e-Series)"),
+        ("ur5e", "UR5", "no version", "PolyScope 'no version'"),
+        ("ur5e", "", "URSoftware 5.11", "an unknown arm"),
+        ("my-cell-arm", "UR10", "URSoftware 5.11", None),  # a file of one's own
+    ],
+)
+def test_the_driver_takes_over_only_the_arm_its_file_describes(
+    model: str, reported: str, polyscope: str, refused: str | None
+) -> None:
+    answer = model_mismatch(model, reported, polyscope)
+    if refused is None:
+        assert answer is None
+    else:
+        assert answer is not None and refused in answer and "--model" in answer

@@ -1,4 +1,4 @@
-"""`python -m device_drivers.ur_rtde.emulator --host 127.0.0.2 [--model ur5]`: an emulated
+"""`python -m device_drivers.ur_rtde.emulator --host 127.0.0.2 [--model ur5e]`: an emulated
 UR controller until interrupted. It runs in a process of its own: ur-rtde's calls block
 in C++ holding Python's interpreter lock, so a client and the emulator cannot share one."""
 
@@ -15,6 +15,7 @@ from device_drivers.sim_cell.link import CellServer
 from device_drivers.sim_cell.world import World
 from device_drivers.ur_rtde.emulator.controller import Controller
 from device_drivers.ur_rtde.emulator.servers import Emulator
+from device_drivers.ur_rtde.models import CB3
 from runtime.robotics.robot_info import available_models, load_robot_info
 
 
@@ -40,11 +41,14 @@ async def serve(host: str, model: str, cell: str) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m device_drivers.ur_rtde.emulator")
     parser.add_argument("--host", default="127.0.0.2", help="the address to serve on")
-    parser.add_argument("--model", default="ur5", help=", ".join(available_models()))
+    e_series = [m for m in available_models() if m.startswith("ur") and m not in CB3]
+    parser.add_argument("--model", default="ur5e", help=", ".join(e_series))
     parser.add_argument(
         "--cell", default="", help="serve a simulated cell under this name (see sim_cell)"
     )
     args = parser.parse_args(argv)
+    if args.model in CB3:  # it reports PolyScope 5 and streams at 500 Hz, as an e-Series does
+        parser.error(f"the emulator is an e-Series controller: give one of {', '.join(e_series)}")
     # Its control loop and the state streams are threads that must get the interpreter back
     # within their 2 ms cycles (the default switch interval is 5 ms).
     sys.setswitchinterval(0.0005)

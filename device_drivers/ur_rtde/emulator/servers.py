@@ -204,8 +204,8 @@ class Emulator:
                 return c.serial
             if command == "is in remote control":
                 return "true"
-            if command == "get robot model":
-                return c.info.model.split()[0].upper()
+            if command == "get robot model":  # the family: UR5 for a UR5e too
+                return re.sub(r"E$", "", c.info.model.upper())
             if command == "robotmode":
                 return f"Robotmode: {ROBOT_MODES.get(c.robot_mode, 'UNKNOWN')}"
             if command == "safetymode" or command == "safetystatus":
