@@ -73,12 +73,16 @@ class ModbusIODriver(Polled, IODriver):
 
     def _update(self, values: dict[str, SignalValue], *, connected: bool, error: str) -> None:
         now = self.clock()
+        different = (connected, error) != (self.connected, self.error)
         for name, value in values.items():
             if name not in self.changed or self.values.get(name) != value:
                 self.changed[name] = now
+                different = True
             self.values[name] = value
         self.connected, self.error = connected, error
         self.seqno += 1
+        if different:
+            self.state_changed.set()
 
     def _unknown(self, exc: OpenPendantError) -> None:
         """Every signal unknown, with why: never the last values as if they still held."""

@@ -28,6 +28,7 @@ MODULES = (
     "program",
     "scale",
     "modbus",
+    "io_panel",
     "ur",
 )
 

@@ -76,7 +76,7 @@ def build_driver_app(
     state_rate_hz: float,
     routers: Sequence[APIRouter] = (),
 ) -> FastAPI:
-    stream = StateStream(driver.state, state_rate_hz)
+    stream = StateStream(driver.state, state_rate_hz, driver.state_changed)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:

@@ -1,4 +1,5 @@
-"""Pushes a driver's state to every subscriber at a fixed rate, serialised once per tick."""
+"""Pushes a driver's state to every subscriber at a fixed rate, serialised once per tick,
+and at once when the driver says it changed."""
 
 from __future__ import annotations
 
@@ -16,9 +17,15 @@ KEEPALIVE = 0.05
 
 
 class StateStream:
-    def __init__(self, snapshot: Callable[[], BaseModel], rate_hz: float) -> None:
+    def __init__(
+        self,
+        snapshot: Callable[[], BaseModel],
+        rate_hz: float,
+        changed: asyncio.Event | None = None,
+    ) -> None:
         self.snapshot = snapshot
         self.period = 1.0 / rate_hz
+        self.changed = changed or asyncio.Event()
         self.fanout = Fanout()
 
     def current(self) -> str:
@@ -40,4 +47,9 @@ class StateStream:
             if delay < -self.period:
                 next_tick = time.monotonic()
                 delay = 0.0
-            await asyncio.sleep(max(delay, 0.0))
+            self.changed.clear()
+            try:
+                await asyncio.wait_for(self.changed.wait(), max(delay, 0.0))
+            except TimeoutError:
+                continue
+            next_tick = time.monotonic()  # a change: out now, and the ticks go on from here

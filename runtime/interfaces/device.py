@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 from abc import ABC, abstractmethod
 from typing import ClassVar, Generic, TypeVar
 
@@ -24,6 +25,9 @@ class DeviceDriver(ABC):
 
     def __init__(self, identity: DeviceIdentity) -> None:
         self.identity = identity
+        # Set when the state changed between two ticks of its stream (a polled input): the
+        # stream sends it at once instead of at its next tick.
+        self.state_changed = asyncio.Event()
 
     @property
     def kind(self) -> str:

@@ -20,22 +20,11 @@ from playwright.sync_api import (
     sync_playwright,
 )
 
+from runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
 from runtime.bench.harness.processes import Runtime, child_env, wait_for
 
 pytestmark = pytest.mark.browser
 
-CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = [
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--no-first-run",
-    "--disable-sync",
-    # No GPU here: WebGL (the 3D view) renders in software. Tablets use their GPU.
-    "--use-angle=swiftshader",
-    "--enable-unsafe-swiftshader",
-]
 TABLET: ViewportSize = {"width": 1280, "height": 800}
 BROWSER_DEADMAN = 0.5  # seconds
 BROWSER_LINK_TIMEOUT = 1.0  # seconds

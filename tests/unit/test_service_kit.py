@@ -156,6 +156,36 @@ def test_state_stream_repeats_a_quiet_state_and_skips_duplicates() -> None:
     assert 2 <= len(received) <= 4
 
 
+def test_state_stream_sends_a_change_at_once_when_the_driver_says_so() -> None:
+    """A stream ticking once a minute: a change the driver signals goes out without waiting
+    for the tick."""
+    from pydantic import BaseModel
+
+    from runtime.drivers.state_stream import StateStream
+    from runtime.kit.websocket import Subscriber
+
+    class Signal(BaseModel):
+        value: int = 0
+
+    current = Signal()
+
+    async def scenario() -> list[str]:
+        changed = asyncio.Event()
+        stream = StateStream(lambda: current, rate_hz=1 / 60, changed=changed)
+        sub = Subscriber()
+        stream.fanout.subscribers.add(sub)
+        task = asyncio.create_task(stream.run())
+        first = await asyncio.wait_for(sub.next_batch(), 5)
+        current.value = 1
+        changed.set()
+        second = await asyncio.wait_for(sub.next_batch(), 5)  # not 60 s
+        task.cancel()
+        return [*first, *second]
+
+    received = asyncio.run(scenario())
+    assert [json.loads(r)["value"] for r in received] == [0, 1]
+
+
 def test_the_request_start_stamp_is_read_only_when_it_is_a_recent_time() -> None:
     now = time.time()
     assert received_at(stamp()) == pytest.approx(now, abs=1.0)
