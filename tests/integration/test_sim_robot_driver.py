@@ -121,7 +121,7 @@ def test_joint_jog_moves_then_stops_on_command_timeout(robot: Robot) -> None:
 def test_limits_hold_through_jogs_streams_and_trajectories(robot: Robot) -> None:
     first = robot.state()["seqno"]
     robot.call("PUT", "/command_mode", {"mode": "jog"})
-    robot.jog([3.15, -3.15, 3.15, 3.2, -3.2, 3.2], seconds=0.4)  # every joint at full speed
+    robot.jog((VMAX * [1, -1, 1, 1, -1, 1]).tolist(), seconds=0.4)  # every joint at full speed
     robot.call("PUT", "/command_mode", {"mode": "position_command"})  # passes through halt
     here = np.array(robot.state()["joint_position"])
     for k in range(40):
