@@ -27,7 +27,12 @@ from runtime.kit.errors import InvalidValue, NotFound, RobotError
 from runtime.robotics.kinematics import Kinematics
 
 CYCLE = 0.002
-STREAM_MODES = (CommandMode.jog, CommandMode.velocity_command, CommandMode.position_command)
+STREAM_MODES = (
+    CommandMode.jog,
+    CommandMode.velocity_command,
+    CommandMode.position_command,
+    CommandMode.freedrive,
+)
 LIMIT_SLACK = 1e-6
 
 
@@ -99,6 +104,7 @@ class SimCore:
         self.tool_open: bool | None = True if "tool" in info.capabilities else None
         self.digital_inputs = [False] * info.digital_inputs
         self.digital_outputs = [False] * info.digital_outputs
+        self.hand = np.zeros(len(info.joints))  # a hand on the arm (simulation only)
 
     # Commands -------------------------------------------------------------------------------
 
@@ -151,6 +157,14 @@ class SimCore:
             self.halt("E-stop")
         else:
             self.estop = False
+
+    def push(self, velocity: FloatArray) -> None:
+        """Simulation only: a hand pushing the arm at these joint velocities (zero: let go).
+        It moves the arm only while it is held free (freedrive), within its limits."""
+        v = np.asarray(velocity, dtype=float)
+        if v.shape != self.hand.shape or not np.all(np.isfinite(v)):
+            raise InvalidValue(f"a push needs {len(self.hand)} finite joint velocities")
+        self.hand = np.clip(v, -self.tracker.max_velocity, self.tracker.max_velocity)
 
     def place(self, position: FloatArray) -> None:
         """Simulation only: the arm is at `position`, at rest, at once, as a test's set-up
@@ -267,6 +281,8 @@ class SimCore:
             self._advance_trajectory()
         elif command is None or command.mode is not self.mode:
             tracker.hold()
+        elif self.mode is CommandMode.freedrive:
+            tracker.step_velocity(self.hand)  # free: the arm goes where the hand takes it
         elif command.position is not None:
             tracker.step_position(*command.reference(now))
         else:

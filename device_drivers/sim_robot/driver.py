@@ -162,6 +162,11 @@ class SimRobot(RobotDriver):
         with self.lock:
             self.core.stream(CommandMode.jog, velocity, None, timeout, time.monotonic())
 
+    async def _freedrive(self, timeout: float) -> None:
+        with self.lock:
+            zero = np.zeros(len(self.info.joints))
+            self.core.stream(CommandMode.freedrive, zero, None, timeout, time.monotonic())
+
     async def _velocity_command(self, velocity: FloatArray, timeout: float) -> None:
         with self.lock:
             self.core.stream(
@@ -214,6 +219,10 @@ class SimRobot(RobotDriver):
     def place(self, position: list[float]) -> None:
         with self.lock:
             self.core.place(np.asarray(position, dtype=float))
+
+    def push(self, velocity: list[float]) -> None:
+        with self.lock:
+            self.core.push(np.asarray(velocity, dtype=float))
 
     def set_estop(self, engaged: bool) -> None:
         with self.lock:

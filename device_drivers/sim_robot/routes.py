@@ -34,6 +34,10 @@ class PlaceRequest(Strict):
     joints: list[float] = Field(min_length=1, max_length=16)
 
 
+class PushRequest(Strict):
+    velocity: list[float] = Field(min_length=1, max_length=16)  # rad/s per joint
+
+
 def sim_router(robot: SimRobot) -> APIRouter:
     router = APIRouter(prefix="/sim")
 
@@ -72,6 +76,13 @@ def sim_router(robot: SimRobot) -> APIRouter:
         """Put the standing arm at these joints at once: a test's set-up in no time, where
         a robot would have to be moved there."""
         robot.place(body.joints)
+        return robot.state()
+
+    @router.put("/hand")
+    async def hand(body: PushRequest) -> RobotState:
+        """A hand pushing the arm at these joint velocities (zero: let go): it moves the arm
+        only while the arm is held free (freedrive)."""
+        robot.push(body.velocity)
         return robot.state()
 
     @router.put("/digital_inputs/{index}")

@@ -49,6 +49,15 @@ from runtime.robotics.kinematics import Kinematics
 log = logging.getLogger(__name__)
 CYCLE = 0.008  # s: servoJ's time per command, and the control thread's period
 RECONNECT_AFTER = 1.0  # s between attempts
+MODE_POLL = 1.0  # s between two questions for the operational mode (it changes by hand)
+# The controller's operational mode as the pendant's rules see it: jogging is for manual
+# mode, at reduced speed (UR's manual mode with an enabling device caps the TCP at 250 mm/s
+# too). A controller without mode selection is jogged as in manual mode.
+OPERATIONAL_MODES = {
+    "MANUAL": OperationalMode.manual_reduced_speed,
+    "AUTOMATIC": OperationalMode.auto,
+    "NONE": OperationalMode.manual_reduced_speed,
+}
 STOP_DECELERATION = 2.0  # rad/s² for stopJ
 
 
@@ -90,6 +99,9 @@ class URDriver(RobotDriver):
         self.seqno = 0
         self._ever_connected = False
         self._moving = False  # a motion command went out since the last stop
+        self._teaching = False  # the controller is in teach mode (freedrive)
+        self.operational_mode = OperationalMode.manual_reduced_speed
+        self._mode_asked = -MODE_POLL
         self._running = threading.Event()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
@@ -124,6 +136,8 @@ class URDriver(RobotDriver):
                 self._try_connect()
             if self.link is not None:
                 self._serve_requests(self.link)
+            if self.link is not None and time.monotonic() - self._mode_asked >= MODE_POLL:
+                self._ask_operational_mode(self.link)
             if self.link is not None:
                 try:
                     self._cycle()
@@ -137,6 +151,20 @@ class URDriver(RobotDriver):
             if self._wake.wait(max(delay, 0.0)):
                 self._wake.clear()
                 next_at = time.monotonic()
+
+    def _ask_operational_mode(self, link: URLink) -> None:
+        self._mode_asked = time.monotonic()
+        try:
+            mode = OPERATIONAL_MODES[link.operational_mode()]
+        except Exception as exc:  # the dashboard's connection: the cycle notices a lost link
+            log.warning("operational mode not read: %s", exc)
+            return
+        with self.lock:
+            if mode is not self.operational_mode:
+                log.info("operational mode: %s", mode.value)
+                if self.mode is not CommandMode.halt:
+                    self._halt_now(f"operational mode changed to {mode.value}")
+                self.operational_mode = mode
 
     def _serve_requests(self, link: URLink) -> None:
         while not self._requests.empty():
@@ -174,6 +202,7 @@ class URDriver(RobotDriver):
         log.warning("%s", why)
         with self.lock:
             link, self.link = self.link, None
+            self._teaching = False  # the program (and its teach mode) ends with the link
             self._fault(why)
         if link is not None:
             link.close()
@@ -222,6 +251,13 @@ class URDriver(RobotDriver):
             self._stop(link)
             return
         _, velocity, position, _ = stream
+        if self.mode is CommandMode.freedrive:
+            if not self._teaching:
+                control.teachMode()
+                self._teaching = True
+            else:
+                control.kickWatchdog()
+            return
         if position is not None:
             control.servoJ(position.tolist(), 0.0, 0.0, CYCLE, self.lookahead, self.gain)
         elif velocity is not None:
@@ -230,6 +266,9 @@ class URDriver(RobotDriver):
         self._moving = True
 
     def _stop(self, link: URLink) -> None:
+        if self._teaching:  # held free no longer: the arm holds where the hand left it
+            link.control.endTeachMode()
+            self._teaching = False
         if self._moving:
             link.control.stopJ(STOP_DECELERATION, True)
             self._moving = False
@@ -306,7 +345,7 @@ class URDriver(RobotDriver):
                 seqno=self.seqno,
                 ts=time.time(),
                 command_mode=self.mode,
-                operational_mode=OperationalMode.auto,
+                operational_mode=self.operational_mode,
                 flags=self._flags(),
                 joint_position=q,
                 joint_velocity=qd,
@@ -401,6 +440,13 @@ class URDriver(RobotDriver):
         with self.lock:
             fresh = self.stream is None
             self.stream = (CommandMode.jog, velocity, None, time.monotonic() + timeout)
+        if fresh:
+            self._wake.set()
+
+    async def _freedrive(self, timeout: float) -> None:
+        with self.lock:
+            fresh = self.stream is None
+            self.stream = (CommandMode.freedrive, None, None, time.monotonic() + timeout)
         if fresh:
             self._wake.set()
 

@@ -17,6 +17,7 @@ from runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
     DigitalOutputCommand,
+    FreedriveCommand,
     JogJointCommand,
     JointTrajectory,
     PositionCommand,
@@ -46,7 +47,14 @@ class Halt:
     tag: str | None = None
 
 
-Streamed = JogJointCommand | VelocityCommand | PositionCommand | CommandModeRequest | Halt
+Streamed = (
+    JogJointCommand
+    | VelocityCommand
+    | PositionCommand
+    | FreedriveCommand
+    | CommandModeRequest
+    | Halt
+)
 
 
 class RobotClient(DeviceClient[RobotState], Robot):
@@ -103,6 +111,9 @@ class RobotClient(DeviceClient[RobotState], Robot):
         await self.stream(command)
 
     async def velocity_command(self, command: VelocityCommand) -> None:
+        await self.stream(command)
+
+    async def freedrive(self, command: FreedriveCommand) -> None:
         await self.stream(command)
 
     async def position_command(self, command: PositionCommand) -> None:

@@ -21,6 +21,8 @@ class CommandMode(StrEnum):
     trajectory = "trajectory"
     position_command = "position_command"
     velocity_command = "velocity_command"
+    # Held free to be moved by hand (a UR's teach mode) while freedrive commands keep coming.
+    freedrive = "freedrive"
 
 
 class OperationalMode(StrEnum):
@@ -167,6 +169,14 @@ class CommandModeRequest(Strict):
     mode: CommandMode
 
 
+class FreedriveCommand(Strict):
+    """Keep the arm free to be moved by hand until `timeout` s pass without a new command
+    (hold to run). Only for a robot with the `freedrive` capability, in freedrive mode."""
+
+    timeout: CommandTimeout = 0.2
+    tag: Tag = None
+
+
 class JogJointCommand(Strict):
     """Move at these joint velocities (rad/s) until `timeout` s pass without a new command."""
 
@@ -289,6 +299,12 @@ class Robot(ABC):
     @abstractmethod
     async def jog_joint(self, command: JogJointCommand) -> None:
         """Holds until `timeout` (at most 1 s) passes without a new command."""
+
+    @endpoint("POST", "/freedrive", body=FreedriveCommand, stream="freedrive")
+    @abstractmethod
+    async def freedrive(self, command: FreedriveCommand) -> None:
+        """The arm stays free to be moved by hand until `timeout` passes without a new
+        command; then it holds where it is."""
 
     @endpoint("POST", "/velocity_command", body=VelocityCommand, stream="velocity_command")
     @abstractmethod

@@ -12,6 +12,7 @@ from runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
     DigitalOutputCommand,
+    FreedriveCommand,
     JogJointCommand,
     JointTrajectory,
     PositionCommand,
@@ -97,6 +98,8 @@ class RobotDriver(DeviceDriver, Robot):
         return self.state()
 
     async def set_command_mode(self, request: CommandModeRequest) -> RobotState:
+        if request.mode is CommandMode.freedrive:
+            self._require_freedrive()
         if request.mode is not CommandMode.halt:
             self._require_ready()
         await self._set_command_mode(request.mode)
@@ -144,6 +147,11 @@ class RobotDriver(DeviceDriver, Robot):
         velocity = self.limits.velocities(command.velocity, "jog velocity")
         await self._jog_joint(velocity, command.timeout)
 
+    async def freedrive(self, command: FreedriveCommand) -> None:
+        self._require_freedrive()
+        self._require_mode(CommandMode.freedrive)
+        await self._freedrive(command.timeout)
+
     async def velocity_command(self, command: VelocityCommand) -> None:
         self._require_mode(CommandMode.velocity_command)
         velocity = self.limits.velocities(command.velocity, "velocity command")
@@ -183,6 +191,12 @@ class RobotDriver(DeviceDriver, Robot):
     def _require_no_estop(self) -> None:
         if self.status().flags.estop:
             raise RobotError("the E-stop is engaged; release it first", code="estop")
+
+    def _require_freedrive(self) -> None:
+        if "freedrive" not in self.info.capabilities:
+            raise RobotError(
+                f"the {self.info.model} cannot be moved by hand (no freedrive)", code="no_freedrive"
+            )
 
     def _require_ready(self) -> RobotStatus:
         state = self.status()
@@ -230,6 +244,11 @@ class RobotDriver(DeviceDriver, Robot):
 
     @abstractmethod
     async def _velocity_command(self, velocity: FloatArray, timeout: float) -> None: ...
+
+    async def _freedrive(self, timeout: float) -> None:
+        """Free to be moved by hand for `timeout` more seconds (drivers that declare the
+        `freedrive` capability implement it)."""
+        raise RobotError("this driver has no freedrive", code="no_freedrive")
 
     @abstractmethod
     async def _position_command(

@@ -12,7 +12,13 @@ import pinocchio as pin
 from runtime.clients.input import InputClient
 from runtime.clients.robot import Halt, Streamed
 from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import CommandMode, PositionCommand, RobotState, VelocityCommand
+from runtime.interfaces.robot import (
+    CommandMode,
+    FreedriveCommand,
+    PositionCommand,
+    RobotState,
+    VelocityCommand,
+)
 from runtime.robotics.joint_move import PlannedMove
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.velocity import VelocityController
@@ -199,6 +205,16 @@ class PlannedMoveAction(Action):
             timeout=COMMAND_TIMEOUT,
             tag=self.tag(),
         )
+
+
+class FreedriveHold(Action):
+    """The arm held free to be moved by hand (a UR's teach mode) for as long as the button
+    is: each cycle renews it; when the commands stop, the robot holds where it is."""
+
+    mode = CommandMode.freedrive
+
+    def tick(self, state: RobotState, now: float) -> FreedriveCommand:
+        return FreedriveCommand(timeout=COMMAND_TIMEOUT, tag=self.tag())
 
 
 class MouseJog(Action):

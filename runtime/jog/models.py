@@ -58,6 +58,16 @@ class MoveToPress(Strict):
     speed: Speed = 0.25
 
 
+class FreedrivePress(Strict):
+    """Hold the arm free to be moved by hand while the button is held (robots with the
+    `freedrive` capability)."""
+
+    type: Literal["freedrive"]
+    press: PressId
+    robot: RobotName
+    token: Token = None
+
+
 class Heartbeat(Strict):
     type: Literal["heartbeat"]
     press: PressId

@@ -19,6 +19,7 @@ from pydantic import ValidationError
 from runtime.interfaces.limits import FloatArray, JointLimitChecker
 from runtime.jog.actions import (
     Action,
+    FreedriveHold,
     JointVelocityJog,
     MouseJog,
     PlannedMoveAction,
@@ -29,6 +30,7 @@ from runtime.jog.directory import Directory
 from runtime.jog.jogger import Ended, Jogger
 from runtime.jog.models import (
     CARTESIAN_AXES,
+    FreedrivePress,
     HaltRequest,
     Heartbeat,
     JogPress,
@@ -39,7 +41,7 @@ from runtime.jog.models import (
 )
 from runtime.jog.waypoints import joint_goal, teach
 from runtime.kit.app import describe_validation_errors
-from runtime.kit.errors import InvalidValue, OpenPendantError
+from runtime.kit.errors import InvalidValue, OpenPendantError, RobotError
 from runtime.kit.websocket import Fanout
 from runtime.robotics.joint_move import plan_joint_move
 from runtime.variable_storage.client import StorageClient
@@ -53,6 +55,7 @@ ANGULAR_SPEED = math.radians(45)  # rad/s at 100 %
 MESSAGES: dict[str, type[Any]] = {
     "jog": JogPress,
     "move_to": MoveToPress,
+    "freedrive": FreedrivePress,
     "heartbeat": Heartbeat,
     "release": Release,
     "halt": HaltRequest,
@@ -102,7 +105,7 @@ class JogSession:
         except ValidationError as exc:
             text, _ = describe_validation_errors(exc.errors())
             raise OpenPendantError(text, code="invalid_request", status=422) from exc
-        if isinstance(request, JogPress | MoveToPress):
+        if isinstance(request, JogPress | MoveToPress | FreedrivePress):
             await self._press(request)
         elif isinstance(request, Heartbeat):
             self._heartbeat(request.press)
@@ -235,7 +238,7 @@ class JogSession:
             self.send({"type": "taught", "robot": robot, "name": name})
             return
 
-    async def _press(self, request: JogPress | MoveToPress) -> None:
+    async def _press(self, request: JogPress | MoveToPress | FreedrivePress) -> None:
         if request.press in self.held:
             self._heartbeat(request.press)  # a repeated press is its own heartbeat
             return
@@ -275,11 +278,19 @@ class JogSession:
                 }
             )
 
-    async def _action(self, request: JogPress | MoveToPress, jogger: Jogger) -> Action:
+    async def _action(
+        self, request: JogPress | MoveToPress | FreedrivePress, jogger: Jogger
+    ) -> Action:
         state = jogger.link.current()
         cap = jogger.tcp_cap()
         q = np.array(state.joint_position_command)
         info = jogger.link.info
+        if isinstance(request, FreedrivePress):
+            if "freedrive" not in info.capabilities:
+                raise RobotError(
+                    f"{request.robot} cannot be moved by hand (no freedrive)", code="no_freedrive"
+                )
+            return FreedriveHold(request.press)
         if isinstance(request, MoveToPress):
             goal = await joint_goal(
                 self.storage,

@@ -1,6 +1,7 @@
 """The Jog panel by touch: take control, enable, hold a jog button (the robot moves while the
 finger is down and stops when it lifts), teach a waypoint, move away, hold "move to" until it
-arrives, a live 3D view of the robot, and a gripper opened and closed beside the buttons."""
+arrives, a live 3D view of the robot, freedrive held while a hand moves the arm, and a
+gripper opened and closed beside the buttons."""
 
 from __future__ import annotations
 
@@ -136,6 +137,41 @@ def test_sliding_off_a_held_button_stops_the_robot(
     expect(page.get_by_test_id("deadman")).to_contain_text("Stopped")
     page.get_by_test_id("control").tap()
     expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+
+
+def test_freedrive_is_held_by_touch_and_a_hand_moves_the_arm(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    """Hold Freedrive: the arm follows a hand on its wrist. Lift the finger: it holds where
+    the hand left it, though the hand still pushes."""
+    hand = f"{runtime.api('GET', '/devices/robot').json()['url']}/sim/hand"
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/jog")
+    take_control_and_enable(page)
+    button = page.get_by_test_id("freedrive")
+    expect(button).to_be_visible()
+    httpx.put(hand, json={"velocity": [0, 0, 0, 0, 0.3, 0]}, timeout=5).raise_for_status()
+    try:
+        before = robot_joints(runtime)
+        finger = Finger(page)
+        finger.down(button)
+        try:
+            wait_for(lambda: robot_joints(runtime)[4] > before[4] + 0.05, 5, what="J5 by hand")
+            expect(page.get_by_test_id("deadman")).to_contain_text("by hand")
+        finally:
+            finger.up()
+        wait_for(lambda: robot_at_rest(runtime), 3, what="held when the finger lifted")
+        held = robot_joints(runtime)
+        time.sleep(0.3)  # the hand still pushes
+        assert np.abs(robot_joints(runtime) - held).max() < STILL
+        assert np.abs(np.delete(held - before, 4)).max() < 1e-9
+        expect(page.get_by_test_id("deadman")).to_contain_text("Stopped")
+    finally:
+        httpx.put(hand, json={"velocity": [0.0] * 6}, timeout=5)
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+    assert errors.errors == []
 
 
 def test_without_control_the_pad_does_nothing(

@@ -97,6 +97,32 @@ def test_rotation_turns_about_the_tcp(cell: Cell, jog: JogClient) -> None:
     assert np.linalg.norm(after.translation - before.translation) < 1e-3  # TCP stays put
 
 
+def test_freedrive_lets_a_hand_move_the_arm_only_while_held(cell: Cell, jog: JogClient) -> None:
+    """Freedrive held: a hand on the wrist moves it. Let go of the button: the arm holds
+    where the hand left it, though the hand still pushes, and nothing resumes."""
+    cell.robot.http.put("/sim/hand", json={"velocity": [0, 0, 0, 0.3, 0, 0]})
+    try:
+        start = cell.robot.q()
+        jog.drain(0.2)  # the hand pushes, nothing holds the arm free: it stays
+        assert np.allclose(cell.robot.q(), start, atol=1e-9)
+        press = jog.press(type="freedrive")
+        with jog.held(press):
+            assert jog.status(press, ("moving", "refused"))["state"] == "moving"
+            wait_for(lambda: cell.robot.q()[3] - start[3] > 0.05, 5, what="the wrist moved")
+            assert cell.robot.state()["command_mode"] == "freedrive"
+        jog.send({"type": "release", "press": press})
+        assert jog.status(press, ("stopped", "halted"))["state"] == "stopped"
+        cell.robot.wait_stopped()
+        moved = cell.robot.q() - start
+        assert moved[3] > 0.05 and np.allclose(np.delete(moved, 3), 0.0, atol=1e-9)
+        held = cell.robot.q()
+        jog.drain(0.2)
+        assert np.allclose(cell.robot.q(), held, atol=1e-9)
+        assert cell.robot.state()["command_mode"] == "halt"
+    finally:
+        cell.robot.http.put("/sim/hand", json={"velocity": [0.0] * 6})
+
+
 @pytest.mark.parametrize(("joint", "direction"), [(0, 1), (3, -1)])
 def test_joint_jog_moves_one_joint(cell: Cell, jog: JogClient, joint: int, direction: int) -> None:
     before = cell.robot.q()

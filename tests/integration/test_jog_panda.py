@@ -116,3 +116,10 @@ def test_the_3d_mouse_jogs_the_panda_along_x_only(
         jog.send({"type": "mouse", "robot": "robot", "device": "mouse", "enabled": False})
         mouse.stop()
         cell.runtime.api("DELETE", "/devices/mouse")
+
+
+def test_freedrive_is_refused_on_a_robot_without_it(cell: Cell, jog: JogClient) -> None:
+    press = jog.press(type="freedrive")
+    refused = jog.status(press, ("refused", "moving"))
+    assert (refused["state"], refused["reason"]) == ("refused", "no_freedrive")
+    assert "cannot be moved by hand" in refused["message"]

@@ -12,9 +12,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from device_drivers.sim_cell.link import CellClient
+from device_drivers.ur_rtde.emulator import control as emulator_control
+from runtime.bench.harness.jog import JogClient
 from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
@@ -114,3 +117,47 @@ def test_the_blockly_pick_and_place_runs_unchanged_on_the_ur(cell: tuple[Runtime
     assert z == pytest.approx(0.02)
     state = runtime.api("GET", "/devices/cell_io/state").json()
     assert state["values"]["lamp_green"] is True
+    runtime.api("DELETE", "/devices/robot/lease", headers=mine)
+
+
+def test_the_ur_is_jogged_and_freedriven_through_the_jog_socket(cell: tuple[Runtime, str]) -> None:
+    """What the Jog panel sends, on the UR: a Cartesian jog up along the base z axis (the
+    runtime's kinematics, joint velocities to the controller) keeps its line; Freedrive held
+    puts the controller in teach mode, where a hand moves the arm; let go, it holds."""
+    runtime, host = cell
+    lease = runtime.api("POST", "/devices/robot/lease", json={"holder": "tests"}).json()["token"]
+    mine = {"X-Lease-Token": lease}
+    assert runtime.api("POST", "/jog/robots/robot/enable", headers=mine).status_code == 200
+    jog = JogClient(runtime, token=lease)
+    try:
+        before = joints(runtime)
+        jog.hold(0.5, kind="cartesian", axis="z", direction=1, frame="base", speed=0.4)
+        wait_for(lambda: at_rest(runtime), 5, what="stopped on release")
+        start, end = UR5E.tcp(before), UR5E.tcp(joints(runtime))
+        moved = end.translation - start.translation
+        assert moved[2] > 0.005 and np.abs(moved[:2]).max() < 1e-3
+        assert np.linalg.norm(pin.log3(start.rotation.T @ end.rotation)) < 1e-3
+
+        emulator_control.world(host, "hand 0.3 0 0 0 0 0")
+        before = joints(runtime)
+        press = jog.press(type="freedrive")
+        with jog.held(press):
+            assert jog.status(press, ("moving", "refused"))["state"] == "moving"
+            wait_for(lambda: emulator_control.emulated(host)["freedrive"], 5, what="teach mode")
+            wait_for(lambda: joints(runtime)[0] > before[0] + 0.05, 5, what="moved by hand")
+        jog.send({"type": "release", "press": press})
+        wait_for(lambda: not emulator_control.emulated(host)["freedrive"], 5, what="teach ended")
+        wait_for(lambda: at_rest(runtime), 5, what="held where the hand left it")
+    finally:
+        emulator_control.world(host, "hand 0 0 0 0 0 0")
+        jog.close()
+        runtime.api("DELETE", "/devices/robot/lease", headers=mine)
+
+
+def joints(runtime: Runtime) -> np.ndarray[Any, Any]:
+    return np.array(runtime.api("GET", "/devices/robot/state").json()["joint_position"])
+
+
+def at_rest(runtime: Runtime) -> bool:
+    velocity = runtime.api("GET", "/devices/robot/state").json()["joint_velocity"]
+    return bool(np.allclose(velocity, 0.0, atol=1e-9))

@@ -24,8 +24,10 @@ from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
+    FreedriveCommand,
     JogJointCommand,
     JointTrajectory,
+    OperationalMode,
     TrajectoryState,
     TrajectoryWaypoint,
 )
@@ -174,6 +176,56 @@ def test_a_jog_moves_while_commanded_and_stops_after_its_timeout(driven: Driven)
     until(lambda: abs(emulated()["qd"][0]) < 1e-6, 5, "stopped once the commands stopped")
     assert d.state().joint_position[0] > start + 0.02
     assert emulated()["runtime_state"] == 2  # stopped by the driver, not by the watchdog
+
+
+def test_the_pendants_operational_mode_is_followed(driven: Driven) -> None:
+    """No mode selection on the controller (UR's default): jogged as in manual mode, at
+    reduced speed. Automatic on its pendant: the robot halts and the runtime refuses to jog
+    it; manual again: reduced speed."""
+    driven.ready()
+    d = driven.driver
+    assert d.state().operational_mode is OperationalMode.manual_reduced_speed
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+    world("operational mode automatic")
+    try:
+        until(lambda: d.state().operational_mode is OperationalMode.auto, 5, "automatic seen")
+        assert d.state().command_mode is CommandMode.halt
+        world("operational mode manual")
+        until(
+            lambda: d.state().operational_mode is OperationalMode.manual_reduced_speed,
+            5,
+            "manual seen",
+        )
+    finally:
+        world("operational mode none")
+
+
+def test_freedrive_is_teach_mode_only_while_commanded(driven: Driven) -> None:
+    """Held free by hand (teach mode) while freedrive commands come; when they stop, the
+    controller leaves teach mode and the arm holds where the hand left it."""
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.freedrive)))
+    world("hand 0 0 0 0.3 0 0")  # a hand on the wrist: it moves nothing yet
+    try:
+        start = np.array(emulated()["q"])
+        assert not emulated()["freedrive"]
+        taught = False
+        for _ in range(50):  # 0.5 s of a held button at 100 Hz
+            driven.run(d.freedrive(FreedriveCommand(timeout=0.1)))
+            taught = taught or emulated()["freedrive"]
+            time.sleep(0.01)
+        assert taught and d.state().command_mode is CommandMode.freedrive
+        until(lambda: not emulated()["freedrive"], 5, "teach mode ended when the commands did")
+        moved = np.array(emulated()["q"]) - start
+        assert moved[3] > 0.05 and np.allclose(np.delete(moved, 3), 0.0, atol=1e-6)
+        until(lambda: abs(emulated()["qd"][3]) < 1e-9, 2, "the arm held")
+        held = np.array(emulated()["q"])
+        time.sleep(0.2)  # the hand still pushes: the arm stays
+        assert np.allclose(emulated()["q"], held, atol=1e-6)
+        assert emulated()["runtime_state"] == PLAYING  # not stopped by the watchdog
+    finally:
+        world("hand 0 0 0 0 0 0")
 
 
 def test_a_trajectory_runs_on_its_planned_path_and_a_halt_stops_the_next(driven: Driven) -> None:

@@ -23,6 +23,7 @@ from runtime.interfaces.gripper import Gripper, GripperMotion
 from runtime.interfaces.io import IOBlock, SignalWrite
 from runtime.interfaces.robot import (
     CommandModeRequest,
+    FreedriveCommand,
     JogJointCommand,
     PositionCommand,
     Robot,
@@ -126,6 +127,7 @@ def test_the_standard_interfaces_declare_their_wire() -> None:
         JogJointCommand: "jog_joint",
         VelocityCommand: "velocity_command",
         PositionCommand: "position_command",
+        FreedriveCommand: "freedrive",
     } == STREAM_TYPES
     assert set(endpoints(Gripper)) == {"activate", "open", "close", "move", "stop"}
     assert endpoints(IOBlock)["write"].params == ["name"]

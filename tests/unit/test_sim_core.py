@@ -95,6 +95,53 @@ def test_jog_stops_when_commands_stop_arriving(core: SimCore) -> None:
     assert_within_limits(core)
 
 
+def test_freedrive_lets_a_hand_move_the_arm_only_while_held(core: SimCore) -> None:
+    clock = Clock(core)
+    push = np.array([0, 0, 0, 0.4, 0, 0])
+    core.push(push)  # a hand on the arm, not held free: nothing moves
+    clock.run(0.2)
+    start = core.tracker.position.copy()
+    core.set_mode(CommandMode.freedrive)
+    clock.run(0.2)
+    assert np.array_equal(core.tracker.position, start)  # free only while commands come
+
+    def held(now: float) -> None:
+        core.stream(CommandMode.freedrive, np.zeros(6), None, 0.1, now)
+
+    clock.run(0.5, held)
+    moved = core.tracker.position - start
+    assert moved[3] > 0.1 and np.allclose(np.delete(moved, 3), 0.0)
+    clock.run(0.5)  # let go of the button: the 100 ms lapses, the arm holds
+    assert core.command is None and np.allclose(core.tracker.velocity, 0.0)
+    stopped_at = core.tracker.position.copy()
+    clock.run(0.2)
+    assert np.array_equal(core.tracker.position, stopped_at)
+    assert_within_limits(core)
+
+
+def test_freedrive_ends_with_the_e_stop_and_a_push_must_be_finite(core: SimCore) -> None:
+    clock = Clock(core)
+    core.set_mode(CommandMode.freedrive)
+    core.push(np.array([0.4, 0, 0, 0, 0, 0]))
+    clock.run(0.2, lambda now: core.stream(CommandMode.freedrive, np.zeros(6), None, 0.1, now))
+    core.set_estop(True)
+    assert core.mode is CommandMode.halt
+    with pytest.raises(RobotError, match="not ready"):
+        core.stream(CommandMode.freedrive, np.zeros(6), None, 0.1, clock.now)
+    with pytest.raises(InvalidValue, match="finite"):
+        core.push(np.array([math.nan, 0, 0, 0, 0, 0]))
+
+
+def test_only_a_robot_with_freedrive_takes_freedrive(ur5: RobotInfo) -> None:
+    panda = load_robot_info("panda")
+    robot = SimRobot(DeviceIdentity(uuid="p", kind="robot", model="panda", name="p"), panda)
+    robot.core.enable()
+    with pytest.raises(RobotError, match="cannot be moved by hand") as refused:
+        asyncio.run(robot.set_command_mode(CommandModeRequest(mode=CommandMode.freedrive)))
+    assert refused.value.code == "no_freedrive"
+    assert "freedrive" in ur5.capabilities
+
+
 @pytest.mark.parametrize("elbow", [0.3, 0.6, 0.9, 1.2])
 def test_a_halt_brakes_along_the_path_and_the_tcp_never_speeds_up(
     ur5: RobotInfo, elbow: float

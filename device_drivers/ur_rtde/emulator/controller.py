@@ -73,7 +73,9 @@ class Controller:
         self.executing = False
         self.move_blocking = False  # a blocking move whose end is signalled "done"
         self.motion = Motion()
+        self.operational_mode = "NONE"  # no mode selection configured (UR's default)
         self.freedrive = False
+        self.hand = np.zeros(len(info.joints))  # a hand pushing the arm (moves it in teach mode)
         self.watchdog_hz: float | None = None
         self.last_kick = 0.0
         self.commands: list[int] = []  # every command code the script took, in order
@@ -124,6 +126,8 @@ class Controller:
             self.robot_mode, self.safety_mode = RUNNING, NORMAL
             self.digital_inputs = self.digital_outputs = 0
             self.speed_fraction = 1.0
+            self.hand[:] = 0.0
+            self.operational_mode = "NONE"
             self.watchdog_hz = None
             self.in_int = [0] * 48
             self.tracker.place(self.tracker.position)
@@ -278,10 +282,12 @@ class Controller:
     def step(self) -> None:
         with self.lock:
             self._script_cycle()
-            if self.robot_mode == RUNNING and self.safety_mode == NORMAL and not self.freedrive:
-                self._move_cycle()
-            else:
+            if self.robot_mode != RUNNING or self.safety_mode != NORMAL:
                 self.tracker.hold()
+            elif self.freedrive:
+                self.tracker.step_velocity(self.hand)  # teach mode: where the hand takes it
+            else:
+                self._move_cycle()
 
     def run(self) -> None:
         self._running.set()

@@ -16,6 +16,8 @@ import struct
 import threading
 import time
 
+import numpy as np
+
 from device_drivers.ur_rtde.emulator import wire
 from device_drivers.ur_rtde.emulator.controller import (
     IDLE,
@@ -202,6 +204,8 @@ class Emulator:
                 return f"URSoftware {major}.{minor}.{bugfix}.{build} (Jan 01 2026)"
             if command == "get serial number":
                 return c.serial
+            if command == "get operational mode":
+                return c.operational_mode
             if command == "is in remote control":
                 return "true"
             if command == "get robot model":  # the family: UR5 for a UR5e too
@@ -246,8 +250,10 @@ class Emulator:
 
     def world(self, command: str) -> str:
         """What happens around the robot (tests only; a real dashboard knows none of it):
-        `protective stop`, `estop on|off`, `digital input N on|off`, `reset` (powered,
-        normal, no program, nothing held), `state`."""
+        `protective stop`, `estop on|off`, `digital input N on|off`, `operational mode
+        manual|automatic|none` (the pendant's mode selection), `hand V1 … V6` (a hand
+        pushing the arm at these joint velocities: it moves only in teach mode), `reset`
+        (powered, normal, no program, nothing held), `state`."""
         c = self.controller
         words = command.split()
         if command == "protective stop":
@@ -261,6 +267,20 @@ class Emulator:
             c.digital_inputs = (
                 (c.digital_inputs | bit) if words[3] == "on" else (c.digital_inputs & ~bit)
             )
+        elif words[:2] == ["operational", "mode"] and words[2:] in (
+            ["manual"],
+            ["automatic"],
+            ["none"],
+        ):
+            c.operational_mode = words[2].upper()
+        elif words[:1] == ["hand"] and len(words) == len(c.hand) + 1:
+            try:
+                push = np.array([float(w) for w in words[1:]])
+            except ValueError:
+                return f"emulator: not numbers: {command!r}"
+            if not np.all(np.isfinite(push)):
+                return f"emulator: not finite: {command!r}"
+            c.hand = np.clip(push, -c.tracker.max_velocity, c.tracker.max_velocity)
         elif command == "state":
             return json.dumps(
                 {

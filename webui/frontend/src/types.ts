@@ -56,7 +56,13 @@ export interface RobotFlags {
   trajectory_running: boolean;
 }
 
-export type CommandMode = "halt" | "jog" | "trajectory" | "position_command" | "velocity_command";
+export type CommandMode =
+  | "halt"
+  | "jog"
+  | "trajectory"
+  | "position_command"
+  | "velocity_command"
+  | "freedrive";
 
 export type OperationalMode =
   | "manual_reduced_speed"

@@ -14,6 +14,7 @@ export class OpJogStatus extends LitElement {
     mine: { type: Boolean },
     ready: { type: Boolean },
     movingTo: { type: String },
+    freedrive: { type: Boolean },
     mouse: { attribute: false },
   };
   declare online: boolean; // the jog socket is open
@@ -21,6 +22,7 @@ export class OpJogStatus extends LitElement {
   declare mine: boolean; // this tab has control
   declare ready: boolean; // the robot is ready to move
   declare movingTo: string; // the waypoint a held Move to is going to
+  declare freedrive: boolean; // the press is Freedrive: the arm is moved by hand
   declare mouse: InputState | null; // the 3D mouse the last press was, if it was one
 
   static styles = [
@@ -48,6 +50,7 @@ export class OpJogStatus extends LitElement {
     this.mine = false;
     this.ready = false;
     this.movingTo = "";
+    this.freedrive = false;
     this.mouse = null;
   }
 
@@ -70,7 +73,8 @@ export class OpJogStatus extends LitElement {
       return html`<div class="deadman chip ${atRest ? "" : "ok"}" data-testid="deadman">
         ${atRest ? t("jog.mouse.at_rest") : t("jog.mouse.moving")}</div>`;
     }
-    const text = s.state === "moving" && this.movingTo
+    const text = s.state === "moving" && this.freedrive ? t("jog.freedrive_on")
+      : s.state === "moving" && this.movingTo
       ? t("jog.moving_to", { name: this.movingTo })
       : s.state === "moving" ? t("jog.moving")
       : s.state === "held" ? t("jog.not_moving", { reason: s.message ?? t("jog.held_back") })

@@ -7,7 +7,7 @@ export interface RobotModel {
   name: string; // the robot it describes: joints of another robot are never drawn on it
   urdf: string | null;
   packages: Record<string, string>;
-  info: { base_link: string; joints: { name: string }[] };
+  info: { base_link: string; joints: { name: string }[]; capabilities: string[] };
 }
 
 // The live 3D view. three.js and the URDF loader load only when a view is first shown.

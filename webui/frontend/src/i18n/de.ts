@@ -218,6 +218,8 @@ export const de: Catalogue = {
   "jog.mouse.at_rest": "3D-Maus an — in Ruhe",
   "jog.mouse.moving": "Verfahren mit der 3D-Maus",
   "jog.moving_to": "Fährt zu {name} — halten zum Fortfahren",
+  "jog.freedrive": "Halten: Freedrive (Arm von Hand bewegen)",
+  "jog.freedrive_on": "Von Hand bewegbar — halten zum Fortfahren",
   "jog.moving": "Fährt — halten zum Fortfahren",
   "jog.not_moving": "Keine Bewegung: {reason}",
   "jog.held_back": "zurückgehalten",

@@ -216,6 +216,8 @@ export const en = {
   "jog.mouse.at_rest": "3D mouse on — at rest",
   "jog.mouse.moving": "Moving with the 3D mouse",
   "jog.moving_to": "Moving to {name} — hold to continue",
+  "jog.freedrive": "Hold: freedrive (move the arm by hand)",
+  "jog.freedrive_on": "Free to move by hand — hold to continue",
   "jog.moving": "Moving — hold to continue",
   "jog.not_moving": "Not moving: {reason}",
   "jog.held_back": "held back",

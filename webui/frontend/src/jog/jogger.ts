@@ -26,6 +26,7 @@ export interface JogView extends ReactiveControllerHost {
 export class Jogger implements ReactiveController {
   status: JogStatus | null = null; // of the last press
   movingTo = ""; // the waypoint a held Move to is going to
+  freedriving = false; // Freedrive is held
   mouse = ""; // the 3D mouse chosen
   mouseOn = false;
   sensitivity = Number(localStorage.getItem(SENSITIVITY_KEY) ?? "100") || 100;
@@ -127,10 +128,19 @@ export class Jogger implements ReactiveController {
     return true;
   }
 
+  /** Freedrive held: the arm may be moved by hand until release(). */
+  holdFreedrive(): void {
+    if (!this.mayMove()) return;
+    const { robot, token } = this.base();
+    this.freedriving = true;
+    this.press = this.socket.press({ type: "freedrive", robot, token });
+  }
+
   release(): void {
     if (this.press) this.socket.release(this.press);
     this.press = "";
     this.movingTo = "";
+    this.freedriving = false;
   }
 
   private onMessage(message: JogMessage): void {
@@ -140,7 +150,10 @@ export class Jogger implements ReactiveController {
     }
     this.status = message;
     const over = !["moving", "held"].includes(message.state);
-    if (message.press === this.press && over) this.movingTo = "";
+    if (message.press === this.press && over) {
+      this.movingTo = "";
+      this.freedriving = false;
+    }
     if (message.state === "refused" && message.reason === "lease_held") {
       control.forget(this.host.robot);
     }

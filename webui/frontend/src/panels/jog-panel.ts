@@ -18,6 +18,7 @@ import type { RobotModel } from "../components/robot-view";
 import type { MoveProgress, Waypoint } from "../components/waypoint-list";
 import "../components/clearance-chip";
 import "../components/gripper-card";
+import "../components/hold-button";
 import "../components/jog-header";
 import "../components/jog-options";
 import "../components/jog-pad";
@@ -92,6 +93,11 @@ export class OpJogPanel extends LitElement {
       }
       section.card {
         margin-bottom: 14px;
+      }
+      op-hold-button.freedrive {
+        display: block;
+        margin: 12px 0 14px;
+        --hold-font-size: 18px;
       }
     `,
   ];
@@ -259,7 +265,7 @@ export class OpJogPanel extends LitElement {
         ></op-jog-waypoints>
         <div class="controls">
           <op-jog-status ?online=${jog.online} .status=${jog.status} ?mine=${mine}
-            ?ready=${!!state?.flags.ready} movingTo=${jog.movingTo}
+            ?ready=${!!state?.flags.ready} movingTo=${jog.movingTo} ?freedrive=${jog.freedriving}
             .mouse=${press.startsWith("mouse:") ? feed.inputState(press.slice(6)) : null}
           ></op-jog-status>
           <op-jog-options mode=${this.mode} stepping=${this.stepping}
@@ -274,6 +280,10 @@ export class OpJogPanel extends LitElement {
               state)} ?disabled=${!canMove}
             @jog-hold=${(e: CustomEvent) => jog.hold(e.detail.axis, e.detail.direction)}
             @jog-release=${() => jog.release()}></op-jog-pad>
+          ${this.model?.info.capabilities.includes("freedrive") ? html`
+            <op-hold-button class="freedrive" data-testid="freedrive" ?disabled=${!canMove}
+              @hold-start=${() => jog.holdFreedrive()} @hold-end=${() => jog.release()}
+              >${t("jog.freedrive")}</op-hold-button>` : ""}
           ${this.mode === "tool" ? html`<p class="muted" data-testid="tool-note">
               ${t("jog.tool_note")}</p>` : ""}
           ${!mine ? html`<p class="muted">${t("jog.control.take_to_jog_hint")}</p>`
