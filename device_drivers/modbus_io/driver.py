@@ -7,6 +7,7 @@ before the silence is not shown as if it were still true."""
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import math
 import time
@@ -54,6 +55,7 @@ class ModbusIODriver(Polled, IODriver):
         self.changed: dict[str, float] = {}
         self.connected = False
         self.error = "not connected yet"
+        self.state_changed = asyncio.Event()
         self.seqno = 0
         # A simulated device this driver serves itself (`--simulate`), started first.
         self.simulator = simulator
@@ -81,7 +83,7 @@ class ModbusIODriver(Polled, IODriver):
             self.values[name] = value
         self.connected, self.error = connected, error
         self.seqno += 1
-        if different:
+        if different and self.state_changed is not None:
             self.state_changed.set()
 
     def _unknown(self, exc: OpenPendantError) -> None:

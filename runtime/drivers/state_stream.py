@@ -25,7 +25,7 @@ class StateStream:
     ) -> None:
         self.snapshot = snapshot
         self.period = 1.0 / rate_hz
-        self.changed = changed or asyncio.Event()
+        self.changed = changed
         self.fanout = Fanout()
 
     def current(self) -> str:
@@ -47,6 +47,9 @@ class StateStream:
             if delay < -self.period:
                 next_tick = time.monotonic()
                 delay = 0.0
+            if self.changed is None:
+                await asyncio.sleep(max(delay, 0.0))
+                continue
             self.changed.clear()
             try:
                 await asyncio.wait_for(self.changed.wait(), max(delay, 0.0))

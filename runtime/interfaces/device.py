@@ -25,9 +25,10 @@ class DeviceDriver(ABC):
 
     def __init__(self, identity: DeviceIdentity) -> None:
         self.identity = identity
-        # Set when the state changed between two ticks of its stream (a polled input): the
-        # stream sends it at once instead of at its next tick.
-        self.state_changed = asyncio.Event()
+        # A driver whose state changes now and then (a polled input) makes this event and
+        # sets it on a change: its stream sends the state at once, not at its next tick.
+        # None for the others (a robot's state changes every cycle anyway).
+        self.state_changed: asyncio.Event | None = None
 
     @property
     def kind(self) -> str:
