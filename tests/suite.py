@@ -48,7 +48,10 @@ def main(extra: list[str]) -> int:
                 preexec_fn=lambda: os.nice(19),
             )
             try:
-                foreground = subprocess.call([*pytest, "-m", "not concurrent", *extra], cwd=ROOT)
+                # The slowest forty, to see where the suite's time goes (docs/testing.md).
+                foreground = subprocess.call(
+                    [*pytest, "-m", "not concurrent", "--durations=40", *extra], cwd=ROOT
+                )
             finally:
                 background_status = background.wait()
         print("\n======== tests run alongside (marked concurrent) ========", flush=True)
