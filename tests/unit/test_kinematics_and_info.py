@@ -12,29 +12,6 @@ from runtime.kit.errors import InvalidValue, NotFound
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import available_models, load_robot_info
 
-# Universal Robots' published DH parameters of the UR5 (CB3), an independent model.
-UR5_DH = {
-    "d": [0.089159, 0, 0, 0.10915, 0.09465, 0.0823],
-    "a": [0, -0.425, -0.39225, 0, 0, 0],
-    "alpha": [np.pi / 2, 0, 0, np.pi / 2, -np.pi / 2, 0],
-}
-
-
-def dh_forward(q: np.ndarray) -> np.ndarray:
-    t = np.eye(4)
-    for i, theta in enumerate(q):
-        a, alpha, d = UR5_DH["a"][i], UR5_DH["alpha"][i], UR5_DH["d"][i]
-        ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
-        t = t @ np.array(
-            [
-                [ct, -st * ca, st * sa, a * ct],
-                [st, ct * ca, -ct * sa, a * st],
-                [0, sa, ca, d],
-                [0, 0, 0, 1],
-            ]
-        )
-    return t
-
 
 def test_required_models_are_available() -> None:
     assert {"ur3", "ur5", "ur10", "panda"} <= set(available_models())
@@ -51,15 +28,7 @@ def test_every_model_loads_with_complete_limits(model: str) -> None:
     assert np.linalg.norm(pose.position) < 1.5
 
 
-def test_ur5_kinematics_match_the_vendor_dh_model() -> None:
-    kinematics = Kinematics(load_robot_info("ur5"))
-    rng = np.random.default_rng(1)
-    for _ in range(50):
-        q = rng.uniform(-np.pi, np.pi, 6)
-        expected = dh_forward(q)
-        actual = kinematics.tcp(q)
-        assert np.allclose(actual.translation, expected[:3, 3], atol=1e-9)
-        assert np.allclose(actual.rotation, expected[:3, :3], atol=1e-9)
+# Every UR model against UR's DH parameters: tests/unit/test_ur_models.py.
 
 
 def test_panda_limits_come_from_the_urdf() -> None:

@@ -99,9 +99,9 @@ def test_the_kinematics_are_ur_s_dh_parameters(model: str) -> None:
     kinematics = Kinematics(load_robot_info(model))
     for q in random_configurations(40):
         ours, theirs = flange(kinematics, q), dh_forward(DH[model], q)
-        assert np.linalg.norm(ours[:3, 3] - theirs[:3, 3]) < 1e-4  # m
+        assert np.linalg.norm(ours[:3, 3] - theirs[:3, 3]) < 1e-6  # m
         turn = pin.log3(ours[:3, :3].T @ theirs[:3, :3])
-        assert np.linalg.norm(turn) < 1e-4  # rad
+        assert np.linalg.norm(turn) < 1e-6  # rad
 
 
 @pytest.mark.parametrize("model", sorted(DH))
