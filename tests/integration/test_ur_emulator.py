@@ -76,7 +76,10 @@ def test_state_streams_at_the_e_series_rate_and_the_script_runs(
     receive: rtde_receive.RTDEReceiveInterface, control: rtde_control.RTDEControlInterface
 ) -> None:
     assert receive.getRobotMode() == 7 and receive.getSafetyMode() == 1  # running, normal
-    assert control.isProgramRunning() and receive.getRuntimeState() == 2
+    assert control.isProgramRunning()
+    # The receive interface has a connection of its own: it sees the script start a few
+    # packages later (seen 1 = stopped right after the control interface's start).
+    wait_for(lambda: receive.getRuntimeState() == 2, 2, what="the receive side sees it run")
     first = receive.getTimestamp()
     wait_for(lambda: receive.getTimestamp() > first + 0.1, 5, what="time going on")
     assert len(receive.getActualQ()) == 6 and len(receive.getActualTCPPose()) == 6
