@@ -74,8 +74,15 @@ class URLink:
         if wrong is not None:
             self.dashboard.disconnect()
             raise RobotError(wrong, code="wrong_model")
-        self.receive: Any = rtde_receive.RTDEReceiveInterface(host, frequency)
-        self.control: Any = rtde_control.RTDEControlInterface(host, frequency)
+        self.receive: Any = None
+        try:
+            self.receive = rtde_receive.RTDEReceiveInterface(host, frequency)
+            self.control: Any = rtde_control.RTDEControlInterface(host, frequency)
+        except Exception:  # nothing of a half-made link stays connected
+            if self.receive is not None:
+                self.receive.disconnect()
+            self.dashboard.disconnect()
+            raise
 
     @property
     def connected(self) -> bool:
