@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+from abc import ABC, abstractmethod
 from typing import TYPE_CHECKING
 
 from device_drivers.modbus_io.link import ModbusLink, poll_forever
@@ -13,14 +14,15 @@ if TYPE_CHECKING:
     from device_drivers.modbus_io.simulator import ModbusSimulator
 
 
-class Polled:
+class Polled(ABC):
     period: float
     link: ModbusLink
     simulator: ModbusSimulator | None
     _poller: asyncio.Task[None] | None = None
 
+    @abstractmethod
     async def poll_once(self) -> None:
-        raise NotImplementedError
+        """Read the device once and update the state (errors become the state's, not raised)."""
 
     async def start(self) -> None:
         if self.simulator is not None:

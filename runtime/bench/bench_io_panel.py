@@ -19,7 +19,7 @@ import httpx
 from runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
 from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
 from runtime.bench.runner import Figure
-from runtime.bench.stats import quick
+from runtime.bench.stats import percentile, quick
 
 FIGURES = ("io_panel_input_to_ui_p50", "io_panel_input_to_ui_p99")
 TARGET_P99 = 50.0  # ms
@@ -33,11 +33,6 @@ WATCH = """(cell) => {
       [cell.getAttribute('data-value'), performance.timeOrigin + performance.now()]))
     .observe(cell, {attributes: true, attributeFilter: ['data-value']});
 }"""
-
-
-def _percentile(values: list[float], q: float) -> float:
-    ordered = sorted(values)
-    return ordered[min(len(ordered) - 1, int(len(ordered) * q))]
 
 
 def _measure(page: Any, block: str, count: int) -> list[float]:
@@ -103,7 +98,7 @@ def run() -> list[Figure]:
             if block_proc is not None:
                 block_proc.stop()
             runtime.stop()
-    p99 = _percentile(latencies, 0.99)
+    p99 = percentile(latencies, 99)
     details = {
         "samples": count,
         "path": "simulator input → Modbus poll → device manager → UI feed → panel",
@@ -111,7 +106,7 @@ def run() -> list[Figure]:
         "max_ms": max(latencies),
     }
     return [
-        Figure("io_panel_input_to_ui_p50", _percentile(latencies, 0.5), "ms", details=details),
+        Figure("io_panel_input_to_ui_p50", percentile(latencies, 50), "ms", details=details),
         Figure(
             "io_panel_input_to_ui_p99",
             p99,

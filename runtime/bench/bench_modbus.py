@@ -13,17 +13,12 @@ from device_drivers.modbus_io.registers import load_map
 from device_drivers.modbus_io.simulator import ModbusSimulator
 from runtime.bench.harness.processes import free_port
 from runtime.bench.runner import Figure
-from runtime.bench.stats import quick
+from runtime.bench.stats import percentile, quick
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import SignalWrite
 from runtime.paths import MODBUS_MAPS_DIR
 
 FIGURES = ("modbus_roundtrip_p50", "modbus_roundtrip_p99", "modbus_poll_p99")
-
-
-def _percentile(values: list[float], q: float) -> float:
-    ordered = sorted(values)
-    return ordered[min(len(ordered) - 1, int(len(ordered) * q))]
 
 
 async def _measure(count: int) -> tuple[list[float], list[float]]:
@@ -54,11 +49,11 @@ def run() -> list[Figure]:
     writes, polls = asyncio.run(_measure(count))
     details = {"samples": count, "path": "driver → pymodbus server on loopback, one connection"}
     return [
-        Figure("modbus_roundtrip_p50", _percentile(writes, 0.5), "ms", details=details),
-        Figure("modbus_roundtrip_p99", _percentile(writes, 0.99), "ms", details=details),
+        Figure("modbus_roundtrip_p50", percentile(writes, 50), "ms", details=details),
+        Figure("modbus_roundtrip_p99", percentile(writes, 99), "ms", details=details),
         Figure(
             "modbus_poll_p99",
-            _percentile(polls, 0.99),
+            percentile(polls, 99),
             "ms",
             details={**details, "reads": "coils, discrete inputs, input and holding registers"},
         ),

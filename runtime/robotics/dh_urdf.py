@@ -28,7 +28,7 @@ from pydantic import Field
 from runtime.interfaces.common import Strict
 
 GENERATED_PACKAGE = "openpendant-urdf"  # the `package://` name of generated URDFs
-CYLINDER_COLOR = "0.72 0.78 0.84 1"  # a light grey-blue, like the arms' covers
+COVER_COLOR = "0.72 0.78 0.84 1"  # a light grey-blue, like the arms' covers
 MIN_SEGMENT = 1e-6  # m: shorter segments are the same point
 
 
@@ -129,7 +129,7 @@ def dh_urdf(
     if len(limits) != len(arm.links):
         raise ValueError(f"{len(limits)} joint limits for {len(arm.links)} DH links")
     lines = [f"<robot name={quoteattr(name)}>"]
-    lines.append(f'<material name="cover"><color rgba="{CYLINDER_COLOR}"/></material>')
+    lines.append(f'<material name="cover"><color rgba="{COVER_COLOR}"/></material>')
     first = arm.links[0]
     foot = [np.array([0.0, 0, 0]), np.array([0.0, 0, max(first.d, 0.0)])]
     lines.append(f"<link name={quoteattr(base_link)}>")
