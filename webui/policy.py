@@ -66,6 +66,7 @@ RULES: tuple[Rule, ...] = (
     rule(("POST",), "/devices/{}/lease/check", OPERATE),
     rule(("POST",), "/devices/{}/call/{}", OPERATE),
     rule(("PUT",), "/devices/{}/tool", PROGRAM),
+    rule(READ, "/devices/{}/cell/parts", VIEW),
     # Jogging and teaching.
     rule(SOCKET, "/jog/ws", OPERATE),
     rule(("POST",), "/jog/robots/{}/(enable|disable|reset_errors)", OPERATE),

@@ -17,6 +17,7 @@ from runtime.interfaces.common import Pose
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.limits import CheckedTrajectory, FloatArray
 from runtime.interfaces.robot import (
+    SIM_CELL,
     CommandMode,
     OperationalMode,
     RobotInfo,
@@ -65,6 +66,8 @@ class LoopTimer:
 
 class SimRobot(RobotDriver):
     def __init__(self, identity: DeviceIdentity, info: RobotInfo) -> None:
+        if SIM_CELL not in info.capabilities:  # its parts are listed for the 3D view
+            info = info.model_copy(update={"capabilities": [*info.capabilities, SIM_CELL]})
         super().__init__(identity, info)
         self.core = SimCore(info, Kinematics(info))
         self.lock = threading.Lock()

@@ -11,6 +11,7 @@ from fastapi import APIRouter, FastAPI, Header, Response, WebSocket
 from fastapi.responses import JSONResponse
 
 from runtime.device_manager.calls import CallRequest, call_device, stop_all
+from runtime.device_manager.cell import cell_parts
 from runtime.device_manager.leases import LeaseGranted, LeaseInfo, LeaseRequest
 from runtime.device_manager.models import (
     AddDeviceRequest,
@@ -115,6 +116,11 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
         """Call a method the device's kind declares (a command needs control)."""
         status, content = await call_device(registry, local_name, method, body, token)
         return JSONResponse(content, status_code=status)
+
+    @router.get("/{local_name}/cell/parts")
+    async def parts(local_name: str) -> list[Any]:
+        """A simulated cell's parts, where they truly are (the 3D view draws them)."""
+        return await cell_parts(registry, local_name)
 
     @router.get("/{local_name}/state")
     async def state(local_name: str) -> Response:

@@ -73,6 +73,9 @@ class ToolSetup(Strict):
         return self
 
 
+SIM_CELL = "sim_cell"
+
+
 class RobotInfo(Strict):
     """Loaded from a robot-info YAML; the URDF gives kinematics and collision geometry."""
 
@@ -87,6 +90,7 @@ class RobotInfo(Strict):
     max_payload: float | None = Field(default=None, gt=0)  # kg, the rated payload
     joints: list[JointLimits] = Field(min_length=1, max_length=64)
     home: JointVector
+    # "sim_cell": a simulator with parts on its table, listed at GET /sim/cell/parts.
     capabilities: list[str] = Field(default_factory=list)
     # The controller's digital I/O, numbered from 0 ("tool" in capabilities: a gripper).
     digital_inputs: int = Field(default=0, ge=0, le=64)

@@ -1,7 +1,7 @@
 """The Jog panel by touch: take control, enable, hold a jog button (the robot moves while the
 finger is down and stops when it lifts), teach a waypoint, move away, hold "move to" until it
-arrives, a live 3D view of the robot, freedrive held while a hand moves the arm, and a
-gripper opened and closed beside the buttons."""
+arrives, a live 3D view of the robot and the simulated cell's parts, freedrive held while a
+hand moves the arm, and a gripper opened and closed beside the buttons."""
 
 from __future__ import annotations
 
@@ -171,6 +171,42 @@ def test_freedrive_is_held_by_touch_and_a_hand_moves_the_arm(
         httpx.put(hand, json={"velocity": [0.0] * 6}, timeout=5)
     page.get_by_test_id("control").tap()
     expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+    assert errors.errors == []
+
+
+def part_pixels(png: bytes) -> int:
+    """Warm brown pixels: the cell's parts (the robot is grey, the background blue-grey)."""
+    image = decode(png)[:, :, :3].astype(int)
+    r, g, b = image[..., 0], image[..., 1], image[..., 2]
+    return int(((r - b > 50) & (r > g) & (g > b)).sum())
+
+
+def test_the_simulated_cells_parts_show_in_the_3d_view_where_they_lie(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    """Parts laid on the simulated robot's table are drawn where they lie, and follow when
+    they move."""
+    table = f"{runtime.api('GET', '/devices/robot').json()['url']}/sim/cell"
+
+    def lay(*parts: tuple[str, list[float]]) -> None:
+        layout = [{"id": i, "size": [0.1] * 3, "pose": {"position": at}} for i, at in parts]
+        httpx.put(table, json={"parts": layout}, timeout=5).raise_for_status()
+
+    lay(("crate", [0.4, -0.25, 0.05]))
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/jog")
+    view = page.get_by_test_id("robot-view")
+    expect(view).to_have_attribute("data-status", "ready", timeout=60_000)
+    expect(view).to_have_attribute("data-parts", "crate@0.400,-0.250,0.050", timeout=10_000)
+    wait_for(lambda: part_pixels(view.screenshot()) > 200, 10, what="the crate drawn")
+    lay(("crate", [0.4, 0.25, 0.05]), ("bin", [0.3, 0.0, 0.05]))
+    expect(view).to_have_attribute(
+        "data-parts", "crate@0.400,0.250,0.050 bin@0.300,0.000,0.050", timeout=10_000
+    )
+    lay()
+    expect(view).to_have_attribute("data-parts", "", timeout=10_000)
+    wait_for(lambda: part_pixels(view.screenshot()) == 0, 10, what="no part drawn")
     assert errors.errors == []
 
 

@@ -92,6 +92,13 @@ def test_the_robots_own_tool_picks_the_part_at_its_tcp_and_drops_it_elsewhere(
     cell.place(PLACE)
     # Held, it goes where the TCP goes.
     assert np.allclose(cube(cell)["pose"]["position"], tcp_at(PLACE), atol=1e-3)
+    # The 3D view's source (through the gateway, as any signed-in user may read it): the
+    # same, held, at the TCP; a device without a simulated cell has no parts to list.
+    [shown] = cell.runtime.api("GET", "/devices/robot/cell/parts").json()
+    assert shown["id"] == "cube" and shown["held"] is True
+    assert np.allclose(shown["pose"]["position"], tcp_at(PLACE), atol=1e-3)
+    none = cell.runtime.api("GET", "/devices/cell_io/cell/parts")
+    assert none.status_code == 404 and none.json()["error"]["code"] == "no_cell", none.text
     run_python(cell, "tool_open", "use_robot('robot')\ntool_open()\n")
     fallen = cube(cell)
     assert fallen["held"] is False

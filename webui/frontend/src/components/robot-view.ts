@@ -1,7 +1,12 @@
 import { LitElement, css, html } from "lit";
+import { api } from "../api";
 import { t } from "../i18n";
 import { shared } from "../styles";
-import type { Marker, RobotScene, WorldContents } from "../three/scene";
+import type { CellPart, Marker, RobotScene, WorldContents } from "../three/scene";
+
+// How often a simulated cell's parts are asked for: a part carried by the gripper follows
+// the arm about this late.
+const PARTS_EVERY_MS = 300;
 
 export interface RobotModel {
   name: string; // the robot it describes: joints of another robot are never drawn on it
@@ -19,6 +24,7 @@ export class OpRobotView extends LitElement {
     world: { attribute: false },
     status: { state: true },
     progress: { state: true },
+    drawnParts: { state: true },
   };
   declare model: RobotModel | null;
   declare joints: number[] | null;
@@ -26,12 +32,16 @@ export class OpRobotView extends LitElement {
   declare world: WorldContents | null; // obstacles and a path preview, when shown
   declare status: "loading" | "ready" | "error";
   declare progress: string;
+  declare drawnParts: string; // what the view shows of the cell's parts: "id@x,y,z …"
   private scene: RobotScene | null = null;
   private shownMarkers = "";
   private shownWorld = "";
   private shownJoints = "";
   private observer = new ResizeObserver(() => this.scene?.resize());
   private loadedUrdf = "";
+  private partsTimer = 0;
+  private partsRound = 0;
+  private shownParts = "";
 
   static styles = [
     shared,
@@ -77,9 +87,12 @@ export class OpRobotView extends LitElement {
     this.world = null;
     this.status = "loading";
     this.progress = "";
+    this.drawnParts = "";
   }
 
   disconnectedCallback(): void {
+    window.clearTimeout(this.partsTimer);
+    this.partsRound++;
     this.observer.disconnect();
     this.scene?.dispose();
     this.scene = null;
@@ -133,6 +146,9 @@ export class OpRobotView extends LitElement {
       this.shownMarkers = JSON.stringify(this.markers);
       this.shownWorld = "";
       this.showWorld();
+      this.shownParts = "";
+      window.clearTimeout(this.partsTimer);
+      void this.followParts(++this.partsRound);
     } catch (err) {
       this.loadedUrdf = ""; // the same model given again is tried again
       this.status = "error";
@@ -141,9 +157,41 @@ export class OpRobotView extends LitElement {
     }
   }
 
+  /** A simulated robot's parts, asked for again and again while a robot is shown; none
+   * drawn while they cannot be had (the last answer would be a guess). One round at a time:
+   * a new load ends the rounds of the one before. */
+  private async followParts(round: number): Promise<void> {
+    const model = this.model;
+    if (round !== this.partsRound || !model || !this.scene || !this.isConnected) return;
+    if (!model.info.capabilities.includes("sim_cell")) {
+      this.showParts([]);
+      return;
+    }
+    if (!document.hidden) {
+      let parts: CellPart[] = [];
+      try {
+        const path = `/api/devices/${encodeURIComponent(model.name)}/cell/parts`;
+        parts = await api<CellPart[]>("GET", path);
+      } catch {
+        parts = [];
+      }
+      if (round !== this.partsRound || model.name !== this.model?.name) return;
+      this.showParts(parts);
+    }
+    this.partsTimer = window.setTimeout(() => void this.followParts(round), PARTS_EVERY_MS);
+  }
+
+  private showParts(parts: CellPart[]): void {
+    const text = JSON.stringify(parts);
+    if (!this.scene || text === this.shownParts) return;
+    this.shownParts = text;
+    this.drawnParts = this.scene.setParts(parts).join(" ");
+  }
+
   render() {
     return html`<div class="canvas" data-testid="robot-view" data-status=${this.status}
-        data-robot=${this.model?.name ?? ""}></div>
+        data-robot=${this.model?.name ?? ""}
+        data-parts=${this.drawnParts}></div>
       ${this.status === "ready"
         ? html`<button class="reset" data-testid="reset-view" title=${t("scene.view.reset_title")}
             @click=${() => this.scene?.resetView()}>${t("scene.view.reset")}</button>`

@@ -49,6 +49,14 @@ export interface Marker {
   selected: boolean;
 }
 
+/** A part of a simulated cell, where it truly lies (the robot's base frame, metres). */
+export interface CellPart {
+  id: string;
+  size: number[];
+  pose: PoseJson;
+  held: boolean;
+}
+
 export type Progress = (loaded: number, total: number) => void;
 
 export interface PoseJson {
@@ -131,6 +139,7 @@ export class RobotScene {
   private robot: URDFRobot | null = null;
   private base: THREE.Object3D | null = null;
   private markers = new THREE.Group();
+  private parts = new THREE.Group(); // in the robot's base frame, placed by its base link
   private world = new THREE.Group(); // world-frame contents, placed by the robot's base
   private worldBase: PoseJson | null = null;
   private frame = 0;
@@ -163,7 +172,8 @@ export class RobotScene {
     const grid = new THREE.GridHelper(2, 20, 0x3a4a5c, 0x222d3a);
     grid.rotation.x = Math.PI / 2;
     this.world.matrixAutoUpdate = false;
-    this.scene.add(grid, this.markers, this.world);
+    this.parts.matrixAutoUpdate = false;
+    this.scene.add(grid, this.markers, this.world, this.parts);
     this.resize();
   }
 
@@ -194,6 +204,7 @@ export class RobotScene {
     }
     this.frameRobot(robot);
     this.placeWorld();
+    this.placeParts();
     this.requestRender();
   }
 
@@ -241,6 +252,35 @@ export class RobotScene {
       this.markers.add(sphere);
     }
     this.requestRender();
+  }
+
+  /** The cell's parts as boxes (a held one lit up); what is drawn, by id and position. */
+  setParts(parts: CellPart[]): string[] {
+    for (const child of [...this.parts.children]) disposeTree(child);
+    this.parts.clear();
+    const drawn: string[] = [];
+    for (const p of parts) {
+      const [x, y, z] = p.size;
+      const box = new THREE.Mesh(
+        new THREE.BoxGeometry(x, y, z),
+        new THREE.MeshPhongMaterial({ color: p.held ? 0x3fb950 : 0xc8a165 }),
+      );
+      box.name = p.id;
+      box.matrixAutoUpdate = false;
+      box.matrix.copy(matrixOf(p.pose));
+      this.parts.add(box);
+      drawn.push(`${p.id}@${p.pose.position.map((v) => v.toFixed(3)).join(",")}`);
+    }
+    this.placeParts();
+    this.requestRender();
+    return drawn;
+  }
+
+  private placeParts(): void {
+    if (!this.base) return;
+    this.base.updateMatrixWorld(true);
+    this.parts.matrix.copy(this.base.matrixWorld);
+    this.parts.matrixWorldNeedsUpdate = true;
   }
 
   setWorld(contents: WorldContents): void {
