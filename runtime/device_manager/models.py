@@ -26,6 +26,8 @@ class DetectedDevice(BaseModel):
     url: str
     added_as: str | None = None
     last_seen: float
+    # Other addresses announcing the same uuid: an impostor, or the device's own old record.
+    also_at: list[str] = Field(default_factory=list)
 
 
 class AddressClaim(BaseModel):

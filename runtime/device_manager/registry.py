@@ -16,6 +16,7 @@ from typing import Any
 import httpx
 
 from plugins.registry import registry
+from runtime.device_manager.announcements import Announcements
 from runtime.device_manager.connection import (
     DeviceConnection,
     describe,
@@ -71,7 +72,7 @@ class DeviceRegistry:
         self.events = Fanout()  # lists and leases only, for services
         self.links = LinkServer(self)
         self.timing = timing or LinkSettings()
-        self.detected: dict[str, Detected] = {}
+        self.announced = Announcements(self._added_at)
         self._unknown_kinds: set[str] = set()
         self.connections: dict[str, DeviceConnection] = {}
         self.claims: dict[str, AddressClaim] = {}  # local name -> another address it was seen at
@@ -92,7 +93,8 @@ class DeviceRegistry:
                     device.uuid,
                 )
             return
-        self.detected[device.uuid] = device
+        if not self.announced.found(device):
+            return
         self._publish_detected()
         for conn in self.connections.values():
             if conn.record.uuid == device.uuid and conn.record.url != device.url:
@@ -178,12 +180,18 @@ class DeviceRegistry:
         return self._added(conn)
 
     def on_gone(self, service_name: str) -> None:
-        gone = [uuid for uuid, d in self.detected.items() if d.service_name == service_name]
-        for uuid in gone:
-            del self.detected[uuid]
-        if gone:
+        if self.announced.gone(service_name):
             self._publish_detected()
             self._publish_devices()
+
+    @property
+    def detected(self) -> dict[str, Detected]:
+        """Per uuid, the announcement that speaks for it."""
+        return self.announced.by_uuid
+
+    def _added_at(self, uuid: str) -> str | None:
+        urls = (c.record.url for c in self.connections.values() if c.record.uuid == uuid)
+        return next(urls, None)
 
     def _background(self, job: Coroutine[Any, Any, None]) -> None:
         task = asyncio.ensure_future(job)
@@ -442,6 +450,7 @@ class DeviceRegistry:
                 url=d.url,
                 added_as=added_as.get(d.uuid),
                 last_seen=d.last_seen,
+                also_at=[url for url in self.announced.urls_of(d.uuid) if url != d.url],
             )
             for d in sorted(self.detected.values(), key=lambda d: (d.kind, d.name, d.uuid))
         ]

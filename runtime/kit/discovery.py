@@ -10,6 +10,7 @@ import asyncio
 import contextlib
 import logging
 import re
+import secrets
 import socket
 import time
 import unicodedata
@@ -116,10 +117,14 @@ class Advertisement:
     # s: how long browsers keep the records when no goodbye comes (a device that lost
     # power). RFC 6762's 75 minutes is far too long for a pendant's list of devices.
     ttl: int = DEFAULT_TTL
+    # Makes this announcement's name its own: two devices that claim one uuid (a cloned
+    # board, an impostor) would otherwise share one name, and the goodbye of either
+    # would end the other's announcement in every browser.
+    tag: str = field(default_factory=lambda: secrets.token_hex(2))
 
     def instance_name(self) -> str:
         label = re.sub(r"[^A-Za-z0-9 _-]", "", self.name)[:40] or self.kind
-        return f"{label} [{self.uuid[:8]}].{SERVICE_TYPE}"
+        return f"{label} [{self.uuid[:8]} {self.tag}].{SERVICE_TYPE}"
 
     def service_info(self) -> AsyncServiceInfo:
         return AsyncServiceInfo(

@@ -109,6 +109,10 @@ def test_another_device_claiming_an_added_robot_is_shown_and_not_followed(
             print(f"shown {notice.inner_text()!r}; claim {claim}; real {real['url']}")
             raise
         expect(notice).to_contain_text("not followed")
+        # In the list of what is on the network, too: one entry, the other address named.
+        listed = page.locator(f"[data-testid=detected-device][data-uuid='{real['uuid']}']")
+        expect(listed).to_have_count(1)
+        expect(listed.get_by_test_id("detected-also-at")).to_contain_text(impostor.url)
         expect(card.get_by_test_id("device-status")).to_have_text("Connected")
         page.screenshot(path=artifacts / "claim.png")
         card.get_by_test_id("repoint-device").tap()
@@ -124,8 +128,7 @@ def test_another_device_claiming_an_added_robot_is_shown_and_not_followed(
 def test_phone_layout_has_big_targets_and_no_sideways_scroll(
     runtime: Runtime, phone: BrowserContext, artifacts: Path, tmp_path: Path
 ) -> None:
-    # A robot of its own to add: the runtime's own one may be added, or out of the list for
-    # a while (the impostor before this test said goodbye under its name and identity).
+    # A robot of its own to add: the runtime's own one may be added already.
     sim = SimRobotProc(tmp_path, name="phone-test-robot")
     try:
         sim.wait_ready()

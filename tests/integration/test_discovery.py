@@ -238,7 +238,8 @@ def test_a_device_can_be_re_pointed_by_the_user_and_an_impostor_is_refused(
 def test_a_device_back_at_another_address_is_followed_only_if_it_proves_who_it_is(
     runtime: Runtime, tmp_path: Path
 ) -> None:
-    """Issue 15: an announcement with an added robot's uuid took over its connection."""
+    """Issue 15: an announcement with an added robot's uuid took over its connection. Issue
+    16: its goodbye took the genuine robot off the detected list."""
     board = tmp_path / "board"  # the robot's board keeps its pairing secret
     first = SimRobotProc(board, "returning-ur5")
     first.wait_ready()
@@ -273,6 +274,21 @@ def test_a_device_back_at_another_address_is_followed_only_if_it_proves_who_it_i
             what="the genuine robot followed to its new port",
         )
         assert httpx.get(f"{impostor.url}/clients").json()["sessions"] == 0
+
+        # Both announce the uuid: the list shows the one the robot is linked at, and the
+        # other address. The impostor's goodbye ends its own announcement only.
+        def listed() -> dict[str, Any] | None:
+            return detected(runtime).get(first.uuid)
+
+        wait_for(
+            lambda: (d := listed()) and d["url"] == genuine.url and d["also_at"] == [impostor.url],
+            10,
+            what="both announcements listed",
+        )
+        impostor.stop()
+        wait_for(lambda: (d := listed()) and d["also_at"] == [], 5, what="the impostor's goodbye")
+        listing = listed()
+        assert listing is not None and listing["url"] == genuine.url
     finally:
         for proc in (impostor, genuine):
             if proc is not None:

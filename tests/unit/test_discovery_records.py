@@ -90,3 +90,10 @@ def test_instance_names_are_safe_and_unique_per_device() -> None:
     )
     assert a.instance_name() != b.instance_name()
     assert "<" not in a.instance_name()
+    # Another announcement with the same identity (a cloned board, an impostor) has a name of
+    # its own: its goodbye ends only its own records.
+    clone = Advertisement(
+        uuid="aaaaaaaa-1", kind="robot", model="m", name="<bad> name!", host="127.0.0.1", port=1
+    )
+    assert clone.instance_name() != a.instance_name()
+    assert a.instance_name() == a.instance_name()

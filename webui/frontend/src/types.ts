@@ -10,6 +10,7 @@ export interface DetectedDevice {
   url: string;
   added_as: string | null;
   last_seen: number;
+  also_at: string[]; // other addresses announcing this uuid (an impostor, or a stale record)
 }
 
 export type ConnectionStatus = "connecting" | "connected" | "stale" | "disconnected";

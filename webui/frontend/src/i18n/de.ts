@@ -31,6 +31,7 @@ export const de: Catalogue = {
   "devices.added": "Hinzugefügte Geräte",
   "devices.none_added":
     "Noch keine Geräte hinzugefügt. Fügen Sie unten eines der im Netzwerk erkannten Geräte hinzu.",
+  "devices.also_at": "Auch angekündigt unter {urls}: ein anderes Gerät gibt sich als dieses aus",
   "devices.detected": "Im Netzwerk erkannt",
   "devices.not_added": "({count} nicht hinzugefügt)",
   "devices.searching": "Netzwerk wird durchsucht…",

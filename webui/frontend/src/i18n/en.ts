@@ -31,6 +31,7 @@ export const en = {
   "devices.added": "Added devices",
   "devices.none_added":
     "No devices added yet. Add one from the devices detected on the network below.",
+  "devices.also_at": "Also announced at {urls}: another device claims this identity",
   "devices.detected": "Detected on the network",
   "devices.not_added": "({count} not added)",
   "devices.searching": "Searching the network…",

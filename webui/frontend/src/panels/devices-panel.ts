@@ -136,6 +136,10 @@ export class OpDevicesPanel extends LitElement {
         <span class="chip">${d.kind}</span>
       </div>
       <div class="sub muted" translate="no">${d.model} · ${d.address}</div>
+      ${d.also_at.length
+        ? html`<div class="chip warn" data-testid="detected-also-at">
+            ${t("devices.also_at", { urls: d.also_at.join(", ") })}</div>`
+        : ""}
       <div class="row">
         ${d.added_as
           ? html`<span class="chip ok">${t("devices.added_as", { name: d.added_as })}</span>`
