@@ -4,11 +4,11 @@ first (`--simulate`), then a poll at a steady rate; on shutdown the reverse."""
 from __future__ import annotations
 
 import asyncio
-import contextlib
 from abc import ABC, abstractmethod
 from typing import TYPE_CHECKING
 
 from device_drivers.modbus_io.link import ModbusLink, poll_forever
+from runtime.kit.tasks import cancel_for_sure
 
 if TYPE_CHECKING:
     from device_drivers.modbus_io.simulator import ModbusSimulator
@@ -31,9 +31,7 @@ class Polled(ABC):
 
     async def shutdown(self) -> None:
         if self._poller is not None:
-            self._poller.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._poller
+            await cancel_for_sure(self._poller)  # it is mostly inside a request
         self.link.close()
         if self.simulator is not None:
             await self.simulator.stop()

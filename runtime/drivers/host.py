@@ -24,6 +24,7 @@ from runtime.interfaces.device import DeviceDriver
 from runtime.kit.app import create_app
 from runtime.kit.discovery import DEFAULT_TTL, Advertisement, Advertiser, Interfaces
 from runtime.kit.serve import listening_socket, run_app
+from runtime.kit.tasks import cancel_for_sure
 
 log = logging.getLogger(__name__)
 
@@ -100,9 +101,7 @@ def build_driver_app(
             yield
         finally:
             await advertiser.stop()
-            pusher.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await pusher
+            await cancel_for_sure(pusher)
             await driver.shutdown()
 
     name = f"{driver.kind}-driver:{driver.identity.name}"

@@ -52,7 +52,9 @@ class StateStream:
                 continue
             self.changed.clear()
             try:
-                await asyncio.wait_for(self.changed.wait(), max(delay, 0.0))
+                # Not wait_for: in Python 3.11 it swallows a cancel that comes with a change.
+                async with asyncio.timeout(max(delay, 0.0)):
+                    await self.changed.wait()
             except TimeoutError:
                 continue
             next_tick = time.monotonic()  # a change: out now, and the ticks go on from here

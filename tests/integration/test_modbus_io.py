@@ -1,9 +1,9 @@
 """The Modbus I/O driver against a device on pymodbus's own server, over TCP on loopback
 (and RTU framing through pyserial's socket:// as a serial line would carry it): every data
 type in every byte and word order, scaling, every exception code, a silent device (its
-signals become unknown), a device restarted (the driver reconnects) and 20 writers at once
-(one request at a time, each write confirmed by its read-back). The block in a running
-runtime is in test_modbus_runtime.py."""
+signals become unknown), a device restarted (the driver reconnects), 20 writers at once
+(one request at a time, each write confirmed by its read-back) and a shutdown mid-poll.
+The block in a running runtime is in test_modbus_runtime.py."""
 
 from __future__ import annotations
 
@@ -15,11 +15,13 @@ from typing import Any
 import pytest
 
 from device_drivers.modbus_io.driver import ModbusIODriver
+from device_drivers.modbus_io.entry import ModbusIOOptions, create
 from device_drivers.modbus_io.errors import EXCEPTIONS, ModbusRefused
 from device_drivers.modbus_io.link import ModbusLink
 from device_drivers.modbus_io.registers import RegisterMap
 from device_drivers.modbus_io.simulator import ModbusSimulator
 from runtime.bench.harness.processes import free_port
+from runtime.drivers.host import build_driver_app
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import SignalWrite
 from runtime.kit.errors import InvalidValue, Unavailable
@@ -239,3 +241,36 @@ async def until(check: Callable[[], bool], timeout: float = 10.0) -> None:
         if asyncio.get_running_loop().time() > deadline:
             raise TimeoutError("condition not met")
         await asyncio.sleep(0.02)
+
+
+def test_the_driver_host_shuts_down_while_a_poll_is_under_way() -> None:
+    """`openpendant driver modbus-io --simulate` hung on SIGTERM until it was killed: its
+    poll was inside a request when cancelled, and Python 3.11's wait_for (through which
+    pymodbus awaits the answer) swallowed the cancel when the answer came in the same loop
+    round. The host's shutdown, begun while a request is on its way, now ends, with the
+    poll and the state stream ended."""
+
+    async def main() -> None:
+        uuid = "3f2b8c1e-0000-4000-8000-00000000000a"
+        driver = create("io", uuid, ModbusIOOptions(simulate=True))
+        app = build_driver_app(driver, advertisement=None, interfaces=[], state_rate_hz=100)
+        lifespan = app.router.lifespan_context(app)
+        ending: list[asyncio.Task[Any]] = []
+        read = driver.link.read
+
+        async def read_then_shut_down(*args: Any) -> list[int]:
+            if driver.seqno >= 5 and not ending:  # a request on its way, the shutdown begun
+                ending.append(asyncio.create_task(lifespan.__aexit__(None, None, None)))
+            return await read(*args)
+
+        driver.link.read = read_then_shut_down  # type: ignore[method-assign,assignment]
+        await lifespan.__aenter__()
+        for _ in range(500):
+            if ending:
+                break
+            await asyncio.sleep(0.01)
+        done, _ = await asyncio.wait(ending, timeout=10)
+        assert done, "the shutdown hangs"
+        assert driver._poller is not None and driver._poller.done()
+
+    asyncio.run(main())
