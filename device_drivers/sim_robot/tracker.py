@@ -33,6 +33,8 @@ SETTLED_VELOCITY = 1e-6  # rad/s
 # this, rad) and its jerk within the limit (this much over it: the interpolation's own).
 FOLLOW_TOLERANCE = 1e-5
 FOLLOW_JERK_SLACK = 1.05
+# rad/s and rad/s²: a holding joint slower than this, and slowing no faster, is at rest.
+AT_REST = 1e-9
 
 
 class TrackerError(RuntimeError):
@@ -101,6 +103,12 @@ class JointTracker:
         as the slowest one allows, so the robot brakes along its path. Braking each joint
         as fast as it can would turn the motion: joints whose motions cancel at the TCP
         stop at different times, and the TCP could speed up while the robot halts."""
+        if np.abs(self.velocity).max() < AT_REST and np.abs(self.acceleration).max() < AT_REST:
+            # At rest it stays: the generator would compute just that, 500 times a second,
+            # and never quite reach zero (it leaves 1e-25 rad/s behind): dropped here.
+            if self.velocity.any() or self.acceleration.any():
+                self.place(self.position)
+            return
         n = len(self.position)
         self._run(
             [_VELOCITY] * n,

@@ -430,6 +430,9 @@ class DeviceConnection:
             close_timeout=0.2,
             max_size=MAX_STATE,
             additional_headers=headers,
+            # A state 100 times a second is ~150 kB/s plain: nothing for a cell's network,
+            # while deflating it costs both ends CPU (a driver may run on a small board).
+            compression=None,
         )
 
 

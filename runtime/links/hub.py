@@ -191,6 +191,7 @@ class LinkHub:
                     close_timeout=0.5,
                     max_size=MAX_FRAME,
                     additional_headers=internal_headers(self.url),
+                    compression=None,  # states 100 times a second: CPU, not bytes, is short
                 ) as ws:
                     await ws.send(json.dumps({"op": "hello", "service": self.service}))
                     if self._watching:
