@@ -1,6 +1,7 @@
 import { LitElement, css, html } from "lit";
 import { api } from "../api";
 import { t } from "../i18n";
+import { feed } from "../live";
 import { shared } from "../styles";
 import type { CellPart, Marker, RobotScene, WorldContents } from "../three/scene";
 
@@ -167,7 +168,9 @@ export class OpRobotView extends LitElement {
       this.showParts([]);
       return;
     }
-    if (!document.hidden) {
+    const linked = feed.robots().some((d) => d.local_name === model.name && d.status === "connected");
+    if (!linked) this.showParts([]); // nothing to ask (and nothing known) while its link is down
+    else if (!document.hidden) {
       let parts: CellPart[] = [];
       try {
         const path = `/api/devices/${encodeURIComponent(model.name)}/cell/parts`;
