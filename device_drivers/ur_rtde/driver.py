@@ -330,6 +330,8 @@ class URDriver(RobotDriver):
             ready=connected and reading is not None and self._ready(reading),
             error=self.error,
             estop=bool(reading and reading.estop),
+            protective_stop=bool(reading and reading.protective_stop),
+            reduced_speed=bool(reading and reading.reduced),
             homed=True,
             communication_failure=not connected,
             trajectory_running=self.trajectory is not None,

@@ -53,6 +53,10 @@ class Reading:
         return self.safety_mode in (PROTECTIVE_STOP, SAFEGUARD_STOP, VIOLATION, FAULT)
 
     @property
+    def reduced(self) -> bool:
+        return self.safety_mode == REDUCED
+
+    @property
     def program_running(self) -> bool:
         return self.runtime_state == PLAYING
 

@@ -119,6 +119,11 @@ class RobotFlags(BaseModel):
     ready: bool = False
     error: bool = False
     estop: bool = False
+    # A safety stop the robot made on its own (a collision, a guard opened, a limit): it
+    # holds until the cause is gone and errors are reset.
+    protective_stop: bool = False
+    # The controller's safety limits are the reduced set (a UR's "reduced mode").
+    reduced_speed: bool = False
     homed: bool = False
     communication_failure: bool = False
     trajectory_running: bool = False

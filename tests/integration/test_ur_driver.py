@@ -278,6 +278,7 @@ def test_a_protective_stop_is_a_fault_until_reset_and_nothing_resumes(driven: Dr
     until(lambda: d.state().flags.error, 5, "the fault seen")
     state = d.state()
     assert "protective stop" in state.error_message and not state.flags.ready
+    assert state.flags.protective_stop and not state.flags.estop
     assert state.command_mode is CommandMode.halt
     until(lambda: max(abs(v) for v in emulated()["qd"]) < 1e-6, 5, "halted")
     driven.run(d.reset_errors())  # unlocks it through the dashboard
@@ -291,6 +292,27 @@ def test_a_protective_stop_is_a_fault_until_reset_and_nothing_resumes(driven: Dr
     driven.run(d.enable())  # the control script again
     until(lambda: d.state().flags.ready, 5, "ready again")
     assert emulated()["runtime_state"] == 2
+    assert not d.state().flags.protective_stop
+
+
+def test_reduced_mode_is_shown_and_the_arm_still_jogs(driven: Driven) -> None:
+    """The safety system's reduced limits (a safeguard, a plane crossed) are not a stop."""
+    driven.ready()
+    d = driven.driver
+    world("reduced on")
+    try:
+        until(lambda: d.state().flags.reduced_speed, 5, "reduced mode seen")
+        assert d.state().flags.ready and not d.state().flags.error
+        driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+        start = d.state().joint_position[0]
+        for _ in range(20):
+            driven.run(d.jog_joint(JogJointCommand(velocity=[0.2, 0, 0, 0, 0, 0], timeout=0.1)))
+            time.sleep(0.01)
+        until(lambda: abs(emulated()["qd"][0]) < 1e-6, 5, "stopped after the presses")
+        assert d.state().joint_position[0] > start + 0.01
+    finally:
+        world("reduced off")
+    until(lambda: not d.state().flags.reduced_speed, 5, "normal mode seen")
 
 
 def test_a_lost_connection_comes_back_by_itself_and_nothing_moves(

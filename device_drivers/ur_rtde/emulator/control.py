@@ -32,8 +32,8 @@ def stop(proc: subprocess.Popen[str]) -> None:
 
 
 def world(host: str, command: str) -> str:
-    """One `emulator …` line: protective stop, estop on|off, digital input N on|off, reset,
-    state."""
+    """One `emulator …` line: protective stop, estop on|off, reduced on|off, digital input N
+    on|off, reset, state."""
     with socket.create_connection((host, 29999), timeout=5) as s:
         f = s.makefile("rw")
         f.readline()  # the greeting

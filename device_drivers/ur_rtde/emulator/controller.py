@@ -23,10 +23,11 @@ CYCLE = 0.002  # s: an e-Series controller's 500 Hz
 
 # robot_mode, safety_mode, runtime_state (UR's RTDE guide)
 POWER_OFF, IDLE, RUNNING = 3, 5, 7
-NORMAL, PROTECTIVE_STOP, SYSTEM_EMERGENCY_STOP = 1, 3, 6
+NORMAL, REDUCED, PROTECTIVE_STOP, SYSTEM_EMERGENCY_STOP = 1, 2, 3, 6
+MOVING = frozenset({NORMAL, REDUCED})  # safety modes the arm may move in
 STOPPED, PLAYING = 1, 2
 # safety_status_bits
-BIT_NORMAL, BIT_PROTECTIVE, BIT_SYSTEM_ESTOP, BIT_ESTOP = 0, 2, 5, 7
+BIT_NORMAL, BIT_REDUCED, BIT_PROTECTIVE, BIT_SYSTEM_ESTOP, BIT_ESTOP = 0, 1, 2, 5, 7
 
 READY, DONE = 1, 2
 MOVEJ, MOVEJ_IK, MOVEL, MOVEL_FK = 1, 2, 3, 4
@@ -110,6 +111,15 @@ class Controller:
             self.safety_mode = PROTECTIVE_STOP
             self._program_stops()
 
+    def reduced_mode(self, on: bool) -> None:
+        """The safety system switches to its reduced limits (a safeguard input, a plane
+        crossed) and back."""
+        with self.lock:
+            if on and self.safety_mode == NORMAL:
+                self.safety_mode = REDUCED
+            elif not on and self.safety_mode == REDUCED:
+                self.safety_mode = NORMAL
+
     def emergency_stop(self, engaged: bool) -> None:
         with self.lock:
             if engaged:
@@ -149,7 +159,7 @@ class Controller:
                 log.info("a script that is not ur-rtde's control script: ignored")
                 return
             self.offset = 24 if "# int register offset\n24" in text else 0
-            if self.robot_mode != RUNNING or self.safety_mode != NORMAL:
+            if self.robot_mode != RUNNING or self.safety_mode not in MOVING:
                 log.info(
                     "script not started: robot mode %d, safety mode %d",
                     self.robot_mode,
@@ -282,7 +292,7 @@ class Controller:
     def step(self) -> None:
         with self.lock:
             self._script_cycle()
-            if self.robot_mode != RUNNING or self.safety_mode != NORMAL:
+            if self.robot_mode != RUNNING or self.safety_mode not in MOVING:
                 self.tracker.hold()
             elif self.freedrive:
                 self.tracker.step_velocity(self.hand)  # teach mode: where the hand takes it
@@ -326,6 +336,7 @@ class Controller:
             pose = self.kinematics.tcp_pose(q)
             safety_bits = 1 << {
                 NORMAL: BIT_NORMAL,
+                REDUCED: BIT_REDUCED,
                 PROTECTIVE_STOP: BIT_PROTECTIVE,
                 SYSTEM_EMERGENCY_STOP: BIT_SYSTEM_ESTOP,
             }.get(self.safety_mode, BIT_NORMAL)

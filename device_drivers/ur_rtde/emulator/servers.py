@@ -250,10 +250,11 @@ class Emulator:
 
     def world(self, command: str) -> str:
         """What happens around the robot (tests only; a real dashboard knows none of it):
-        `protective stop`, `estop on|off`, `digital input N on|off`, `operational mode
-        manual|automatic|none` (the pendant's mode selection), `hand V1 … V6` (a hand
-        pushing the arm at these joint velocities: it moves only in teach mode), `reset`
-        (powered, normal, no program, nothing held), `state`."""
+        `protective stop`, `estop on|off`, `reduced on|off` (the safety system's reduced
+        limits), `digital input N on|off`, `operational mode manual|automatic|none` (the
+        pendant's mode selection), `hand V1 … V6` (a hand pushing the arm at these joint
+        velocities: it moves only in teach mode), `reset` (powered, normal, no program,
+        nothing held), `state`."""
         c = self.controller
         words = command.split()
         if command == "protective stop":
@@ -262,6 +263,8 @@ class Emulator:
             c.reset()
         elif words[:1] == ["estop"] and words[1:] in (["on"], ["off"]):
             c.emergency_stop(words[1] == "on")
+        elif words[:1] == ["reduced"] and words[1:] in (["on"], ["off"]):
+            c.reduced_mode(words[1] == "on")
         elif words[:2] == ["digital", "input"] and len(words) == 4 and words[2].isdigit():
             bit = 1 << int(words[2])
             c.digital_inputs = (

@@ -186,6 +186,8 @@ export class OpStatusBar extends LitElement {
     const live = feed.online && device.status === "connected";
     let badge = html``;
     if (live && state?.flags.estop) badge = html`<span class="chip bad">${t("app.estop")}</span>`;
+    else if (live && state?.flags.protective_stop)
+      badge = html`<span class="chip bad">${t("app.protective_stop")}</span>`;
     else if (live && state?.flags.error)
       badge = html`<span class="chip bad" title=${state.error_message}>${t("app.error")}</span>`;
     else if (live && state && !state.flags.enabled)

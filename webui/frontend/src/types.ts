@@ -52,6 +52,8 @@ export interface RobotFlags {
   ready: boolean;
   error: boolean;
   estop: boolean;
+  protective_stop: boolean;
+  reduced_speed: boolean;
   homed: boolean;
   communication_failure: boolean;
   trajectory_running: boolean;

@@ -112,6 +112,7 @@ export const de: Catalogue = {
   // status-bar.ts
   "app.raise_needs_control": "Steuerung übernehmen, um die Geschwindigkeit zu erhöhen",
   "app.estop": "NOT-HALT",
+  "app.protective_stop": "SCHUTZSTOPP",
   "app.error": "FEHLER",
   "app.disabled": "Gesperrt",
   "app.in_focus": "Der Roboter im Fokus",
@@ -267,6 +268,18 @@ export const de: Catalogue = {
   "jog.control.take_to_jog_hint": "Steuerung übernehmen, um diesen Roboter zu verfahren.",
   "jog.enable_to_jog_hint": "Roboter freigeben, um ihn zu verfahren.",
   "jog.mouse.title": "3D-Maus",
+  // robot-fault.ts
+  "fault.link.title": "Keine Verbindung zu {robot}",
+  "fault.link.todo": "Er wurde angehalten. Die Laufzeit verbindet sich von selbst wieder, sobald er antwortet (Stromversorgung und Netzwerkkabel prüfen); nichts bewegt sich, bevor Sie ihn wieder freigeben.",
+  "fault.controller.title": "Der Treiber von {robot} hat die Steuerung verloren",
+  "fault.controller.todo": "Der Arm wurde angehalten. Stromversorgung und Netzwerkkabel der Steuerung prüfen; der Treiber verbindet sich von selbst wieder. Dann Fehler quittieren und freigeben: nichts läuft von selbst weiter.",
+  "fault.estop.title": "NOT-HALT an {robot}",
+  "fault.estop.todo": "Zelle sichern, NOT-HALT-Taster entriegeln, dann Fehler quittieren und freigeben.",
+  "fault.protective_stop.title": "Schutzstopp an {robot}",
+  "fault.protective_stop.todo": "Der Roboter hat selbst gestoppt (Kollision, Schutzeinrichtung, Grenze). Ursache finden und beheben, dann Fehler quittieren und freigeben.",
+  "fault.error.title": "{robot} hat einen Fehler",
+  "fault.error.todo": "Beheben, was die Meldung unten nennt, dann Fehler quittieren und freigeben.",
+  "fault.reduced": "Reduzierter Modus: die reduzierten Sicherheitsgrenzen der Steuerung gelten",
   // jog-pad.ts
   "jog.axis_minus": "{axis} minus",
   "jog.axis_plus": "{axis} plus",

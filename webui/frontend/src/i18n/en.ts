@@ -111,6 +111,7 @@ export const en = {
   // status-bar.ts
   "app.raise_needs_control": "Take control to raise the speed",
   "app.estop": "E-STOP",
+  "app.protective_stop": "PROTECTIVE STOP",
   "app.error": "ERROR",
   "app.disabled": "Disabled",
   "app.in_focus": "The robot in focus",
@@ -263,6 +264,18 @@ export const en = {
   "jog.control.take_to_jog_hint": "Take control to jog this robot.",
   "jog.enable_to_jog_hint": "Enable the robot to jog it.",
   "jog.mouse.title": "3D mouse",
+  // robot-fault.ts
+  "fault.link.title": "No link to {robot}",
+  "fault.link.todo": "It was halted. The runtime links to it again by itself as soon as it answers (check its power and network cable); nothing moves until you enable it again.",
+  "fault.controller.title": "{robot}'s driver has lost its controller",
+  "fault.controller.todo": "The arm was halted. Check the controller's power and network cable; the driver reconnects by itself. Then tap Reset error and Enable: nothing resumes by itself.",
+  "fault.estop.title": "Emergency stop on {robot}",
+  "fault.estop.todo": "Make the cell safe, release the E-stop button, then tap Reset error and Enable.",
+  "fault.protective_stop.title": "Protective stop on {robot}",
+  "fault.protective_stop.todo": "The robot stopped itself (a collision, a safeguard, a limit). Find and clear the cause, then tap Reset error and Enable.",
+  "fault.error.title": "{robot} has a fault",
+  "fault.error.todo": "Fix what the message below names, then tap Reset error and Enable.",
+  "fault.reduced": "Reduced mode: the controller's reduced safety limits apply",
   // jog-pad.ts
   "jog.axis_minus": "{axis} minus",
   "jog.axis_plus": "{axis} plus",

@@ -25,6 +25,7 @@ import "../components/jog-pad";
 import "../components/jog-status";
 import "../components/jog-waypoints";
 import "../components/mouse-card";
+import "../components/robot-fault";
 import "../components/robot-view";
 import "../components/tcp-readout";
 
@@ -237,6 +238,7 @@ export class OpJogPanel extends LitElement {
         @control-toggle=${() => this.toggleControl()}
         @power=${(e: CustomEvent<{ command: PowerCommand }>) => this.power(e.detail.command)}
       ></op-jog-header>
+      <op-robot-fault robot=${this.robot} .device=${device} .state=${state}></op-robot-fault>
       ${this.message ? html`<p class="error" role="alert" data-testid="jog-message">${this.message}</p>` : ""}
       <div class="layout">
         <div class="view">
