@@ -117,9 +117,9 @@ class Advertisement:
     # s: how long browsers keep the records when no goodbye comes (a device that lost
     # power). RFC 6762's 75 minutes is far too long for a pendant's list of devices.
     ttl: int = DEFAULT_TTL
-    # Makes this announcement's name its own: two devices that claim one uuid (a cloned
-    # board, an impostor) would otherwise share one name, and the goodbye of either
-    # would end the other's announcement in every browser.
+    # Makes this announcement's names its own: two devices that claim one uuid (a cloned
+    # board, an impostor) would otherwise share them, and the goodbye of either would end
+    # the other's announcement in every browser.
     tag: str = field(default_factory=lambda: secrets.token_hex(2))
 
     def instance_name(self) -> str:
@@ -139,7 +139,9 @@ class Advertisement:
                 "name": self.name,
                 "api": self.api,
             },
-            server=f"openpendant-{self.uuid[:12]}.local.",
+            # Its own host name too: two announcers of one uuid on one host name would have
+            # their addresses merged in every browser's cache (one's port, the other's IP).
+            server=f"openpendant-{self.uuid[:12]}-{self.tag}.local.",
             host_ttl=self.ttl,
             other_ttl=self.ttl,
         )

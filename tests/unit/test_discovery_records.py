@@ -96,4 +96,5 @@ def test_instance_names_are_safe_and_unique_per_device() -> None:
         uuid="aaaaaaaa-1", kind="robot", model="m", name="<bad> name!", host="127.0.0.1", port=1
     )
     assert clone.instance_name() != a.instance_name()
+    assert clone.service_info().server != a.service_info().server  # its addresses its own
     assert a.instance_name() == a.instance_name()
