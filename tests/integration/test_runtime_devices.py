@@ -10,14 +10,9 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-import pytest
 from websockets.sync.client import connect
 
 from runtime.bench.harness.processes import Runtime, SimRobotProc, free_port, wait_for
-
-# Seconds-scale waits, no tight real-time margin: run beside the other real-time tests
-# (tests/suite.py).
-pytestmark = pytest.mark.tolerant
 
 
 def detected(runtime: Runtime, uuid: str) -> list[dict[str, Any]]:
