@@ -31,6 +31,7 @@ from device_drivers.sim_robot.core import RunningTrajectory
 from device_drivers.sim_robot.reference import TrajectoryReference
 from device_drivers.sim_robot.scaling import TimeScaling
 from device_drivers.ur_rtde.link import RUNNING, Reading, URLink
+from device_drivers.ur_rtde.modes import ModeWatch
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.limits import CheckedTrajectory, FloatArray
 from runtime.interfaces.robot import (
@@ -49,7 +50,6 @@ from runtime.robotics.kinematics import Kinematics
 log = logging.getLogger(__name__)
 CYCLE = 0.008  # s: servoJ's time per command, and the control thread's period
 RECONNECT_AFTER = 1.0  # s between attempts
-MODE_POLL = 1.0  # s between two questions for the operational mode (it changes by hand)
 # The controller's operational mode as the pendant's rules see it: jogging is for manual
 # mode, at reduced speed (UR's manual mode with an enabling device caps the TCP at 250 mm/s
 # too). A controller without mode selection is jogged as in manual mode.
@@ -101,7 +101,7 @@ class URDriver(RobotDriver):
         self._moving = False  # a motion command went out since the last stop
         self._teaching = False  # the controller is in teach mode (freedrive)
         self.operational_mode = OperationalMode.manual_reduced_speed
-        self._mode_asked = -MODE_POLL
+        self._modes = ModeWatch(host, self._mode_seen, lambda: self.link is not None)
         self._running = threading.Event()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
@@ -113,6 +113,7 @@ class URDriver(RobotDriver):
     # The control thread -------------------------------------------------------------------
 
     async def start(self) -> None:
+        self._modes.start()
         self._running.set()
         self._thread = threading.Thread(target=self._loop, name="ur-control", daemon=True)
         self._thread.start()
@@ -120,6 +121,7 @@ class URDriver(RobotDriver):
     async def shutdown(self) -> None:
         await self.halt()
         self._running.clear()
+        self._modes.close()
         if self._thread is not None:
             self._thread.join(timeout=3.0)
         with self.lock:
@@ -136,8 +138,6 @@ class URDriver(RobotDriver):
                 self._try_connect()
             if self.link is not None:
                 self._serve_requests(self.link)
-            if self.link is not None and time.monotonic() - self._mode_asked >= MODE_POLL:
-                self._ask_operational_mode(self.link)
             if self.link is not None:
                 try:
                     self._cycle()
@@ -152,13 +152,9 @@ class URDriver(RobotDriver):
                 self._wake.clear()
                 next_at = time.monotonic()
 
-    def _ask_operational_mode(self, link: URLink) -> None:
-        self._mode_asked = time.monotonic()
-        try:
-            mode = OPERATIONAL_MODES[link.operational_mode()]
-        except Exception as exc:  # the dashboard's connection: the cycle notices a lost link
-            log.warning("operational mode not read: %s", exc)
-            return
+    def _mode_seen(self, answer: str) -> None:
+        """From the mode watch's thread."""
+        mode = OPERATIONAL_MODES[answer]
         with self.lock:
             if mode is not self.operational_mode:
                 log.info("operational mode: %s", mode.value)

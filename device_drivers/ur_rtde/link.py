@@ -121,14 +121,6 @@ class URLink:
                 _UNFREEABLE.append(io)
                 log.warning("an I/O connection died while in use: %s", exc)
 
-    def operational_mode(self) -> str:
-        """The dashboard's `get operational mode`: MANUAL, AUTOMATIC, or NONE where the
-        controller has no mode selection (and on PolyScope before 5.6, which has no
-        command for it)."""
-        self.dashboard.send("get operational mode\n")
-        answer = str(self.dashboard.receive()).strip().upper()
-        return answer if answer in ("MANUAL", "AUTOMATIC") else "NONE"
-
     def power_up(self, timeout: float = 30.0) -> None:
         """Power on and release the brakes (the controller's own sequence), until running."""
         if self.read().robot_mode == RUNNING:

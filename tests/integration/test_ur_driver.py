@@ -1,8 +1,8 @@
 """The UR driver (ur-rtde underneath) against the controller emulator (issue 16, must-show
 2): the state mapped, a jog that stops when its commands stop, a trajectory executed on its
-planned path, a halt, a protective stop becoming a fault until reset, a lost connection
-coming back with nothing moving, and the watchdog stopping the arm when the driver's
-process dies."""
+planned path, a halt, a protective stop becoming a fault until reset, a hung dashboard, a
+lost connection coming back with nothing moving, and the watchdog stopping the arm when the
+driver's process dies."""
 
 from __future__ import annotations
 
@@ -198,6 +198,28 @@ def test_the_pendants_operational_mode_is_followed(driven: Driven) -> None:
         )
     finally:
         world("operational mode none")
+
+
+def test_a_hung_dashboard_does_not_hold_up_the_arm(driven: Driven) -> None:
+    """The operational mode is asked on a dashboard connection and a thread of its own:
+    while the dashboard answers nothing (3 s), jogging goes on and the RTDE watchdog never
+    stops the script."""
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+    world("dashboard stall 3")
+    try:
+        start = d.state().joint_position[0]
+        for _ in range(200):  # 2 s of presses at 100 Hz, through at least one mode question
+            driven.run(d.jog_joint(JogJointCommand(velocity=[0.2, 0, 0, 0, 0, 0], timeout=0.1)))
+            time.sleep(0.01)
+        assert emulated()["runtime_state"] == PLAYING  # the watchdog did not stop it
+        state = d.state()
+        assert not state.flags.error, state.error_message
+        assert state.joint_position[0] > start + 0.1
+    finally:
+        world("dashboard stall 0")
+    until(lambda: abs(emulated()["qd"][0]) < 1e-6, 5, "stopped once the presses stopped")
 
 
 def test_freedrive_is_teach_mode_only_while_commanded(driven: Driven) -> None:

@@ -149,6 +149,7 @@ class Emulator:
     def __init__(self, controller: Controller, host: str = "127.0.0.2") -> None:
         self.controller, self.host = controller, host
         self._servers: list[asyncio.Server] = []
+        self.stalled = 0.0  # monotonic time until which the dashboard answers nothing
 
     async def start(self) -> None:
         self.controller.run()
@@ -188,7 +189,10 @@ class Emulator:
         writer.write(b"Connected: Universal Robots Dashboard Server\n")
         try:
             while line := await reader.readline():
-                reply = self.dashboard(line.decode("utf-8", "replace").strip())
+                command = line.decode("utf-8", "replace").strip()
+                if not command.startswith("emulator "):  # the test's own line always answers
+                    await asyncio.sleep(max(self.stalled - time.monotonic(), 0.0))  # hung
+                reply = self.dashboard(command)
                 writer.write(reply.encode() + b"\n")
                 await writer.drain()
         except ConnectionError:
@@ -251,7 +255,8 @@ class Emulator:
     def world(self, command: str) -> str:
         """What happens around the robot (tests only; a real dashboard knows none of it):
         `protective stop`, `estop on|off`, `reduced on|off` (the safety system's reduced
-        limits), `digital input N on|off`, `operational mode manual|automatic|none` (the
+        limits), `dashboard stall S` (the dashboard answers nothing else for S seconds),
+        `digital input N on|off`, `operational mode manual|automatic|none` (the
         pendant's mode selection), `hand V1 … V6` (a hand pushing the arm at these joint
         velocities: it moves only in teach mode), `reset` (powered, normal, no program,
         nothing held), `state`."""
@@ -265,6 +270,12 @@ class Emulator:
             c.emergency_stop(words[1] == "on")
         elif words[:1] == ["reduced"] and words[1:] in (["on"], ["off"]):
             c.reduced_mode(words[1] == "on")
+        elif words[:2] == ["dashboard", "stall"] and len(words) == 3:
+            try:
+                seconds = float(words[2])
+            except ValueError:
+                return f"emulator: not a number: {command!r}"
+            self.stalled = time.monotonic() + min(max(seconds, 0.0), 60.0)
         elif words[:2] == ["digital", "input"] and len(words) == 4 and words[2].isdigit():
             bit = 1 << int(words[2])
             c.digital_inputs = (
