@@ -8,8 +8,8 @@
   time), so they never take the CPU from a real-time test; then, once those are done, the
   real-time tests marked `tolerant` (discovery, the launcher, leases: waits of seconds,
   no robot moved against a link's 200 ms margin) one at a time at nice 10, so the first
-  lane still wins the CPU when both want it. The first lane runs its integration tests before its browser tests, so
-  the second lane is done long before the browsers start.
+  lane still wins the CPU when both want it. The first lane runs its integration tests
+  before its browser tests, so the second lane is done long before the browsers start.
 
 Exit status: the worst of them. The second lane's reports are printed after the first's."""
 
