@@ -44,6 +44,9 @@ class Announcements:
                 chosen[device.uuid] = device
         return chosen
 
-    def urls_of(self, uuid: str) -> list[str]:
-        """Every address announcing `uuid`."""
-        return sorted({d.url for d in self._by_name.values() if d.uuid == uuid})
+    def urls_by_uuid(self) -> dict[str, list[str]]:
+        """Every address announcing each uuid (one pass: the list may hold a thousand)."""
+        urls: dict[str, set[str]] = {}
+        for device in self._by_name.values():
+            urls.setdefault(device.uuid, set()).add(device.url)
+        return {uuid: sorted(found) for uuid, found in urls.items()}

@@ -439,6 +439,7 @@ class DeviceRegistry:
 
     def detected_list(self) -> list[DetectedDevice]:
         added_as = {c.record.uuid: name for name, c in self.connections.items()}
+        urls = self.announced.urls_by_uuid()
         return [
             DetectedDevice(
                 uuid=d.uuid,
@@ -450,7 +451,7 @@ class DeviceRegistry:
                 url=d.url,
                 added_as=added_as.get(d.uuid),
                 last_seen=d.last_seen,
-                also_at=[url for url in self.announced.urls_of(d.uuid) if url != d.url],
+                also_at=[url for url in urls.get(d.uuid, []) if url != d.url],
             )
             for d in sorted(self.detected.values(), key=lambda d: (d.kind, d.name, d.uuid))
         ]

@@ -23,7 +23,7 @@ def test_a_goodbye_ends_only_its_own_announcement() -> None:
     book.found(announced("genuine._openpendant._tcp.local.", 8001, seen=1.0))
     book.found(announced("impostor._openpendant._tcp.local.", 9001, seen=2.0))
     assert book.by_uuid[UUID].port == 9001  # nobody added it: the newest speaks
-    assert book.urls_of(UUID) == ["http://127.0.0.1:8001", "http://127.0.0.1:9001"]
+    assert book.urls_by_uuid() == {UUID: ["http://127.0.0.1:8001", "http://127.0.0.1:9001"]}
     assert book.gone("impostor._openpendant._tcp.local.")
     assert book.by_uuid[UUID].port == 8001
     assert not book.gone("impostor._openpendant._tcp.local.")  # said twice: no change
