@@ -21,10 +21,6 @@ from runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wa
 from runtime.kit.discovery import SERVICE_TYPE
 from tests.support.fake_device import FakeDevice
 
-# Seconds-scale waits, no tight real-time margin: run beside the other real-time tests
-# (tests/suite.py).
-pytestmark = pytest.mark.tolerant
-
 SHORT_TTL = {"OPENPENDANT_DISCOVERY__TTL": "3"}
 
 

@@ -26,10 +26,6 @@ from runtime.bench.harness.processes import (
     whole_cell_env,
 )
 
-# Seconds-scale waits, no tight real-time margin: run beside the other real-time tests
-# (tests/suite.py).
-pytestmark = pytest.mark.tolerant
-
 
 @pytest.fixture(scope="module")
 def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:

@@ -5,13 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-import pytest
-
 from runtime.bench.harness.processes import Runtime, child_env, wait_for
-
-# Seconds-scale waits, no tight real-time margin: run beside the other real-time tests
-# (tests/suite.py).
-pytestmark = pytest.mark.tolerant
 
 
 def test_control_lease_between_two_pendants(home: Path) -> None:
