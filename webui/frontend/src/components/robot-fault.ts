@@ -25,7 +25,8 @@ const TODO = {
 export function faultOf(device: AddedDevice | undefined, state: RobotState | undefined):
     FaultKind | null {
   if (!device) return null;
-  if (device.status !== "connected" || !state) return "link";
+  if (device.status !== "connected") return "link";
+  if (!state) return null; // linked, its first state on its way: nothing to say yet
   const flags = state.flags;
   if (flags.estop) return "estop";
   if (flags.protective_stop) return "protective_stop";
