@@ -72,4 +72,3 @@ def _dropped(dashboard: Any) -> None:
             dashboard.disconnect()
         except Exception as exc:  # gone already
             log.debug("dashboard disconnect: %s", exc)
-    return None

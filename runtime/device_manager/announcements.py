@@ -16,9 +16,9 @@ MAX_ANNOUNCEMENTS = 1024
 
 
 class Announcements:
-    def __init__(self, added_at: Callable[[str], str | None]) -> None:
-        """`added_at(uuid)`: the address the added device of that uuid is linked at, if any."""
-        self.added_at = added_at
+    def __init__(self, added_urls: Callable[[], dict[str, str]]) -> None:
+        """`added_urls()`: per uuid, the address its added device is linked at."""
+        self.added_urls = added_urls
         self._by_name: dict[str, Detected] = {}
 
     def found(self, device: Detected) -> bool:
@@ -37,12 +37,16 @@ class Announcements:
     def by_uuid(self) -> dict[str, Detected]:
         """Per uuid, the announcement that speaks for it: the one at the address the added
         device is linked at now, else the newest."""
+        added = self.added_urls()
         chosen: dict[str, Detected] = {}
         for device in sorted(self._by_name.values(), key=lambda d: d.last_seen):
             current = chosen.get(device.uuid)
-            if current is None or current.url != self.added_at(device.uuid):
+            if current is None or current.url != added.get(device.uuid):
                 chosen[device.uuid] = device
         return chosen
+
+    def announces(self, uuid: str) -> bool:
+        return any(device.uuid == uuid for device in self._by_name.values())
 
     def urls_by_uuid(self) -> dict[str, list[str]]:
         """Every address announcing each uuid (one pass: the list may hold a thousand)."""

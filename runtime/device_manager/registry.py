@@ -72,7 +72,7 @@ class DeviceRegistry:
         self.events = Fanout()  # lists and leases only, for services
         self.links = LinkServer(self)
         self.timing = timing or LinkSettings()
-        self.announced = Announcements(self._added_at)
+        self.announced = Announcements(self._added_urls)
         self._unknown_kinds: set[str] = set()
         self.connections: dict[str, DeviceConnection] = {}
         self.claims: dict[str, AddressClaim] = {}  # local name -> another address it was seen at
@@ -189,9 +189,8 @@ class DeviceRegistry:
         """Per uuid, the announcement that speaks for it."""
         return self.announced.by_uuid
 
-    def _added_at(self, uuid: str) -> str | None:
-        urls = (c.record.url for c in self.connections.values() if c.record.uuid == uuid)
-        return next(urls, None)
+    def _added_urls(self) -> dict[str, str]:
+        return {c.record.uuid: c.record.url for c in self.connections.values()}
 
     def _background(self, job: Coroutine[Any, Any, None]) -> None:
         task = asyncio.ensure_future(job)
@@ -375,7 +374,7 @@ class DeviceRegistry:
             status=conn.status,
             last_error=conn.last_error,
             connected_since=conn.connected_since,
-            detected=r.uuid in self.detected,
+            detected=self.announced.announces(r.uuid),
             controlled_by=lease.holder,
             control_expires=lease.expires,
             link=conn.generation,

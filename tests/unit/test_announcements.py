@@ -19,7 +19,7 @@ def announced(name: str, port: int, seen: float, uuid: str = UUID) -> Detected:
 
 
 def test_a_goodbye_ends_only_its_own_announcement() -> None:
-    book = Announcements(lambda uuid: None)
+    book = Announcements(dict)
     book.found(announced("genuine._openpendant._tcp.local.", 8001, seen=1.0))
     book.found(announced("impostor._openpendant._tcp.local.", 9001, seen=2.0))
     assert book.by_uuid[UUID].port == 9001  # nobody added it: the newest speaks
@@ -32,7 +32,7 @@ def test_a_goodbye_ends_only_its_own_announcement() -> None:
 
 
 def test_the_address_a_device_is_linked_at_speaks_for_it() -> None:
-    book = Announcements(lambda uuid: "http://127.0.0.1:8001" if uuid == UUID else None)
+    book = Announcements(lambda: {UUID: "http://127.0.0.1:8001"})
     book.found(announced("genuine._openpendant._tcp.local.", 8001, seen=1.0))
     book.found(announced("impostor._openpendant._tcp.local.", 9001, seen=2.0))
     assert book.by_uuid[UUID].port == 8001
@@ -40,7 +40,7 @@ def test_the_address_a_device_is_linked_at_speaks_for_it() -> None:
 
 def test_the_list_is_bounded(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(announcements, "MAX_ANNOUNCEMENTS", 3)
-    book = Announcements(lambda uuid: None)
+    book = Announcements(dict)
     uuids = [f"3f2b8c1e-0000-4000-8000-00000000000{i}" for i in range(4)]
     taken = [book.found(announced(f"d{i}.local.", 8000 + i, 1.0, u)) for i, u in enumerate(uuids)]
     assert taken == [True, True, True, False]

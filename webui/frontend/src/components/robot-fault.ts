@@ -13,7 +13,7 @@ const TITLE = {
   error: "fault.error.title",
 } as const;
 
-const TODO = {
+const WHAT_TO_DO = {
   link: "fault.link.todo",
   controller: "fault.controller.todo",
   estop: "fault.estop.todo",
@@ -104,7 +104,7 @@ export class OpRobotFault extends LitElement {
     const detail = this.detail(kind);
     return html`<div class="fault" role="alert" data-testid="robot-fault" data-kind=${kind}>
       <strong>${t(TITLE[kind], { robot: this.robot })}</strong>
-      <p>${t(TODO[kind])}</p>
+      <p>${t(WHAT_TO_DO[kind])}</p>
       ${detail ? html`<p class="detail" data-testid="robot-fault-detail">${detail}</p>` : ""}
     </div>`;
   }
