@@ -28,6 +28,13 @@ PLUGIN = Plugin(
             realtime=True,
         ),
         Driver(
+            "ur-io",
+            "io",
+            "device_drivers.ur_rtde.io_entry:create",
+            options="device_drivers.ur_rtde.io_entry:URIOOptions",
+            description="a Universal Robots controller's digital, analog and tool I/O (ur-rtde)",
+        ),
+        Driver(
             "spacemouse",
             "input",
             "device_drivers.spacemouse.entry:create",

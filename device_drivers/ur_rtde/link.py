@@ -61,6 +61,24 @@ class Reading:
         return self.runtime_state == PLAYING
 
 
+def write_outputs(host: str, work: Callable[[Any], object]) -> None:
+    """`work(io)` on an I/O interface made for it and closed at once. A long-lived one is
+    not kept: ur-rtde's RTDEIOInterface aborts the whole process when it is destroyed after
+    its connection died (its destructor throws), and a controller gives each input field to
+    one RTDE connection at a time, so a held one would lock out every other writer (the
+    robot driver's tool output and the I/O driver's outputs)."""
+    io = rtde_io.RTDEIOInterface(host)
+    try:
+        if work(io) is False:
+            raise RobotError("the controller refused the output", code="io")
+    finally:
+        try:
+            io.disconnect()
+        except RuntimeError as exc:  # the connection died meanwhile: keep it, never free it
+            _UNFREEABLE.append(io)
+            log.warning("an I/O connection died while in use: %s", exc)
+
+
 class URLink:
     def __init__(self, host: str, frequency: float, model: str) -> None:
         """Refuses (RobotError `wrong_model`) a controller that is not the `model` arm,
@@ -107,19 +125,7 @@ class URLink:
         )
 
     def set_outputs(self, work: Callable[[Any], object]) -> None:
-        """`work(io)` on an I/O interface made for it and closed at once. A long-lived one
-        is not kept: ur-rtde's RTDEIOInterface aborts the whole process when it is
-        destroyed after its connection died (its destructor throws)."""
-        io = rtde_io.RTDEIOInterface(self.host)
-        try:
-            if work(io) is False:
-                raise RobotError("the controller refused the output", code="io")
-        finally:
-            try:
-                io.disconnect()
-            except RuntimeError as exc:  # the connection died meanwhile: keep it, never free it
-                _UNFREEABLE.append(io)
-                log.warning("an I/O connection died while in use: %s", exc)
+        write_outputs(self.host, work)
 
     def power_up(self, timeout: float = 30.0) -> None:
         """Power on and release the brakes (the controller's own sequence), until running."""

@@ -1,6 +1,7 @@
 """Must-show 1, the UR half: the Blockly pick and place of test_sim_cell, unchanged, on a UR
 (the UR driver through ur-rtde to the controller emulator) with the simulated Modbus I/O
-block and Robotiq gripper mounted on it: the part ends at the place position."""
+block and Robotiq gripper mounted on it: the part ends at the place position. The same
+controller's own I/O (the ur-io driver) through the same I/O blocks."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ import pytest
 
 from device_drivers.sim_cell.link import CellClient
 from device_drivers.ur_rtde.emulator import control as emulator_control
+from runtime.bench.harness.blocks import block, number, stack, workspace
 from runtime.bench.harness.jog import JogClient
 from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
 from runtime.robotics.kinematics import Kinematics
@@ -50,6 +52,7 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Runtime, st
     devices = [
         ("robot", DriverProc(home, "ur-rtde", "ur", "--address", HOST, "--model", "ur5e")),
         ("cell_io", DriverProc(home, "modbus-io", "cell-io", "--simulate", "--cell", CELL)),
+        ("ur_io", DriverProc(home, "ur-io", "ur-io", "--address", HOST)),
         (
             "gripper",
             DriverProc(home, "modbus-gripper", "robotiq", "--simulate", "--mounted-on", CELL),
@@ -104,11 +107,7 @@ def test_the_blockly_pick_and_place_runs_unchanged_on_the_ur(cell: tuple[Runtime
     started = runtime.api("POST", "/programs/ur_cycle/run", json={"leases": {"robot": lease}})
     assert started.status_code == 202, started.text
 
-    def ended() -> dict[str, Any] | None:
-        status: dict[str, Any] = runtime.api("GET", "/programs/ur_cycle/status").json()
-        return status if status["state"] in ("finished", "error", "stopped") else None
-
-    final = wait_for(ended, 120, what="the cycle's end")
+    final = wait_for(ended(runtime, "ur_cycle"), 120, what="the cycle's end")
     assert final["state"] == "finished", final.get("error")
     part = next(p for p in ask(runtime, "parts")["parts"] if p["id"] == "cube")
     x, y, z = part["pose"]["position"]
@@ -118,6 +117,49 @@ def test_the_blockly_pick_and_place_runs_unchanged_on_the_ur(cell: tuple[Runtime
     state = runtime.api("GET", "/devices/cell_io/state").json()
     assert state["values"]["lamp_green"] is True
     runtime.api("DELETE", "/devices/robot/lease", headers=mine)
+
+
+def ended(runtime: Runtime, program: str) -> Any:
+    def check() -> dict[str, Any] | None:
+        status: dict[str, Any] = runtime.api("GET", f"/programs/{program}/status").json()
+        return status if status["state"] in ("finished", "error", "stopped") else None
+
+    return check
+
+
+def test_the_controllers_own_io_through_the_io_blocks(cell: tuple[Runtime, str]) -> None:
+    """Digital, analog and tool I/O of the UR controller (ur-io), by the blocks every I/O
+    block answers: an output set, an analog output in volts, a wait for the tool input, an
+    analog input stored."""
+    runtime, host = cell
+    emulator_control.world(host, "digital input 16 off")
+    emulator_control.world(host, "analog input 1 3.25")
+    main = stack(
+        block(
+            "io_set_output", {"NAME": "ur_io.do2"}, VALUE=block("logic_boolean", {"BOOL": "TRUE"})
+        ),
+        block("io_set_analog", {"NAME": "ur_io.ao0"}, VALUE=number(5)),
+        block("io_wait_input", {"NAME": "ur_io.ti0", "STATE": "TRUE"}, TIMEOUT=number(20)),
+        block("store_set", {"NAME": "ur_ai1"}, VALUE=block("io_get_analog", {"NAME": "ur_io.ai1"})),
+    )
+    saved = runtime.api("PUT", "/programs/ur_io_cycle", json={"workspace": workspace(main)})
+    assert saved.status_code == 200, saved.text
+    started = runtime.api("POST", "/programs/ur_io_cycle/run", json={})
+    assert started.status_code == 202, started.text
+    wait_for(
+        lambda: abs(emulator_control.emulated(host)["analog_outputs"][0] - 5.0) < 1e-6,
+        20,
+        what="AO0 at 5 V",
+    )
+    assert emulator_control.emulated(host)["digital_outputs"] >> 2 & 1  # set before AO0
+    assert runtime.api("GET", "/programs/ur_io_cycle/status").json()["state"] == "running"
+    emulator_control.world(host, "digital input 16 on")  # the tool's sensor
+    final = wait_for(ended(runtime, "ur_io_cycle"), 30, what="the program's end")
+    assert final["state"] == "finished", final.get("error")
+    stored = runtime.api("GET", "/variables/ur_ai1").json()
+    assert stored["value"] == pytest.approx(3.25), stored
+    state = runtime.api("GET", "/devices/ur_io/state").json()
+    assert state["values"]["do2"] is True and state["values"]["ti0"] is True
 
 
 def test_the_ur_is_jogged_and_freedriven_through_the_jog_socket(cell: tuple[Runtime, str]) -> None:

@@ -33,7 +33,7 @@ def stop(proc: subprocess.Popen[str]) -> None:
 
 def world(host: str, command: str) -> str:
     """One `emulator …` line: protective stop, estop on|off, reduced on|off, digital input N
-    on|off, reset, state."""
+    on|off, analog input N VALUE, reset, state (all of them: `Emulator.world`)."""
     with socket.create_connection((host, 29999), timeout=5) as s:
         f = s.makefile("rw")
         f.readline()  # the greeting

@@ -69,7 +69,11 @@ class Controller:
         self.digital_outputs = 0  # standard 0-7, configurable 8-15, tool 16-17
         self.digital_inputs = 0
         self.speed_fraction = 1.0
+        # The standard analog outputs as the script sets them: a ratio of the range and
+        # whether the output is in its voltage (0-10 V) or current (4-20 mA) domain.
         self.analog_outputs = [0.0, 0.0]
+        self.analog_output_voltage = [True, True]
+        self.analog_inputs = [0.0, 0.0]  # in the inputs' units (V or mA)
         self.offset = 0  # the script's register offset (24: the upper range)
         self.executing = False
         self.move_blocking = False  # a blocking move whose end is signalled "done"
@@ -362,8 +366,10 @@ class Controller:
                 "actual_digital_output_bits": self.digital_outputs,
                 "speed_scaling": self.speed_fraction,
                 "target_speed_fraction": self.speed_fraction,
-                "standard_analog_output0": self.analog_outputs[0],
-                "standard_analog_output1": self.analog_outputs[1],
+                "standard_analog_input0": self.analog_inputs[0],
+                "standard_analog_input1": self.analog_inputs[1],
+                "standard_analog_output0": self.analog_out(0),
+                "standard_analog_output1": self.analog_out(1),
                 "joint_mode": (253,) * 6 if powered else (236,) * 6,
             }
             for n in range(48):
@@ -384,10 +390,19 @@ class Controller:
             if fields.get("speed_slider_mask"):
                 self.speed_fraction = min(max(float(fields["speed_slider_fraction"]), 0.0), 1.0)  # type: ignore[arg-type]
             mask = int(fields.get("standard_analog_output_mask", 0))  # type: ignore[call-overload]
+            voltage = int(fields.get("standard_analog_output_type", 0))  # type: ignore[call-overload]
             for k in (0, 1):
                 if mask & (1 << k) and f"standard_analog_output_{k}" in fields:
-                    self.analog_outputs[k] = float(fields[f"standard_analog_output_{k}"])  # type: ignore[arg-type]
+                    ratio = float(fields[f"standard_analog_output_{k}"])  # type: ignore[arg-type]
+                    self.analog_outputs[k] = min(max(ratio, 0.0), 1.0)
+                    self.analog_output_voltage[k] = bool(voltage & (1 << k))
             self.inputs_written(list(fields))
+
+    def analog_out(self, k: int) -> float:
+        """What the controller reports: the output in its domain's unit (V or mA)."""
+        if self.analog_output_voltage[k]:
+            return 10.0 * self.analog_outputs[k]
+        return 4.0 + 16.0 * self.analog_outputs[k]
 
     def _masked(self, fields: dict[str, object], name: str, shift: int) -> None:
         mask = int(fields.get(f"{name}_mask", 0))  # type: ignore[call-overload]

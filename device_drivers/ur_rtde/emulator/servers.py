@@ -256,7 +256,8 @@ class Emulator:
         """What happens around the robot (tests only; a real dashboard knows none of it):
         `protective stop`, `estop on|off`, `reduced on|off` (the safety system's reduced
         limits), `dashboard stall S` (the dashboard answers nothing else for S seconds),
-        `digital input N on|off`, `operational mode manual|automatic|none` (the
+        `digital input N on|off` (0-7 standard, 8-15 configurable, 16-17 tool), `analog
+        input N VALUE` (in the input's unit, V or mA), `operational mode manual|automatic|none` (the
         pendant's mode selection), `hand V1 … V6` (a hand pushing the arm at these joint
         velocities: it moves only in teach mode), `reset` (powered, normal, no program,
         nothing held), `state`."""
@@ -281,6 +282,14 @@ class Emulator:
             c.digital_inputs = (
                 (c.digital_inputs | bit) if words[3] == "on" else (c.digital_inputs & ~bit)
             )
+        elif words[:2] == ["analog", "input"] and len(words) == 4 and words[2] in ("0", "1"):
+            try:
+                value = float(words[3])
+            except ValueError:
+                return f"emulator: not a number: {command!r}"
+            if not np.isfinite(value):
+                return f"emulator: not finite: {command!r}"
+            c.analog_inputs[int(words[2])] = value
         elif words[:2] == ["operational", "mode"] and words[2:] in (
             ["manual"],
             ["automatic"],
@@ -308,6 +317,8 @@ class Emulator:
                     "commands": c.commands[-50:],
                     "started_at": c.started_at,
                     "scripts": c.scripts,
+                    "digital_outputs": c.digital_outputs,
+                    "analog_outputs": [c.analog_out(0), c.analog_out(1)],
                 }
             )
         else:

@@ -1,0 +1,43 @@
+"""A UR controller's I/O as the driver host starts it (`openpendant driver ur-io --address
+HOST`), beside the arm's own driver (`ur-rtde`) for the same controller."""
+
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from device_drivers.ur_rtde.io_driver import Domain, URIODriver
+from runtime.interfaces.device import DeviceIdentity
+from runtime.kit.errors import InvalidValue
+
+
+class URIOOptions(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    address: str = Field(default="", max_length=253, description="the controller's host name or IP")
+    analog_inputs: Domain = Field(
+        default="voltage", description="the domain the controller's I/O setup gives AI0/AI1"
+    )
+    analog_outputs: Domain = Field(
+        default="voltage", description="the domain AO0/AO1 are written in (0-10 V or 4-20 mA)"
+    )
+    frequency: float = Field(default=125.0, gt=0, le=500, description="RTDE Hz")
+    poll_hz: float = Field(default=100.0, gt=0, le=500, description="reads per second")
+
+    def default_name(self) -> str:
+        return "ur_io"
+
+
+def create(name: str, uuid: str, options: URIOOptions) -> URIODriver:
+    if not options.address:
+        raise InvalidValue("--address is the controller's host name or IP address")
+    identity = DeviceIdentity(
+        uuid=uuid, kind="io", model="Universal Robots controller I/O", name=name
+    )
+    return URIODriver(
+        identity,
+        options.address,
+        analog_inputs=options.analog_inputs,
+        analog_outputs=options.analog_outputs,
+        frequency=options.frequency,
+        poll_hz=options.poll_hz,
+    )
