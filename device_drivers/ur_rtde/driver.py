@@ -35,6 +35,8 @@ from device_drivers.ur_rtde.modes import ModeWatch
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.limits import CheckedTrajectory, FloatArray
 from runtime.interfaces.robot import (
+    POWER_ON,
+    UNLOCK_PROTECTIVE_STOP,
     CommandMode,
     OperationalMode,
     RobotFlags,
@@ -74,6 +76,8 @@ class URDriver(RobotDriver):
         gain: float = 300.0,
         connect: Callable[[str, float, str], URLink] = URLink,
     ) -> None:
+        added = [c for c in (POWER_ON, UNLOCK_PROTECTIVE_STOP) if c not in info.capabilities]
+        info = info.model_copy(update={"capabilities": [*info.capabilities, *added]})
         super().__init__(identity, info)
         self.host, self.frequency = host, frequency
         self.watchdog_hz, self.lookahead, self.gain = watchdog_hz, lookahead, gain

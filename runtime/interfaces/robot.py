@@ -74,6 +74,11 @@ class ToolSetup(Strict):
 
 
 SIM_CELL = "sim_cell"
+# What a driver's power commands do beyond the standard's (the UI names its buttons so):
+# Enable also powers the arm on and releases its brakes; Reset errors also unlocks a
+# protective stop.
+POWER_ON = "power_on"
+UNLOCK_PROTECTIVE_STOP = "unlock_protective_stop"
 
 
 class RobotInfo(Strict):

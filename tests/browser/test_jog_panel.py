@@ -1,7 +1,8 @@
 """The Jog panel by touch: take control, enable, hold a jog button (the robot moves while the
 finger is down and stops when it lifts), teach a waypoint, move away, hold "move to" until it
 arrives, a live 3D view of the robot and the simulated cell's parts, freedrive held while a
-hand moves the arm, and a gripper opened and closed beside the buttons."""
+hand moves the arm, a gripper opened and closed beside the buttons, and what stops the
+robot said with what to do (a UR's own words for its power-on and unlock too)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, expect
 
+from device_drivers.ur_rtde.emulator import control as emulator_control
 from runtime.bench.harness.processes import STILL, DriverProc, Runtime, SimRobotProc, wait_for
 from tests.browser.conftest import (
     Finger,
@@ -24,6 +26,8 @@ from tests.browser.conftest import (
 )
 from tests.browser.test_shop_floor import take_control_and_enable
 from tests.support.png import decode
+
+UR_HOST = "127.0.0.8"  # the UR emulator's own loopback address (its ports are fixed)
 
 
 @pytest.fixture(scope="module")
@@ -326,3 +330,55 @@ def test_the_gripper_is_activated_closed_on_a_part_and_opened_from_the_jog_panel
     finally:
         runtime.api("DELETE", "/devices/gripper")
         device.stop()
+
+
+def test_a_ur_says_what_enable_and_reset_do_on_it(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    """A UR (its driver through ur-rtde to the controller emulator): Enable says it powers
+    the arm on; after a protective stop the card and the button say Reset error unlocks it;
+    the controller's reduced mode is shown while it lasts."""
+    emulator = emulator_control.start(UR_HOST)
+    driver = DriverProc(runtime.home, "ur-rtde", "ur", "--address", UR_HOST, "--model", "ur5e")
+    try:
+        url = driver.wait_ready()
+        added = runtime.api("POST", "/devices", json={"url": url, "local_name": "ur"})
+        assert added.status_code in (200, 201), added.text
+        page = tablet.new_page()
+        errors = PageErrors(page)
+        page.goto(f"{runtime.url}/#/jog")
+        page.locator("[data-testid=status-robot][data-name=ur]").tap()
+        expect(page.get_by_test_id("jog-robot")).to_have_text("ur", timeout=10_000)
+        page.get_by_test_id("control").tap()
+        expect(page.get_by_test_id("lease")).to_contain_text("You have control")
+        enable = page.get_by_test_id("enable")
+        expect(enable).to_have_text("Power on & enable", timeout=15_000)
+        enable.tap()
+        expect(page.get_by_test_id("disable")).to_be_visible(timeout=15_000)
+
+        emulator_control.world(UR_HOST, "reduced on")
+        expect(page.get_by_test_id("robot-reduced")).to_be_visible(timeout=5_000)
+        emulator_control.world(UR_HOST, "reduced off")
+        expect(page.get_by_test_id("robot-reduced")).to_have_count(0, timeout=5_000)
+
+        emulator_control.world(UR_HOST, "protective stop")
+        fault = page.get_by_test_id("robot-fault")
+        expect(fault).to_have_attribute("data-kind", "protective_stop", timeout=5_000)
+        expect(fault).to_contain_text("tap Unlock & reset")
+        chip = page.locator("[data-testid=status-robot][data-name=ur]")
+        expect(chip).to_contain_text("PROTECTIVE STOP")
+        unlock = page.get_by_test_id("reset-error")
+        expect(unlock).to_have_text("Unlock & reset")
+        unlock.tap()
+        expect(fault).to_have_count(0, timeout=10_000)
+        assert emulator_control.emulated(UR_HOST)["safety_mode"] == 1  # normal: unlocked
+        enable.tap()  # nothing resumed by itself: enabled again by hand
+        expect(page.get_by_test_id("disable")).to_be_visible(timeout=15_000)
+        page.get_by_test_id("control").tap()
+        expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+        failed = [e for e in errors.errors if not e.startswith("Failed to load resource")]
+        assert failed == []
+    finally:
+        runtime.api("DELETE", "/devices/ur")
+        driver.stop()
+        emulator_control.stop(emulator)

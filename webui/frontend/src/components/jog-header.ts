@@ -16,6 +16,8 @@ export class OpJogHeader extends LitElement {
     enabled: { type: Boolean },
     error: { type: Boolean },
     canPower: { type: Boolean },
+    powersOn: { type: Boolean },
+    unlocks: { type: Boolean },
   };
   declare robot: string;
   declare mine: boolean; // this tab has control
@@ -24,6 +26,8 @@ export class OpJogHeader extends LitElement {
   declare enabled: boolean;
   declare error: boolean;
   declare canPower: boolean;
+  declare powersOn: boolean; // Enable also powers the arm on and releases its brakes (a UR)
+  declare unlocks: boolean; // Reset error now also unlocks a protective stop (a UR)
 
   static styles = [
     shared,
@@ -47,6 +51,8 @@ export class OpJogHeader extends LitElement {
     this.enabled = false;
     this.error = false;
     this.canPower = false;
+    this.powersOn = false;
+    this.unlocks = false;
   }
 
   private power(command: PowerCommand): void {
@@ -68,10 +74,12 @@ export class OpJogHeader extends LitElement {
         ? html`<button data-testid="disable" ?disabled=${!this.canPower}
             @click=${() => this.power("disable")}>${t("jog.disable")}</button>`
         : html`<button data-testid="enable" ?disabled=${!this.canPower}
-            @click=${() => this.power("enable")}>${t("jog.enable")}</button>`}
+            @click=${() => this.power("enable")}>
+            ${t(this.powersOn ? "jog.power_on_enable" : "jog.enable")}</button>`}
       ${this.error
-        ? html`<button ?disabled=${!this.canPower} @click=${() => this.power("reset_errors")}>
-            ${t("jog.reset_error")}</button>`
+        ? html`<button data-testid="reset-error" ?disabled=${!this.canPower}
+            @click=${() => this.power("reset_errors")}>
+            ${t(this.unlocks ? "jog.unlock_reset" : "jog.reset_error")}</button>`
         : ""}`;
   }
 }

@@ -44,10 +44,12 @@ export class OpRobotFault extends LitElement {
     robot: { type: String },
     device: { attribute: false },
     state: { attribute: false },
+    unlocks: { type: Boolean },
   };
   declare robot: string;
   declare device: AddedDevice | undefined;
   declare state: RobotState | undefined;
+  declare unlocks: boolean; // its Reset error unlocks a protective stop (a UR)
 
   static styles = [
     shared,
@@ -85,6 +87,7 @@ export class OpRobotFault extends LitElement {
     this.robot = "";
     this.device = undefined;
     this.state = undefined;
+    this.unlocks = false;
   }
 
   private detail(kind: FaultKind): string {
@@ -104,7 +107,8 @@ export class OpRobotFault extends LitElement {
     const detail = this.detail(kind);
     return html`<div class="fault" role="alert" data-testid="robot-fault" data-kind=${kind}>
       <strong>${t(TITLE[kind], { robot: this.robot })}</strong>
-      <p>${t(WHAT_TO_DO[kind])}</p>
+      <p>${t(kind === "protective_stop" && this.unlocks
+        ? "fault.protective_stop.todo_unlock" : WHAT_TO_DO[kind])}</p>
       ${detail ? html`<p class="detail" data-testid="robot-fault-detail">${detail}</p>` : ""}
     </div>`;
   }

@@ -235,10 +235,15 @@ export class OpJogPanel extends LitElement {
       <op-jog-header robot=${this.robot} ?mine=${mine} holder=${mine ? control.holder : ""}
         controlledBy=${device?.controlled_by ?? ""} ?enabled=${!!state?.flags.enabled}
         ?error=${!!state?.flags.error} ?canPower=${mine && !!state}
+        ?powersOn=${!!this.model?.info.capabilities.includes("power_on")}
+        ?unlocks=${!!state?.flags.protective_stop
+          && !!this.model?.info.capabilities.includes("unlock_protective_stop")}
         @control-toggle=${() => this.toggleControl()}
         @power=${(e: CustomEvent<{ command: PowerCommand }>) => this.power(e.detail.command)}
       ></op-jog-header>
-      <op-robot-fault robot=${this.robot} .device=${device} .state=${state}></op-robot-fault>
+      <op-robot-fault robot=${this.robot} .device=${device} .state=${state}
+        ?unlocks=${!!this.model?.info.capabilities.includes("unlock_protective_stop")}
+      ></op-robot-fault>
       ${this.message ? html`<p class="error" role="alert" data-testid="jog-message">${this.message}</p>` : ""}
       <div class="layout">
         <div class="view">
