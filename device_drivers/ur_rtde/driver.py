@@ -30,6 +30,7 @@ import numpy as np
 from device_drivers.sim_robot.core import RunningTrajectory
 from device_drivers.sim_robot.reference import TrajectoryReference
 from device_drivers.sim_robot.scaling import TimeScaling
+from device_drivers.ur_rtde.io_writer import OutputWriter
 from device_drivers.ur_rtde.link import RUNNING, Reading, URLink
 from device_drivers.ur_rtde.modes import ModeWatch
 from runtime.interfaces.device import DeviceIdentity
@@ -61,6 +62,8 @@ OPERATIONAL_MODES = {
     "NONE": OperationalMode.manual_reduced_speed,
 }
 STOP_DECELERATION = 2.0  # rad/s² for stopJ
+TOOL_OUTPUT_0 = 16  # the tool outputs' first bit in the controller's digital output bits
+OUTPUT_SEEN_WITHIN = 1.0  # s for a written output to show in the controller's state
 
 
 class URDriver(RobotDriver):
@@ -106,6 +109,7 @@ class URDriver(RobotDriver):
         self._teaching = False  # the controller is in teach mode (freedrive)
         self.operational_mode = OperationalMode.manual_reduced_speed
         self._modes = ModeWatch(host, self._mode_seen, lambda: self.link is not None)
+        self.writer = OutputWriter(host)
         self._running = threading.Event()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
@@ -126,6 +130,7 @@ class URDriver(RobotDriver):
         await self.halt()
         self._running.clear()
         self._modes.close()
+        await self.writer.close()
         if self._thread is not None:
             self._thread.join(timeout=3.0)
         with self.lock:
@@ -356,7 +361,9 @@ class URDriver(RobotDriver):
                 speed_ratio=self.speed_ratio,
                 error_message=self.error_message if self.error else "",
                 trajectory=self.trajectory.status() if self.trajectory else None,
-                tool_open=None if reading is None else not bool(reading.digital_outputs >> 16 & 1),
+                tool_open=None
+                if reading is None
+                else not bool(reading.digital_outputs >> TOOL_OUTPUT_0 & 1),
                 digital_inputs=[
                     bool(reading and reading.digital_inputs >> i & 1) for i in range(n_in)
                 ],
@@ -480,12 +487,25 @@ class URDriver(RobotDriver):
             return running.status()
 
     async def _set_digital_output(self, index: int, value: bool) -> None:
-        await self._in_control_thread(
-            lambda link: link.set_outputs(lambda io: io.setStandardDigitalOut(index, value))
-        )
+        await self._write_output("setStandardDigitalOut", index, value, bit=index)
 
     async def _set_tool(self, open_: bool) -> None:
         # The tool connector's output 0 closes the gripper (the common wiring).
-        await self._in_control_thread(
-            lambda link: link.set_outputs(lambda io: io.setToolDigitalOut(0, not open_))
-        )
+        await self._write_output("setToolDigitalOut", 0, not open_, bit=TOOL_OUTPUT_0)
+
+    async def _write_output(self, call: str, index: int, value: bool, *, bit: int) -> None:
+        """Written from the writer's own process (never this one: see io_writer.py), then
+        confirmed by the controller's state, which the answer then shows."""
+        with self.lock:
+            self._link()
+        await self.writer.call(call, index, value)
+        deadline = time.monotonic() + OUTPUT_SEEN_WITHIN
+        while True:
+            with self.lock:
+                reading = self.reading
+                if reading is not None and bool(reading.digital_outputs >> bit & 1) == value:
+                    return
+                self._link()
+            if time.monotonic() > deadline:
+                raise RobotError(f"the controller did not show output {bit} as {value}", code="io")
+            await asyncio.sleep(CYCLE / 2)

@@ -21,7 +21,7 @@ from typing import Any, Literal
 
 import rtde_receive
 
-from device_drivers.ur_rtde.link import write_outputs
+from device_drivers.ur_rtde.io_writer import OutputWriter
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import (
     IODriver,
@@ -134,6 +134,7 @@ class URIODriver(IODriver):
         self.state_changed = self.changes  # the state stream sends a change at once
         self._published = asyncio.Condition()  # a write waits on it for its read-back
         self._writing = asyncio.Lock()  # one write at a time, each confirmed before the next
+        self.writer = OutputWriter(host)
         self._loop: asyncio.AbstractEventLoop | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -149,6 +150,7 @@ class URIODriver(IODriver):
         self._stop.set()
         if self._thread is not None:
             await asyncio.to_thread(self._thread.join, 5.0)
+        await self.writer.close()
 
     def _run(self) -> None:
         receive: Any = None
@@ -235,20 +237,17 @@ class URIODriver(IODriver):
         signal = self._signal(name)
         if not signal.writable:
             raise InvalidValue(f"{name} is an input: only outputs are written", code="read_only")
-        setter = self._setter(signal, command.value)
+        call, args = self._call(signal, command.value)
         async with self._writing:
             self._reachable()
-            try:
-                await asyncio.to_thread(write_outputs, self.host, setter)
-            except RuntimeError as exc:  # ur-rtde's own: no connection, no answer
-                raise Unavailable(
-                    f"writing {name}: the controller at {self.host} did not take it: {exc}",
-                    code="disconnected",
-                ) from None
+            await self.writer.call(call, *args)
             value = await self._read_back(signal, command.value)
         return SignalReading(name=name, value=value, ts=self.clock())
 
-    def _setter(self, signal: SignalInfo, value: bool | float) -> Callable[[Any], object]:
+    def _call(
+        self, signal: SignalInfo, value: bool | float
+    ) -> tuple[str, tuple[int, bool | float]]:
+        """ur-rtde's I/O interface method that writes it, and its arguments."""
         index = int(signal.name[2:])
         if signal.digital:
             if not isinstance(value, bool):
@@ -256,7 +255,7 @@ class URIODriver(IODriver):
             method = {"do": "setStandardDigitalOut", "co": "setConfigurableDigitalOut"}.get(
                 signal.name[:2], "setToolDigitalOut"
             )
-            return lambda io: getattr(io, method)(index, value)
+            return method, (index, value)
         low, high = _range(signal)
         if isinstance(value, bool) or not math.isfinite(value):
             raise InvalidValue(f"{signal.name} is analog: write a finite number")
@@ -264,8 +263,8 @@ class URIODriver(IODriver):
             raise InvalidValue(f"{signal.name} takes {low:g} to {high:g} {signal.unit}")
         ratio = (value - low) / (high - low)  # the controller takes a ratio of the range
         if self.analog_outputs == "voltage":
-            return lambda io: io.setAnalogOutputVoltage(index, ratio)
-        return lambda io: io.setAnalogOutputCurrent(index, ratio)
+            return "setAnalogOutputVoltage", (index, ratio)
+        return "setAnalogOutputCurrent", (index, ratio)
 
     def _holds(self, signal: SignalInfo, wanted: bool | float) -> bool:
         value = self.values[signal.name]

@@ -62,11 +62,10 @@ class Reading:
 
 
 def write_outputs(host: str, work: Callable[[Any], object]) -> None:
-    """`work(io)` on an I/O interface made for it and closed at once. A long-lived one is
-    not kept: ur-rtde's RTDEIOInterface aborts the whole process when it is destroyed after
-    its connection died (its destructor throws), and a controller gives each input field to
-    one RTDE connection at a time, so a held one would lock out every other writer (the
-    robot driver's tool output and the I/O driver's outputs)."""
+    """`work(io)` on an I/O interface made for it and closed at once (in the writer's own
+    process: io_writer.py says why). A long-lived one is not kept: a controller gives each
+    input field to one RTDE connection at a time, so a held one would lock out every other
+    writer (the arm driver's tool output and the I/O driver's outputs)."""
     io = rtde_io.RTDEIOInterface(host)
     try:
         if work(io) is False:
@@ -123,9 +122,6 @@ class URLink:
             speed_fraction=float(r.getTargetSpeedFraction()),
             timestamp=float(r.getTimestamp()),
         )
-
-    def set_outputs(self, work: Callable[[Any], object]) -> None:
-        write_outputs(self.host, work)
 
     def power_up(self, timeout: float = 30.0) -> None:
         """Power on and release the brakes (the controller's own sequence), until running."""

@@ -24,10 +24,12 @@ from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
+    DigitalOutputCommand,
     FreedriveCommand,
     JogJointCommand,
     JointTrajectory,
     OperationalMode,
+    ToolCommand,
     TrajectoryState,
     TrajectoryWaypoint,
 )
@@ -162,6 +164,29 @@ def test_the_state_follows_the_controller(driven: Driven) -> None:
     world("digital input 1 on")
     until(lambda: driven.driver.state().digital_inputs[1], what="DI1 seen")
     assert emulated()["watchdog_hz"] == 10.0  # set on connecting: a dead driver stops it
+
+
+def test_outputs_are_written_while_the_arm_jogs_and_it_goes_on(driven: Driven) -> None:
+    """ur-rtde's I/O interface stops every thread of its process for 100 ms while it
+    connects: made in the driver's process, each output written cost the control thread the
+    RTDE watchdog, which stopped the control program. Made in the writer's process, a jog
+    goes on through ten writes, each shown in the state answered."""
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+    start = d.state().joint_position[0]
+    for k in range(5):
+        value = k % 2 == 0
+        driven.run(d.jog_joint(JogJointCommand(velocity=[0.1, 0, 0, 0, 0, 0], timeout=0.5)))
+        state = driven.run(d.set_digital_output(2, DigitalOutputCommand(value=value)))
+        assert state.digital_outputs[2] is value
+        assert bool(emulated()["digital_outputs"] >> 2 & 1) is value
+        state = driven.run(d.set_tool(ToolCommand(open=not value)))
+        assert state.tool_open is (not value)
+    state = d.state()
+    assert not state.flags.error and state.flags.ready, state.error_message
+    assert emulated()["runtime_state"] == PLAYING
+    assert state.joint_position[0] > start + 0.05  # it jogged all along
 
 
 def test_a_jog_moves_while_commanded_and_stops_after_its_timeout(driven: Driven) -> None:

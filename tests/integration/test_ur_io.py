@@ -13,6 +13,7 @@ from collections.abc import Awaitable, Callable, Iterator
 from typing import Any
 
 import pytest
+import rtde_io
 
 from device_drivers.ur_rtde.emulator import control as emulator_control
 from device_drivers.ur_rtde.io_driver import URIODriver
@@ -144,6 +145,33 @@ def test_bad_writes_are_refused_and_change_nothing(emulator: subprocess.Popen[st
         after = emulated()
         assert after["digital_outputs"] == before["digital_outputs"]
         assert after["analog_outputs"] == before["analog_outputs"]
+
+    driven(work)
+
+
+def test_a_write_waits_while_another_connection_holds_the_outputs(
+    emulator: subprocess.Popen[str],
+) -> None:
+    """A controller gives each RTDE input field to one connection at a time: a write that
+    finds the outputs held (the arm's driver writing its tool output that moment) is tried
+    again until they are free; held for longer, it is refused and nothing is written."""
+
+    async def work(driver: URIODriver) -> None:
+        holder = await asyncio.to_thread(rtde_io.RTDEIOInterface, HOST)
+        asyncio.get_running_loop().call_later(0.5, holder.disconnect)
+        started = time.monotonic()
+        reading = await driver.write("do5", SignalWrite(value=True))
+        assert reading.value is True
+        assert time.monotonic() - started > 0.4  # it waited for the holder
+        await driver.write("do6", SignalWrite(value=False))
+        holder = await asyncio.to_thread(rtde_io.RTDEIOInterface, HOST)
+        try:
+            with pytest.raises(OpenPendantError) as refused:
+                await driver.write("do6", SignalWrite(value=True))
+            assert refused.value.code == "outputs_in_use", refused.value.message
+        finally:
+            holder.disconnect()
+        assert not emulated()["digital_outputs"] >> 6 & 1
 
     driven(work)
 

@@ -75,6 +75,7 @@ class Controller:
         self.analog_output_voltage = [True, True]
         self.analog_inputs = [0.0, 0.0]  # in the inputs' units (V or mA)
         self.offset = 0  # the script's register offset (24: the upper range)
+        self.input_owners: dict[str, object] = {}  # RTDE input field -> the connection owning it
         self.executing = False
         self.move_blocking = False  # a blocking move whose end is signalled "done"
         self.motion = Motion()

@@ -62,6 +62,9 @@ class RtdeSession:
         finally:
             if self.streaming is not None:
                 self.streaming.cancel()
+            owners = self.controller.input_owners
+            for name in [n for n, owner in owners.items() if owner is self]:
+                del owners[name]
             self.writer.close()
 
     def handle(self, kind: int, body: bytes) -> None:
@@ -80,6 +83,16 @@ class RtdeSession:
         elif kind == wire.I:
             names = wire.names(body)
             types = [wire.INPUTS.get(n, "NOT_FOUND") for n in names]
+            # A controller gives each input field to one connection at a time.
+            claimed = c.input_owners
+            if any(claimed.get(n, self) is not self for n in names):
+                taken = [
+                    "IN_USE" if claimed.get(n, self) is not self else t
+                    for n, t in zip(names, types, strict=True)
+                ]
+                self.send(wire.I, b"\x00" + ",".join(taken).encode())
+                return
+            claimed.update(dict.fromkeys(names, self))
             number = len(self.inputs) + 1
             self.inputs[number] = (names, types)
             self.send(wire.I, bytes([number]) + ",".join(types).encode())
