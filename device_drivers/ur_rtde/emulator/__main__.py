@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import gc
 import logging
 import signal
 import sys
@@ -27,6 +28,10 @@ async def serve(host: str, model: str, cell: str) -> None:
     if cell:  # parts on its table, for simulated grippers and sensors named after it
         world = CellServer(World(controller.tcp), cell)
         await world.start()
+    # A full collection stops every thread: over what start-up loaded it would let input
+    # packages queue while the watchdog check runs (as the driver's host, runtime/kit/app.py).
+    gc.collect()
+    gc.freeze()
     print(f"UR emulator ready on {host}", flush=True)
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
