@@ -120,10 +120,12 @@ async def signal_of(run: RunHost, name: str) -> tuple[str, str, str]:
         raise CallRefused(
             f"I/O names look like robot.do0 or cell_io.lamp, not {name[:40]!r}", "unknown_io"
         )
-    try:
-        kind = (await run.devices.manager.device(device)).kind
-    except NotFound:
-        raise CallRefused(f"there is no device {device!r}", "unknown_device") from None
+    kind = run.kinds.get(device)
+    if kind is None:
+        try:
+            kind = run.kinds[device] = (await run.devices.manager.device(device)).kind
+        except NotFound:
+            raise CallRefused(f"there is no device {device!r}", "unknown_device") from None
     if kind == "robot" and IO_NAME.match(name) is None:
         raise CallRefused(f"a robot's I/O is do0, do1, … di0, di1, …, not {signal!r}", "unknown_io")
     if kind not in ("robot", "io"):

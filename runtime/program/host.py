@@ -72,6 +72,8 @@ class RunHost:
         self.robots: list[str] = []  # ... of which the robots
         self.speed = 0.5
         self.gripper_force: dict[str, float] = {}  # N, set by a block for the following closes
+        # Each device's kind, asked once per run (an input waited on is read every few ms).
+        self.kinds: dict[str, str] = {}
         # Named on each move: the motion service refuses the run's moves once it is stopped,
         # even one whose request is still on its way when the stop arrives.
         self.caller = f"run-{uuid.uuid4().hex}"

@@ -119,3 +119,31 @@ def test_a_stop_while_the_device_is_looked_up_sends_nothing(events: list[str]) -
 
     asyncio.run(scenario())
     assert "run sent" not in events
+
+
+def test_a_devices_kind_is_asked_once_per_run() -> None:
+    """An input waited on is read every few milliseconds: its device's kind is looked up
+    once, and an unknown device is still refused by name."""
+    from runtime.kit.errors import NotFound
+    from runtime.program.handlers import signal_of
+
+    asked: list[str] = []
+
+    async def device(name: str) -> Any:
+        asked.append(name)
+        if name != "cell_io":
+            raise NotFound(f"no device {name}")
+        return SimpleNamespace(kind="io")
+
+    devices = SimpleNamespace(manager=SimpleNamespace(device=device))
+    run = make_host(devices)
+
+    async def reads() -> None:
+        for _ in range(3):
+            assert await signal_of(run, "cell_io.part_present") == ("cell_io", "io", "part_present")
+        with pytest.raises(CallRefused) as refused:
+            await signal_of(run, "gone.lamp")
+        assert refused.value.code == "unknown_device"
+
+    asyncio.run(reads())
+    assert asked == ["cell_io", "gone"]
