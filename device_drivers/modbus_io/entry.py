@@ -5,7 +5,6 @@ them is the real one)."""
 
 from __future__ import annotations
 
-import socket
 from pathlib import Path
 
 from fastapi import APIRouter
@@ -64,12 +63,6 @@ class ModbusIOOptions(LinkOptions):
         return "sim-io" if self.simulate else "io"
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def create(name: str, uuid: str, options: ModbusIOOptions) -> ModbusIODriver:
     registers = load_map(options.map or DEFAULT_MAP)
     if options.unit_id is not None:
@@ -78,7 +71,7 @@ def create(name: str, uuid: str, options: ModbusIOOptions) -> ModbusIODriver:
     address = options.link_address()
     if options.simulate:
         cell = CellClient(options.cell) if options.cell else None
-        simulator = ModbusSimulator(registers, "127.0.0.1", free_port(), cell=cell)
+        simulator = ModbusSimulator(registers, "127.0.0.1", cell=cell)
         address = simulator.address
     identity = DeviceIdentity(uuid=uuid, kind="io", model=registers.model[:64], name=name)
     link = ModbusLink(address, registers.unit_id, options.timeout)

@@ -14,7 +14,7 @@ from pydantic import BaseModel, Field
 from device_drivers.modbus_io import robotiq
 from device_drivers.modbus_io.digital_gripper import DigitalGripper, load_gripper_map
 from device_drivers.modbus_io.driver import ModbusIODriver
-from device_drivers.modbus_io.entry import LinkOptions, free_port
+from device_drivers.modbus_io.entry import LinkOptions
 from device_drivers.modbus_io.link import ModbusLink
 from device_drivers.modbus_io.robotiq_gripper import RobotiqGripper
 from device_drivers.modbus_io.sim_grippers import DigitalGripperSimulator, RobotiqSimulator
@@ -51,7 +51,7 @@ def _robotiq(identity: DeviceIdentity, options: ModbusGripperOptions) -> Robotiq
     simulator = None
     address = options.link_address()
     if options.simulate:
-        simulator = RobotiqSimulator(profile, "127.0.0.1", free_port(), cell=options.cell())
+        simulator = RobotiqSimulator(profile, "127.0.0.1", cell=options.cell())
         address = simulator.address
     link = ModbusLink(address, unit_id, options.timeout)
     return RobotiqGripper(
@@ -75,7 +75,6 @@ def _digital(identity: DeviceIdentity, options: ModbusGripperOptions) -> Digital
             registers.stroke,
             registers.move_time,
             host="127.0.0.1",
-            port=free_port(),
             cell=options.cell(),
         )
         address = simulator.address

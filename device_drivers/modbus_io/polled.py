@@ -27,6 +27,7 @@ class Polled(ABC):
     async def start(self) -> None:
         if self.simulator is not None:
             await self.simulator.start()
+            self.link.address = self.simulator.address  # its port is known once it listens
         self._poller = asyncio.create_task(poll_forever(self.period, self.poll_once))
 
     async def shutdown(self) -> None:

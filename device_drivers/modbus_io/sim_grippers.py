@@ -52,7 +52,7 @@ class RobotiqSimulator(ModbusSimulator):
         self,
         profile: Profile,
         host: str = "127.0.0.1",
-        port: int = 5020,
+        port: int = 0,
         *,
         rtu: bool = False,
         cell: CellClient | None = None,

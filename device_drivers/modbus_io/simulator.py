@@ -43,7 +43,7 @@ class ModbusSimulator:
         self,
         registers: RegisterMap,
         host: str = "127.0.0.1",
-        port: int = 5020,
+        port: int = 0,  # 0: any free port (`address` says which, once started)
         *,
         rtu: bool = False,
         cell: CellClient | None = None,
@@ -160,6 +160,8 @@ class ModbusSimulator:
             self._server = ModbusTcpServer(self._device(), address=(self.host, self.port))
         self._task = asyncio.create_task(self._server.serve_forever())
         await asyncio.sleep(0)
+        if self.port == 0:  # the port the system gave it: nobody can take it meanwhile
+            self.port = await self._bound_port()
         for _ in range(100):  # listening once a connection is accepted
             with contextlib.suppress(OSError):
                 _, writer = await asyncio.open_connection(self.host, self.port)
@@ -169,6 +171,17 @@ class ModbusSimulator:
                 return
             await asyncio.sleep(0.02)
         raise RuntimeError(f"the Modbus simulator did not listen on {self.host}:{self.port}")
+
+    async def _bound_port(self) -> int:
+        server = self._server
+        for _ in range(250):
+            sockets = getattr(getattr(server, "transport", None), "sockets", None)
+            if sockets:
+                return int(sockets[0].getsockname()[1])
+            if self._task is not None and self._task.done():
+                break  # it could not listen: its exception says why
+            await asyncio.sleep(0.01)
+        raise RuntimeError(f"the Modbus simulator did not listen on {self.host}")
 
     async def _sense(self) -> None:
         assert self.cell is not None

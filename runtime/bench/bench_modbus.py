@@ -11,7 +11,6 @@ from device_drivers.modbus_io.driver import ModbusIODriver
 from device_drivers.modbus_io.link import ModbusLink
 from device_drivers.modbus_io.registers import load_map
 from device_drivers.modbus_io.simulator import ModbusSimulator
-from runtime.bench.harness.processes import free_port
 from runtime.bench.runner import Figure
 from runtime.bench.stats import percentile, quick
 from runtime.interfaces.device import DeviceIdentity
@@ -23,7 +22,7 @@ FIGURES = ("modbus_roundtrip_p50", "modbus_roundtrip_p99", "modbus_poll_p99")
 
 async def _measure(count: int) -> tuple[list[float], list[float]]:
     registers = load_map(MODBUS_MAPS_DIR / "cell_io.yaml")
-    sim = ModbusSimulator(registers, port=free_port())
+    sim = ModbusSimulator(registers)
     await sim.start()
     identity = DeviceIdentity(uuid="bench-io", kind="io", model="bench", name="bench-io")
     driver = ModbusIODriver(identity, registers, ModbusLink(sim.address, registers.unit_id, 1.0))

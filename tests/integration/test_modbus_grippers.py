@@ -19,7 +19,6 @@ from device_drivers.modbus_io.link import ModbusLink
 from device_drivers.modbus_io.robotiq import Request
 from device_drivers.modbus_io.robotiq_gripper import GripperFault, RobotiqGripper
 from device_drivers.modbus_io.sim_grippers import DigitalGripperSimulator, RobotiqSimulator
-from runtime.bench.harness.processes import free_port
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.gripper import GripperMotion
 from runtime.kit.errors import InvalidValue
@@ -38,7 +37,7 @@ def run_robotiq(
     timeout: float = 0.5,
 ) -> None:
     async def main() -> None:
-        sim = RobotiqSimulator(robotiq.PROFILES[profile], port=free_port(), rtu=rtu)
+        sim = RobotiqSimulator(robotiq.PROFILES[profile], rtu=rtu)
         await sim.start()
         link = ModbusLink(sim.address, robotiq.UNIT_ID, timeout)
         gripper = RobotiqGripper(IDENTITY, robotiq.PROFILES[profile], link)
@@ -154,9 +153,8 @@ def run_digital(test: Callable[[DigitalGripperSimulator, DigitalGripper], Awaita
     registers = load_gripper_map(DIGITAL_MAP)
 
     async def main() -> None:
-        sim = DigitalGripperSimulator(
-            registers, registers.stroke, registers.move_time, port=free_port()
-        )
+        # Its port is found when it listens: the block points the link at it then.
+        sim = DigitalGripperSimulator(registers, registers.stroke, registers.move_time)
         link = ModbusLink(sim.address, registers.unit_id, 0.5)
         block = ModbusIODriver(
             IDENTITY.model_copy(update={"kind": "io"}), registers, link, simulator=sim

@@ -20,7 +20,6 @@ from device_drivers.modbus_io.errors import EXCEPTIONS, ModbusRefused
 from device_drivers.modbus_io.link import ModbusLink
 from device_drivers.modbus_io.registers import RegisterMap
 from device_drivers.modbus_io.simulator import ModbusSimulator
-from runtime.bench.harness.processes import free_port
 from runtime.drivers.host import build_driver_app
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import SignalWrite
@@ -94,7 +93,7 @@ def run(
     registers = registers or make_map()
 
     async def main() -> None:
-        sim = ModbusSimulator(registers, port=free_port(), rtu=rtu)
+        sim = ModbusSimulator(registers, rtu=rtu)
         await sim.start()
         identity = DeviceIdentity(uuid="io-1", kind="io", model="test block", name="io")
         link = ModbusLink(sim.address, registers.unit_id, timeout)
