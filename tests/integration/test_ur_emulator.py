@@ -117,9 +117,10 @@ def test_outputs_and_the_speed_slider_through_the_io_interface(
     try:
         assert io.setStandardDigitalOut(3, True)
         assert io.setToolDigitalOut(1, True)
-        wait_for(lambda: receive.getDigitalOutState(3), 5, what="DO3 on")
-        bits = receive.getActualDigitalOutputBits()
-        assert bits == (1 << 3) | (1 << 17)
+        # Two packages, applied one after the other: a state may come between them.
+        both = (1 << 3) | (1 << 17)
+        wait_for(lambda: receive.getActualDigitalOutputBits() & both == both, 5, what="DO3, TO1")
+        assert receive.getActualDigitalOutputBits() == both
         assert io.setStandardDigitalOut(3, False)
         wait_for(lambda: not receive.getDigitalOutState(3), 5, what="DO3 off")
         assert io.setSpeedSlider(0.4)
