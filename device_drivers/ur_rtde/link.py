@@ -6,6 +6,7 @@ the driver's own control thread, never from the event loop."""
 from __future__ import annotations
 
 import logging
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -76,6 +77,13 @@ def write_outputs(host: str, work: Callable[[Any], object]) -> None:
         except RuntimeError as exc:  # the connection died meanwhile: keep it, never free it
             _UNFREEABLE.append(io)
             log.warning("an I/O connection died while in use: %s", exc)
+
+
+def _disconnect(part: Any) -> None:
+    try:
+        part.disconnect()
+    except Exception as exc:
+        log.debug("closing: %s", exc)
 
 
 class URLink:
@@ -163,11 +171,16 @@ class URLink:
             time.sleep(0.005)
 
     def close(self) -> None:
-        for part in (self.control, self.receive):
-            try:
-                part.disconnect()
-            except Exception as exc:
-                log.debug("closing: %s", exc)
+        # Each of ur-rtde's disconnects sleeps 500 ms (without the interpreter lock): both at
+        # once.
+        closing = [
+            threading.Thread(target=_disconnect, args=(part,), name="ur-close")
+            for part in (self.control, self.receive)
+        ]
+        for thread in closing:
+            thread.start()
+        for thread in closing:
+            thread.join()
         try:
             self.dashboard.disconnect()
         except Exception as exc:
