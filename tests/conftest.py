@@ -51,3 +51,9 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     (runtime/kit/app.py), later collections skip it."""
     gc.collect()
     gc.freeze()
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    """Collectable again, so that it all ends with the process (a frozen OMPL object left
+    at exit makes nanobind report leaks)."""
+    gc.unfreeze()
