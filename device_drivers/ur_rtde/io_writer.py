@@ -22,6 +22,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from device_drivers.ur_rtde.link import write_outputs
 from runtime.kit.errors import OpenPendantError, RobotError, Unavailable
 
 log = logging.getLogger(__name__)
@@ -41,8 +42,6 @@ ANSWER_WITHIN = 15.0  # s: connecting to an unreachable controller takes ur-rtde
 
 def serve(host: str) -> None:
     """The child's side: every request line on stdin, its answer on stdout."""
-    from device_drivers.ur_rtde.link import write_outputs
-
     for line in sys.stdin:
         try:
             request = json.loads(line)
