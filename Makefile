@@ -42,12 +42,13 @@ lint: $(PY_STAMP)
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 
-# The whole suite (tests/suite.py: real-time tests one at a time, the rest alongside them);
-# with ARGS, just pytest with those (e.g. ARGS=tests/unit or ARGS="-k jog").
-test: setup lint
+# The whole suite (tests/suite.py: real-time tests one at a time, the rest and the lint
+# alongside them); with ARGS, the lint, then pytest with those (e.g. ARGS="-k jog").
+test: setup
 ifeq ($(strip $(ARGS)),)
 	$(BIN)/python -m tests.suite
 else
+	$(MAKE) lint
 	$(BIN)/pytest $(ARGS)
 endif
 

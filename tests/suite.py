@@ -5,9 +5,9 @@
 - the tests marked `concurrent` (unit tests, security and API checks, the store, the install)
   run on both cores at the lowest priority (nice 19) in the time the first session leaves
   idle (it waits on processes, sockets and browsers about half of the time), so they never
-  take the CPU from a real-time test.
+  take the CPU from a real-time test; so does the lint (ruff and mypy, as `make lint`).
 
-Exit status: the worse of the two. The concurrent session's report is printed after the
+Exit status: the first that failed. The concurrent session's report is printed after the
 other's."""
 
 from __future__ import annotations
@@ -21,11 +21,25 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 
 
+# What `make lint` runs: checked alongside the tests too, not before them.
+LINT = "ruff check . && ruff format --check . && mypy"
+
+
 def main(extra: list[str]) -> int:
     pytest = [sys.executable, "-m", "pytest"]
+    bin_dir = Path(sys.executable).parent
     with tempfile.TemporaryDirectory(prefix="openpendant-concurrent-") as scratch:
         log_path = Path(scratch) / "concurrent.log"
-        with log_path.open("w") as log:
+        lint_path = Path(scratch) / "lint.log"
+        with log_path.open("w") as log, lint_path.open("w") as lint_log:
+            lint = subprocess.Popen(
+                ["sh", "-c", LINT],
+                cwd=ROOT,
+                env={**os.environ, "PATH": f"{bin_dir}{os.pathsep}{os.environ.get('PATH', '')}"},
+                stdout=lint_log,
+                stderr=subprocess.STDOUT,
+                preexec_fn=lambda: os.nice(19),
+            )
             background = subprocess.Popen(
                 [
                     *pytest,
@@ -54,10 +68,16 @@ def main(extra: list[str]) -> int:
                 )
             finally:
                 background_status = background.wait()
+                lint_status = lint.wait()
         print("\n======== tests run alongside (marked concurrent) ========", flush=True)
         print(log_path.read_text(errors="replace"), flush=True)
-    print(f"real-time tests: exit {foreground}; concurrent tests: exit {background_status}")
-    return foreground or background_status
+        print(f"======== lint alongside ({LINT}) ========", flush=True)
+        print(lint_path.read_text(errors="replace"), flush=True)
+    print(
+        f"real-time tests: exit {foreground}; concurrent tests: exit {background_status}; "
+        f"lint: exit {lint_status}"
+    )
+    return foreground or background_status or lint_status
 
 
 if __name__ == "__main__":
