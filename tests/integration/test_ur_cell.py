@@ -20,7 +20,7 @@ from device_drivers.sim_cell.link import CellClient
 from device_drivers.ur_rtde.emulator import control as emulator_control
 from runtime.bench.harness.blocks import block, number, stack, workspace
 from runtime.bench.harness.jog import JogClient
-from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
+from runtime.bench.harness.processes import DriverProc, Runtime, child_env, stop_all, wait_for
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
 from tests.integration.test_sim_cell import pick_and_place_with_the_cells_devices, tcp_at
@@ -71,9 +71,7 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Runtime, st
         )
         yield runtime, HOST
     finally:
-        for _, device in devices:
-            device.stop()
-        runtime.stop()
+        stop_all([*(device for _, device in devices), runtime])
         emulator.terminate()
         emulator.communicate(timeout=10)
 

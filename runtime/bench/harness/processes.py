@@ -12,7 +12,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -104,6 +104,7 @@ class Proc:
             stdin=subprocess.DEVNULL,
             preexec_fn=(lambda: os.nice(nice)) if nice else None,
         )
+        self._terminated = False
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
@@ -137,8 +138,9 @@ class Proc:
         return self.popen.poll() is None
 
     def stop(self, timeout: float = 10.0) -> int:
+        if self.alive() and not self._terminated:
+            self.terminate()
         if self.alive():
-            self.popen.send_signal(signal.SIGTERM)
             try:
                 self.popen.wait(timeout)
             except subprocess.TimeoutExpired:
@@ -148,9 +150,24 @@ class Proc:
         self._log.close()
         return int(self.popen.returncode)
 
+    def terminate(self) -> None:
+        """SIGTERM, once (a second one may cut a process's orderly shutdown short)."""
+        if self.alive():
+            self.popen.send_signal(signal.SIGTERM)
+            self._terminated = True
+
     def kill(self) -> None:
         self.popen.kill()
         self.popen.wait()
+
+
+def stop_all(procs: Iterable[Proc], timeout: float = 10.0) -> None:
+    """Stop several at once: each is told first, then each waited for."""
+    procs = list(procs)
+    for proc in procs:
+        proc.terminate()
+    for proc in procs:
+        proc.stop(timeout)
 
 
 class Runtime(Proc):
