@@ -1,0 +1,1 @@
+"""The simulated camera: the shared simulated cell seen through a known camera model."""
