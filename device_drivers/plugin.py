@@ -7,7 +7,7 @@ from plugins.api import Driver, Plugin
 
 PLUGIN = Plugin(
     name="drivers",
-    description="The simulated robot, the 3D mouse, Modbus I/O blocks and grippers",
+    description="The simulated robot and camera, the 3D mouse, UR arms, Modbus I/O and grippers",
     drivers=(
         Driver(
             "sim-robot",
@@ -17,6 +17,15 @@ PLUGIN = Plugin(
             routes="device_drivers.sim_robot.entry:routes",
             description="a simulated robot (UR3, UR5, UR10, Panda or a robot-info YAML)",
             realtime=True,
+            simulated=True,
+        ),
+        Driver(
+            "sim-camera",
+            "camera",
+            "device_drivers.sim_camera.entry:create",
+            options="device_drivers.sim_camera.entry:SimCameraOptions",
+            routes="device_drivers.sim_camera.entry:routes",
+            description="a simulated camera above the cell, with a ChArUco board to show it",
             simulated=True,
         ),
         Driver(

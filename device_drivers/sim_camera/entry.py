@@ -1,0 +1,157 @@
+"""The simulated camera as the driver host starts it (`openpendant driver sim-camera`): a
+camera above the cell's table looking down at it, and a ChArUco board to put in its view.
+Its own routes (`/sim/…`) are the world's side: where the board lies, and the ground truth
+(the camera model and every pose) that tests measure a calibration against."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from fastapi import APIRouter
+from pydantic import BaseModel, ConfigDict, Field
+from scipy.spatial.transform import Rotation
+
+from device_drivers.sim_camera.driver import Board, SimCamera
+from device_drivers.sim_camera.optics import CameraModel, look_at
+from runtime.interfaces.common import Pose
+from runtime.interfaces.device import DeviceIdentity
+from runtime.kit.errors import InvalidValue
+
+DICTIONARIES = {
+    name.removeprefix("DICT_").lower(): getattr(cv2.aruco, name)
+    for name in dir(cv2.aruco)
+    if name.startswith("DICT_") and not name.endswith("_MAX")
+}
+BOARD_DPI_M = 4000.0  # the printed board's texture: pixels per metre (0.25 mm a pixel)
+
+
+class SimCameraOptions(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    width: int = Field(default=1280, ge=16, le=4096, description="image width (px)")
+    height: int = Field(default=800, ge=16, le=4096, description="image height (px)")
+    fov: float = Field(default=60.0, gt=5, lt=150, description="horizontal field of view (°)")
+    k1: float = Field(default=-0.08, ge=-1, le=1, description="radial distortion k1")
+    k2: float = Field(default=0.03, ge=-1, le=1, description="radial distortion k2")
+    x: float = Field(default=0.45, ge=-10, le=10, description="camera position x (m, world)")
+    y: float = Field(default=0.0, ge=-10, le=10, description="camera position y (m)")
+    z: float = Field(default=1.0, ge=-10, le=10, description="camera position z (m)")
+    look_x: float = Field(default=0.45, ge=-10, le=10, description="looks at x (m)")
+    look_y: float = Field(default=0.0, ge=-10, le=10, description="looks at y (m)")
+    look_z: float = Field(default=0.0, ge=-10, le=10, description="looks at z (m)")
+    fps: float = Field(default=10.0, gt=0, le=60, description="frames a second at most")
+    noise: float = Field(default=1.0, ge=0, le=50, description="sensor noise (grey levels)")
+    blur: float = Field(default=0.0, ge=0, le=10, description="defocus blur sigma (px)")
+    squares_x: int = Field(default=9, ge=3, le=30, description="board squares across")
+    squares_y: int = Field(default=6, ge=3, le=30, description="board squares down")
+    square: float = Field(default=0.03, gt=0.002, le=0.2, description="board square (m)")
+    marker: float = Field(default=0.022, gt=0.001, le=0.2, description="board marker (m)")
+    dictionary: str = Field(default="5x5_100", description="the board's ArUco dictionary")
+
+    def default_name(self) -> str:
+        return "sim-camera"
+
+
+def camera_model(options: SimCameraOptions) -> CameraModel:
+    eye = np.array([options.x, options.y, options.z])
+    target = np.array([options.look_x, options.look_y, options.look_z])
+    if np.linalg.norm(target - eye) < 1e-6:
+        raise InvalidValue("the camera cannot look at the point it stands on")
+    forward = (target - eye) / np.linalg.norm(target - eye)
+    # Image rows run along the world's -x when looking straight down, else downwards.
+    up = np.array([1.0, 0.0, 0.0]) if abs(forward[2]) > 0.99 else np.array([0.0, 0.0, 1.0])
+    focal = options.width / 2 / np.tan(np.radians(options.fov) / 2)
+    return CameraModel(
+        options.width,
+        options.height,
+        focal,
+        focal,
+        (options.width - 1) / 2,
+        (options.height - 1) / 2,
+        (options.k1, options.k2, 0.0, 0.0, 0.0),
+        look_at(eye, target, up),
+    )
+
+
+def charuco_board(options: SimCameraOptions) -> Board:
+    if options.dictionary not in DICTIONARIES:
+        raise InvalidValue(f"no ArUco dictionary {options.dictionary!r} (e.g. 5x5_100, 4x4_50)")
+    if options.marker >= options.square:
+        raise InvalidValue("the board's markers must be smaller than its squares")
+    dictionary = cv2.aruco.getPredefinedDictionary(DICTIONARIES[options.dictionary])
+    squares = (options.squares_x, options.squares_y)
+    board = cv2.aruco.CharucoBoard(squares, options.square, options.marker, dictionary)
+    width, height = options.squares_x * options.square, options.squares_y * options.square
+    size = (round(width * BOARD_DPI_M), round(height * BOARD_DPI_M))
+    texture = np.asarray(board.generateImage(size, marginSize=0), dtype=np.uint8)
+    return Board(
+        texture, width, height, squares, options.square, options.marker, options.dictionary
+    )
+
+
+def create(name: str, uuid: str, options: SimCameraOptions) -> SimCamera:
+    identity = DeviceIdentity(uuid=uuid, kind="camera", model="simulated camera", name=name)
+    return SimCamera(
+        identity,
+        camera_model(options),
+        charuco_board(options),
+        fps=options.fps,
+        noise=options.noise,
+        blur=options.blur,
+    )
+
+
+class BoardPlacement(BaseModel):
+    """Where the board lies (its printed face's top-left corner, x along its columns, y down
+    its rows, z into the print), or null: put away."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    pose: Pose | None
+
+
+def _matrix(pose: Pose) -> np.ndarray:
+    matrix = np.eye(4)
+    matrix[:3, :3] = Rotation.from_quat(pose.orientation).as_matrix()  # x, y, z, w
+    matrix[:3, 3] = pose.position
+    return matrix
+
+
+def _pose(matrix: np.ndarray) -> dict[str, object]:
+    quaternion = Rotation.from_matrix(matrix[:3, :3]).as_quat()  # x, y, z, w
+    return {"position": matrix[:3, 3].tolist(), "orientation": quaternion.tolist()}
+
+
+def routes(driver: SimCamera) -> APIRouter:
+    router = APIRouter(prefix="/sim")
+
+    @router.put("/board")
+    async def put_board(body: BoardPlacement) -> dict[str, object]:
+        driver.put_board(None if body.pose is None else _matrix(body.pose))
+        return truth()
+
+    @router.get("/truth")
+    def truth() -> dict[str, object]:
+        """The camera model and pose and the board's, as the images were made."""
+        camera, board = driver.camera, driver.board
+        return {
+            "camera": {
+                "width": camera.width,
+                "height": camera.height,
+                "fx": camera.fx,
+                "fy": camera.fy,
+                "cx": camera.cx,
+                "cy": camera.cy,
+                "distortion": camera.coefficients.tolist(),
+                "pose": _pose(camera.pose),
+            },
+            "board": {
+                "squares": list(board.squares),
+                "square": board.square,
+                "marker": board.marker,
+                "dictionary": board.dictionary,
+                "pose": None if driver.board_pose is None else _pose(driver.board_pose),
+            },
+        }
+
+    return router
