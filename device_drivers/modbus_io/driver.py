@@ -7,7 +7,6 @@ before the silence is not shown as if it were still true."""
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import math
 import time
@@ -22,8 +21,8 @@ from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import (
     IODriver,
     IOInfo,
-    IOState,
     SignalReading,
+    SignalRecord,
     SignalValue,
     SignalWrite,
 )
@@ -34,7 +33,7 @@ log = logging.getLogger(__name__)
 Words = dict[tuple[Table, int], int]  # (table, address) -> register word or bit (0/1)
 
 
-class ModbusIODriver(Polled, IODriver):
+class ModbusIODriver(Polled, SignalRecord, IODriver):
     def __init__(
         self,
         identity: DeviceIdentity,
@@ -49,14 +48,8 @@ class ModbusIODriver(Polled, IODriver):
         super().__init__(identity, info)
         self.map = registers
         self.period = 1.0 / poll_hz
-        self.clock = clock
         self.link = link
-        self.values: dict[str, SignalValue] = {r.name: None for r in registers.signals}
-        self.changed: dict[str, float] = {}
-        self.connected = False
-        self.error = "not connected yet"
-        self.state_changed = asyncio.Event()
-        self.seqno = 0
+        self._start_record((r.name for r in registers.signals), clock)
         # A simulated device this driver serves itself (`--simulate`), started first.
         self.simulator = simulator
 
@@ -73,23 +66,10 @@ class ModbusIODriver(Polled, IODriver):
         number = decode(raw, reg.data_type, self.map.byte_order, self.map.word_order)
         return to_unit(number, reg.scale, reg.offset)
 
-    def _update(self, values: dict[str, SignalValue], *, connected: bool, error: str) -> None:
-        now = self.clock()
-        different = (connected, error) != (self.connected, self.error)
-        for name, value in values.items():
-            if name not in self.changed or self.values.get(name) != value:
-                self.changed[name] = now
-                different = True
-            self.values[name] = value
-        self.connected, self.error = connected, error
-        self.seqno += 1
-        if different and self.state_changed is not None:
-            self.state_changed.set()
-
     def _unknown(self, exc: OpenPendantError) -> None:
         """Every signal unknown, with why: never the last values as if they still held."""
         silent = exc.code in ("device_timeout",)
-        self._update(dict.fromkeys(self.values), connected=not silent, error=str(exc))
+        self._record(dict.fromkeys(self.values), connected=not silent, error=str(exc))
 
     # Polling ------------------------------------------------------------------------------
 
@@ -104,21 +84,11 @@ class ModbusIODriver(Polled, IODriver):
                 log.warning("%s: %s", self.identity.name, exc.message)
             self._unknown(exc)
             return
-        self._update(
+        self._record(
             {r.name: self._value(r, words) for r in self.map.signals}, connected=True, error=""
         )
 
     # The I/O interface --------------------------------------------------------------------
-
-    def state(self) -> IOState:
-        return IOState(
-            seqno=self.seqno,
-            ts=self.clock(),
-            connected=self.connected,
-            values=dict(self.values),
-            changed=dict(self.changed),
-            error=self.error,
-        )
 
     def _register(self, name: str) -> Register:
         try:
@@ -129,7 +99,7 @@ class ModbusIODriver(Polled, IODriver):
     async def _read_signal(self, reg: Register) -> SignalValue:
         words = await self._read_block(reg.table, reg.address, reg.words)
         value = self._value(reg, words)
-        self._update({reg.name: value}, connected=True, error=self.error)
+        self._record({reg.name: value}, connected=True, error=self.error)
         return value
 
     async def read(self, name: str) -> SignalReading:
@@ -169,7 +139,7 @@ class ModbusIODriver(Polled, IODriver):
             # Confirmed only by what the device then holds.
             held = await self._read_block(reg.table, reg.address, reg.words)
             value = self._value(reg, held)
-            self._update({name: value}, connected=True, error=self.error)
+            self._record({name: value}, connected=True, error=self.error)
         if [held[(reg.table, reg.address + i)] for i in range(reg.words)] != words:
             raise OpenPendantError(
                 f"{name}: wrote {command.value}, the device holds {value}",

@@ -10,10 +10,20 @@ from runtime.kit.errors import InvalidValue
 from runtime.robotics.robot_info import available_models, load_robot_info
 
 
-class UROptions(BaseModel):
+class ControllerOptions(BaseModel):
+    """Where the UR controller is: every driver of one (the arm's, its I/O's) needs it."""
+
     model_config = ConfigDict(extra="forbid")
 
     address: str = Field(default="", max_length=253, description="the controller's host name or IP")
+
+    def host(self) -> str:
+        if not self.address:
+            raise InvalidValue("--address is the controller's host name or IP address")
+        return self.address
+
+
+class UROptions(ControllerOptions):
     model: str = Field(
         default="ur5e",
         description=f"robot-info ({', '.join(available_models())}) or a YAML; checked against "
@@ -29,14 +39,13 @@ class UROptions(BaseModel):
 
 
 def create(name: str, uuid: str, options: UROptions) -> URDriver:
-    if not options.address:
-        raise InvalidValue("--address is the controller's host name or IP address")
+    host = options.host()
     info = load_robot_info(options.model)
     identity = DeviceIdentity(uuid=uuid, kind="robot", model=info.model, name=name)
     return URDriver(
         identity,
         info,
-        options.address,
+        host,
         frequency=options.frequency,
         watchdog_hz=options.watchdog_hz,
         lookahead=options.lookahead,

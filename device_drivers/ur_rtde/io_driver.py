@@ -26,9 +26,9 @@ from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.io import (
     IODriver,
     IOInfo,
-    IOState,
     SignalInfo,
     SignalReading,
+    SignalRecord,
     SignalValue,
     SignalWrite,
 )
@@ -105,7 +105,7 @@ def read_values(receive: Any) -> dict[str, SignalValue]:
     return values
 
 
-class URIODriver(IODriver):
+class URIODriver(SignalRecord, IODriver):
     def __init__(
         self,
         identity: DeviceIdentity,
@@ -123,15 +123,8 @@ class URIODriver(IODriver):
         super().__init__(identity, info)
         self.host, self.frequency, self.period = host, frequency, 1.0 / poll_hz
         self.analog_outputs = analog_outputs
-        self.clock = clock
         self.signals = {s.name: s for s in info.signals}
-        self.values: dict[str, SignalValue] = dict.fromkeys(self.signals)
-        self.changed: dict[str, float] = {}
-        self.connected = False
-        self.error = "not connected yet"
-        self.seqno = 0
-        self.changes = asyncio.Event()
-        self.state_changed = self.changes  # the state stream sends a change at once
+        self._start_record(self.signals, clock)
         self._published = asyncio.Condition()  # a write waits on it for its read-back
         self._writing = asyncio.Lock()  # one write at a time, each confirmed before the next
         self.writer = OutputWriter(host)
@@ -195,28 +188,11 @@ class URIODriver(IODriver):
             asyncio.run_coroutine_threadsafe(self._update(values, connected, error), loop)
 
     async def _update(self, values: dict[str, SignalValue], connected: bool, error: str) -> None:
-        now = self.clock()
-        for name, value in values.items():
-            if name not in self.changed or self.values[name] != value:
-                self.changed[name] = now
-            self.values[name] = value
-        self.connected, self.error = connected, error
-        self.seqno += 1
-        self.changes.set()
+        self._record(values, connected=connected, error=error)
         async with self._published:
             self._published.notify_all()
 
     # The I/O interface --------------------------------------------------------------------
-
-    def state(self) -> IOState:
-        return IOState(
-            seqno=self.seqno,
-            ts=self.clock(),
-            connected=self.connected,
-            values=dict(self.values),
-            changed=dict(self.changed),
-            error=self.error,
-        )
 
     def _signal(self, name: str) -> SignalInfo:
         try:

@@ -3,17 +3,14 @@ HOST`), beside the arm's own driver (`ur-rtde`) for the same controller."""
 
 from __future__ import annotations
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import Field
 
+from device_drivers.ur_rtde.entry import ControllerOptions
 from device_drivers.ur_rtde.io_driver import Domain, URIODriver
 from runtime.interfaces.device import DeviceIdentity
-from runtime.kit.errors import InvalidValue
 
 
-class URIOOptions(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-
-    address: str = Field(default="", max_length=253, description="the controller's host name or IP")
+class URIOOptions(ControllerOptions):
     analog_inputs: Domain = Field(
         default="voltage", description="the domain the controller's I/O setup gives AI0/AI1"
     )
@@ -28,14 +25,13 @@ class URIOOptions(BaseModel):
 
 
 def create(name: str, uuid: str, options: URIOOptions) -> URIODriver:
-    if not options.address:
-        raise InvalidValue("--address is the controller's host name or IP address")
+    host = options.host()
     identity = DeviceIdentity(
         uuid=uuid, kind="io", model="Universal Robots controller I/O", name=name
     )
     return URIODriver(
         identity,
-        options.address,
+        host,
         analog_inputs=options.analog_inputs,
         analog_outputs=options.analog_outputs,
         frequency=options.frequency,

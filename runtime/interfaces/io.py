@@ -4,7 +4,9 @@ still sees the change)."""
 
 from __future__ import annotations
 
+import asyncio
 from abc import ABC, abstractmethod
+from collections.abc import Callable, Iterable
 from typing import Literal
 
 from pydantic import BaseModel, Field
@@ -91,3 +93,48 @@ class IODriver(KindDriver[IOInfo], IOBlock):
 
     @abstractmethod
     def state(self) -> IOState: ...
+
+
+class SignalRecord:
+    """What an I/O driver last knew of its signals, and when each last changed: its state.
+    Mixed in before IODriver (it answers `state`)."""
+
+    values: dict[str, SignalValue]
+    changed: dict[str, float]
+    connected: bool
+    error: str
+    seqno: int
+    clock: Callable[[], float]
+    state_changed: asyncio.Event | None
+
+    def _start_record(self, names: Iterable[str], clock: Callable[[], float]) -> None:
+        self.clock = clock
+        self.values = dict.fromkeys(names)
+        self.changed = {}
+        self.connected, self.error = False, "not connected yet"
+        self.seqno = 0
+        self._changes = asyncio.Event()
+        self.state_changed = self._changes  # the state stream sends a change at once
+
+    def _record(self, values: dict[str, SignalValue], *, connected: bool, error: str) -> None:
+        now = self.clock()
+        different = (connected, error) != (self.connected, self.error)
+        for name, value in values.items():
+            if name not in self.changed or self.values.get(name) != value:
+                self.changed[name] = now
+                different = True
+            self.values[name] = value
+        self.connected, self.error = connected, error
+        self.seqno += 1
+        if different:
+            self._changes.set()
+
+    def state(self) -> IOState:
+        return IOState(
+            seqno=self.seqno,
+            ts=self.clock(),
+            connected=self.connected,
+            values=dict(self.values),
+            changed=dict(self.changed),
+            error=self.error,
+        )
