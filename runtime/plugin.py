@@ -65,6 +65,7 @@ PLUGIN = Plugin(
         Service("jog", "runtime.jog.service:build_app", ("jog",), public_paths=("/jog/ws",)),
         Service("motion", "runtime.motion.service:build_app", ("motion",)),
         Service("program", "runtime.program.service:build_app", ("programs",)),
+        Service("vision", "runtime.vision.service:build_app", ("vision",)),
     ),
     variable_types=(
         VariableType("number", "a finite number", f"{T}:number"),
@@ -98,6 +99,16 @@ PLUGIN = Plugin(
             "scene_object",
             "an obstacle, keep-out zone or held object of the scene",
             f"{IF}.scene:SceneObject",
+        ),
+        VariableType(
+            "camera_calibration",
+            "a camera's intrinsics as calibrated, with their errors",
+            "runtime.vision.models:CameraCalibration",
+        ),
+        VariableType(
+            "calibration_board",
+            "a calibration board as printed: ChArUco or chessboard, squares and sizes",
+            "runtime.vision.boards:BoardSpec",
         ),
         VariableType(
             "program",

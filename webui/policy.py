@@ -74,6 +74,14 @@ RULES: tuple[Rule, ...] = (
     rule(("POST",), "/jog/robots/{}/teach", PROGRAM),
     # Moves.
     rule(("POST",), "/motion/robots/{}/(plan|moves|pause|resume)", OPERATE),
+    # Vision: calibrating a camera (or placing it in the world) is a programmer's, as
+    # changing a frame is; stopping an operation is everyone's.
+    rule(("POST",), "/vision/operations/{}/cancel", VIEW),
+    rule(("POST",), "/vision/(intrinsic|extrinsic)", PROGRAM),
+    rule(("POST",), "/vision/intrinsic/{}/(capture|solve)", PROGRAM),
+    rule(("DELETE",), "/vision/intrinsic/{}/frames/{}", PROGRAM),
+    rule(("POST",), "/vision/operations/{}/save", PROGRAM),
+    rule(("PUT",), "/vision/cameras/{}/calibration.yaml", PROGRAM),
     # Programs: running them is an operator's, editing them a programmer's.
     rule(("POST",), "/programs/{}/(run|pause|resume|step)", OPERATE),
     rule(("PUT",), "/programs/{}/breakpoints", OPERATE),

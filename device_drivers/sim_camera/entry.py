@@ -5,23 +5,20 @@ Its own routes (`/sim/…`) are the world's side: where the board lies, and the 
 
 from __future__ import annotations
 
-import cv2
 import numpy as np
 from fastapi import APIRouter
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from scipy.spatial.transform import Rotation
 
 from device_drivers.sim_camera.driver import Board, SimCamera
 from device_drivers.sim_camera.optics import CameraModel, look_at
 from runtime.interfaces.common import Pose
 from runtime.interfaces.device import DeviceIdentity
+from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue
+from runtime.vision.boards import Board as VisionBoard
+from runtime.vision.boards import BoardSpec
 
-DICTIONARIES = {
-    name.removeprefix("DICT_").lower(): getattr(cv2.aruco, name)
-    for name in dir(cv2.aruco)
-    if name.startswith("DICT_") and not name.endswith("_MAX")
-}
 BOARD_DPI_M = 4000.0  # the printed board's texture: pixels per metre (0.25 mm a pixel)
 
 
@@ -74,16 +71,19 @@ def camera_model(options: SimCameraOptions) -> CameraModel:
 
 
 def charuco_board(options: SimCameraOptions) -> Board:
-    if options.dictionary not in DICTIONARIES:
-        raise InvalidValue(f"no ArUco dictionary {options.dictionary!r} (e.g. 5x5_100, 4x4_50)")
-    if options.marker >= options.square:
-        raise InvalidValue("the board's markers must be smaller than its squares")
-    dictionary = cv2.aruco.getPredefinedDictionary(DICTIONARIES[options.dictionary])
-    squares = (options.squares_x, options.squares_y)
-    board = cv2.aruco.CharucoBoard(squares, options.square, options.marker, dictionary)
+    try:
+        spec = BoardSpec(
+            squares_x=options.squares_x,
+            squares_y=options.squares_y,
+            square=options.square,
+            marker=options.marker,
+            dictionary=options.dictionary,
+        )
+    except ValidationError as exc:
+        raise InvalidValue(describe_validation_errors(exc.errors())[0]) from None
+    texture = VisionBoard(spec).generate(BOARD_DPI_M)
     width, height = options.squares_x * options.square, options.squares_y * options.square
-    size = (round(width * BOARD_DPI_M), round(height * BOARD_DPI_M))
-    texture = np.asarray(board.generateImage(size, marginSize=0), dtype=np.uint8)
+    squares = (options.squares_x, options.squares_y)
     return Board(
         texture, width, height, squares, options.square, options.marker, options.dictionary
     )

@@ -51,6 +51,31 @@ ROUND_TRIP: dict[str, Any] = {
         "tcp": {"position": [0.0, 0.0, 0.15], "orientation": UNIT_Q},
         "payload": {"mass": 1.5, "center_of_mass": [0.0, 0.0, 0.05]},
     },
+    "calibration_board": {
+        "kind": "charuco",
+        "squares_x": 9,
+        "squares_y": 6,
+        "square": 0.03,
+        "marker": 0.022,
+        "dictionary": "5x5_100",
+    },
+    "camera_calibration": {
+        "camera": "camera",
+        "intrinsics": {
+            "width": 1280,
+            "height": 800,
+            "fx": 1108.5,
+            "fy": 1108.7,
+            "cx": 639.4,
+            "cy": 399.8,
+            "distortion": [-0.08, 0.03, 0.0, 0.0, 0.0],
+        },
+        "rms": 0.12,
+        "uncertainty": {"fx": 0.4, "fy": 0.4},
+        "frame_errors": [0.1, 0.13],
+        "board": None,
+        "calibrated": 1795000000.0,
+    },
     "program": {
         "source": "blocks",
         "workspace_json": '{"blocks":{"blocks":[]}}',
@@ -93,6 +118,9 @@ REJECT: list[tuple[str, Any]] = [
     ("tool", {"tcp": {"position": [0.0, 0.0, 3.0]}}),
     ("tool", {"payload": {"mass": -1.0}}),
     ("tool", {"payload": {"mass": math.nan}}),
+    ("calibration_board", {"squares_x": 9, "squares_y": 6, "square": 0.03, "marker": 0.04}),
+    ("calibration_board", {"squares_x": 9, "squares_y": 6, "square": 0.03, "dictionary": "7x7"}),
+    ("camera_calibration", {"camera": "c", "intrinsics": {"width": 0}, "rms": 0.1}),
     ("no_such_type", 1),
 ]
 

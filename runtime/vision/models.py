@@ -1,0 +1,116 @@
+"""What the vision service takes and gives: a camera's calibration as it is stored (the
+variable type `camera_calibration`), a guided capture's progress, and long operations."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, Field
+
+from runtime.interfaces.camera import Intrinsics
+from runtime.interfaces.common import Pose, Strict
+from runtime.vision.boards import BoardSpec
+
+NAME = r"^[a-z][a-z0-9_]{0,31}$"  # a device's local name
+
+
+def calibration_variable(camera: str) -> str:
+    return f"calibration.{camera}"
+
+
+class CameraCalibration(Strict):
+    """A camera's intrinsics as a calibration found them, and how well: the RMS
+    reprojection error (px), each parameter's standard deviation, each frame's error."""
+
+    camera: str = Field(min_length=1, max_length=64)
+    intrinsics: Intrinsics
+    rms: float = Field(ge=0)
+    uncertainty: dict[str, float] = Field(default_factory=dict, max_length=32)
+    frame_errors: list[float] = Field(default_factory=list, max_length=1000)
+    board: BoardSpec | None = None  # None: imported from a file
+    calibrated: float = Field(ge=0)  # when (Unix time)
+
+
+class Coverage(BaseModel):
+    """Where in the image the board's corners have been seen (counts per cell, rows of
+    `columns` cells), and how the board was tilted towards the camera in each frame."""
+
+    rows: int
+    columns: int
+    cells: list[list[int]]
+    covered: float  # the share of cells seen at least once
+    tilts: dict[str, int]  # flat, left, right, up, down: frames tilted so
+    hints: list[str]  # what to show the camera next
+    ready: bool  # enough frames, image covered and tilted: a solve can be trusted
+
+
+class FrameReport(BaseModel):
+    """One capture: kept (its index) or rejected, with the reason."""
+
+    accepted: bool
+    index: int | None = None
+    reason: str = ""
+    corners: int = 0
+    points: list[list[float]] = Field(default_factory=list)  # the corners found (px)
+    tilt: str = ""
+    tilt_deg: float | None = None
+    taken: float = 0.0  # when the image was taken
+
+
+class SessionFrame(BaseModel):
+    index: int
+    corners: int
+    tilt: str
+    tilt_deg: float
+    error: float | None = None  # px, after a solve
+    outlier: bool = False
+
+
+class IntrinsicSessionView(BaseModel):
+    id: str
+    camera: str
+    board: BoardSpec
+    width: int | None = None
+    height: int | None = None
+    frames: list[SessionFrame]
+    rejected: int  # captures that were not kept
+    coverage: Coverage
+    min_frames: int
+    result: CameraCalibration | None = None  # the last solve's
+
+
+class IntrinsicStart(Strict):
+    camera: str = Field(pattern=NAME)
+    board: BoardSpec | None = None  # None: the stored setting `vision.board`
+
+
+class OperationStatus(BaseModel):
+    """A long operation (a solve, a robot-origin run): progress 0-1, its stage in words."""
+
+    id: str
+    kind: Literal["intrinsic", "extrinsic"]
+    state: Literal["running", "done", "failed", "cancelled"]
+    progress: float
+    stage: str
+    error: str = ""
+    result: dict[str, object] | None = None
+
+
+class ExtrinsicRequest(Strict):
+    """The camera's pose in the world from a board lying at a known pose: typed, or a
+    stored `frame` or `pose` variable (taught)."""
+
+    camera: str = Field(pattern=NAME)
+    board: BoardSpec | None = None
+    board_pose: Pose | None = None
+    board_variable: str | None = Field(default=None, max_length=128)
+    frames: int = Field(default=3, ge=1, le=30)
+
+
+class ExtrinsicResult(BaseModel):
+    camera: str
+    pose: Pose  # the camera in the world (x right, y down the image, z along the view)
+    frames: int
+    reprojection: float  # px, RMS over the frames
+    spread_mm: float  # how far the frames' estimates lie apart
+    spread_deg: float

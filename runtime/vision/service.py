@@ -1,0 +1,139 @@
+"""The vision service: guided camera calibration (intrinsic sessions, the camera's pose in
+the world), long operations with progress and cancel, and calibrations as OpenCV YAML."""
+
+from __future__ import annotations
+
+import contextlib
+import re
+from collections.abc import AsyncIterator
+from typing import Any
+
+from fastapi import APIRouter, FastAPI, Request
+from fastapi.responses import PlainTextResponse
+
+from runtime.clients.devices import Devices
+from runtime.kit.app import create_app
+from runtime.kit.errors import InvalidValue
+from runtime.kit.settings import RuntimeSettings
+from runtime.variable_storage.client import StorageClient
+from runtime.vision.calibration_file import MAX_FILE, from_yaml, to_yaml
+from runtime.vision.calibrations import Calibrations
+from runtime.vision.models import (
+    CameraCalibration,
+    ExtrinsicRequest,
+    FrameReport,
+    IntrinsicSessionView,
+    IntrinsicStart,
+    OperationStatus,
+    calibration_variable,
+)
+from runtime.vision.operations import Operations
+
+CAMERA = re.compile(r"^[a-z][a-z0-9_]{0,31}\Z")
+
+
+def _camera(name: str) -> str:
+    if not CAMERA.match(name):
+        raise InvalidValue(f"{name!r} is not a device's local name", code="bad_name")
+    return name
+
+
+def vision_router(calibrations: Calibrations, operations: Operations) -> APIRouter:
+    router = APIRouter(prefix="/vision")
+
+    @router.post("/intrinsic", status_code=201)
+    async def start_intrinsic(body: IntrinsicStart) -> IntrinsicSessionView:
+        """A guided intrinsic calibration of a camera with a board (the stored setting if
+        none is given)."""
+        return await calibrations.start_intrinsic(body.camera, body.board)
+
+    @router.get("/intrinsic/{session_id}")
+    async def session(session_id: str) -> IntrinsicSessionView:
+        return calibrations.view(session_id)
+
+    @router.post("/intrinsic/{session_id}/capture")
+    async def capture(session_id: str) -> FrameReport:
+        """A new frame from the camera: kept, or rejected with the reason."""
+        return await calibrations.capture(session_id)
+
+    @router.delete("/intrinsic/{session_id}/frames/{index}")
+    async def drop_frame(session_id: str, index: int) -> IntrinsicSessionView:
+        calibrations.session(session_id).remove(index)
+        return calibrations.view(session_id)
+
+    @router.post("/intrinsic/{session_id}/solve", status_code=202)
+    async def solve(session_id: str) -> OperationStatus:
+        return calibrations.solve(session_id).status()
+
+    @router.post("/extrinsic", status_code=202)
+    async def extrinsic(body: ExtrinsicRequest) -> OperationStatus:
+        """The camera's pose in the world from a board lying at a known pose."""
+        return (await calibrations.start_extrinsic(body)).status()
+
+    @router.get("/operations/{op_id}")
+    async def operation(op_id: str, wait: float = 0.0) -> OperationStatus:
+        if wait > 0:
+            return (await operations.wait(op_id, min(wait, 600.0))).status()
+        return operations.get(op_id).status()
+
+    @router.post("/operations/{op_id}/cancel")
+    async def cancel(op_id: str) -> OperationStatus:
+        return (await operations.cancel(op_id)).status()
+
+    @router.post("/operations/{op_id}/save")
+    async def save(op_id: str) -> dict[str, Any]:
+        """Stores what a finished calibration found (nothing is stored before)."""
+        return await calibrations.save(op_id)
+
+    @router.get("/cameras/{camera}/calibration")
+    async def calibration(camera: str) -> CameraCalibration:
+        return await calibrations.calibration(_camera(camera))
+
+    @router.get("/cameras/{camera}/calibration.yaml")
+    async def export(camera: str) -> PlainTextResponse:
+        found = await calibrations.calibration(_camera(camera))
+        return PlainTextResponse(
+            to_yaml(found),
+            media_type="application/x-yaml",
+            headers={"Content-Disposition": f'attachment; filename="{camera}.yaml"'},
+        )
+
+    @router.put("/cameras/{camera}/calibration.yaml")
+    async def import_(camera: str, request: Request) -> CameraCalibration:
+        """An OpenCV YAML calibration (another tool's, or one exported before) as this
+        camera's."""
+        body = await request.body()
+        if len(body) > MAX_FILE:
+            raise InvalidValue("a calibration file is a few kilobytes, not this", code="too_large")
+        try:
+            text = body.decode()
+        except UnicodeDecodeError:
+            raise InvalidValue("a calibration file is text (UTF-8)", code="bad_file") from None
+        imported = from_yaml(text, _camera(camera))
+        await calibrations.storage.put(
+            calibration_variable(camera), "camera_calibration", imported.model_dump(mode="json")
+        )
+        return imported
+
+    return router
+
+
+def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
+    storage = StorageClient(urls["variable_storage"])
+    devices = Devices(urls["device_manager"], "vision", settings.link.stale_after)
+    operations = Operations()
+    calibrations = Calibrations(devices, storage, operations)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        await devices.start()
+        try:
+            yield
+        finally:
+            await operations.close()
+            await devices.close()
+            await storage.aclose()
+
+    app = create_app("vision", lifespan=lifespan)
+    app.include_router(vision_router(calibrations, operations))
+    return app
