@@ -1,0 +1,1 @@
+"""The vision service: camera calibration (intrinsic, extrinsic, robot origin) and detection."""
