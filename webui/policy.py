@@ -77,7 +77,7 @@ RULES: tuple[Rule, ...] = (
     # Vision: calibrating a camera (or placing it in the world) is a programmer's, as
     # changing a frame is; stopping an operation is everyone's.
     rule(("POST",), "/vision/operations/{}/cancel", VIEW),
-    rule(("POST",), "/vision/(intrinsic|extrinsic)", PROGRAM),
+    rule(("POST",), "/vision/(intrinsic|extrinsic|robot_origin)", PROGRAM),
     rule(("POST",), "/vision/intrinsic/{}/(capture|solve)", PROGRAM),
     rule(("DELETE",), "/vision/intrinsic/{}/frames/{}", PROGRAM),
     rule(("POST",), "/vision/operations/{}/save", PROGRAM),

@@ -10,11 +10,14 @@ import base64
 import threading
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
 
 from device_drivers.sim_camera.optics import CameraModel, Gray, Renderer, Target
+from device_drivers.sim_camera.scene import cell_targets
+from device_drivers.sim_cell.link import CellClient
 from runtime.interfaces.camera import (
     CameraDriver,
     CameraInfo,
@@ -50,6 +53,8 @@ class SimCamera(CameraDriver):
         noise: float = 1.0,
         blur: float = 0.0,
         seed: int | None = None,
+        cell: CellClient | None = None,
+        tags: str = "4x4_50",
     ) -> None:
         info = CameraInfo(
             model="simulated camera", width=camera.width, height=camera.height, fps=fps
@@ -58,6 +63,9 @@ class SimCamera(CameraDriver):
         self.camera, self.board = camera, board
         self.noise, self.blur = noise, blur
         self.board_pose: np.ndarray | None = None
+        # The robot's cell in view (its parts and flange tag, asked at every frame).
+        self.cell, self.tags = cell, tags
+        self.scene: dict[str, Any] | None = None
         self._renderer: Renderer | None = None
         self._rng = np.random.default_rng(seed)
         self._lock = threading.Lock()  # renders one at a time (the ray table is shared)
@@ -92,7 +100,9 @@ class SimCamera(CameraDriver):
             await asyncio.sleep(wait)
         self._last = time.monotonic()
         taken = time.time()
-        pixels = await asyncio.to_thread(self._render)
+        scene = await self.cell.ask("scene") if self.cell is not None else None
+        self.scene = scene if scene is not None and "error" not in scene else None
+        pixels = await asyncio.to_thread(self._render, self.scene)
         if request.encoding == "png":
             ok, encoded = cv2.imencode(".png", pixels)
         else:
@@ -110,9 +120,9 @@ class SimCamera(CameraDriver):
             data=base64.b64encode(encoded.tobytes()).decode(),
         )
 
-    def _render(self) -> Gray:
+    def _render(self, scene: dict[str, Any] | None) -> Gray:
         assert self._renderer is not None
-        targets = []
+        targets = cell_targets(scene, self.tags) if scene is not None else []
         board, pose = self.board, self.board_pose
         if pose is not None:
             targets.append(Target(board.texture, board.width, board.height, pose))

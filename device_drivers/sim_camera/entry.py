@@ -12,12 +12,13 @@ from scipy.spatial.transform import Rotation
 
 from device_drivers.sim_camera.driver import Board, SimCamera
 from device_drivers.sim_camera.optics import CameraModel, look_at
+from device_drivers.sim_cell.link import CellClient
 from runtime.interfaces.common import Pose
 from runtime.interfaces.device import DeviceIdentity
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue
+from runtime.vision.boards import DICTIONARIES, BoardSpec
 from runtime.vision.boards import Board as VisionBoard
-from runtime.vision.boards import BoardSpec
 
 BOARD_DPI_M = 4000.0  # the printed board's texture: pixels per metre (0.25 mm a pixel)
 
@@ -44,6 +45,12 @@ class SimCameraOptions(BaseModel):
     square: float = Field(default=0.03, gt=0.002, le=0.2, description="board square (m)")
     marker: float = Field(default=0.022, gt=0.001, le=0.2, description="board marker (m)")
     dictionary: str = Field(default="5x5_100", description="the board's ArUco dictionary")
+    cell: str | None = Field(
+        default=None,
+        max_length=64,
+        description="the simulated robot whose cell is in view (its parts and flange tag)",
+    )
+    tags: str = Field(default="4x4_50", description="the ArUco dictionary of the cell's tags")
 
     def default_name(self) -> str:
         return "sim-camera"
@@ -90,6 +97,8 @@ def charuco_board(options: SimCameraOptions) -> Board:
 
 
 def create(name: str, uuid: str, options: SimCameraOptions) -> SimCamera:
+    if options.tags not in DICTIONARIES:
+        raise InvalidValue(f"no ArUco dictionary {options.tags!r} (e.g. 4x4_50, 5x5_100)")
     identity = DeviceIdentity(uuid=uuid, kind="camera", model="simulated camera", name=name)
     return SimCamera(
         identity,
@@ -98,6 +107,8 @@ def create(name: str, uuid: str, options: SimCameraOptions) -> SimCamera:
         fps=options.fps,
         noise=options.noise,
         blur=options.blur,
+        cell=CellClient(options.cell) if options.cell else None,
+        tags=options.tags,
     )
 
 
@@ -152,6 +163,9 @@ def routes(driver: SimCamera) -> APIRouter:
                 "dictionary": board.dictionary,
                 "pose": None if driver.board_pose is None else _pose(driver.board_pose),
             },
+            # The cell as the last frame showed it (the robot's true base, parts, flange tag).
+            "cell": driver.scene,
+            "tags": driver.tags,
         }
 
     return router

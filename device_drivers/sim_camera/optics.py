@@ -76,10 +76,17 @@ class Renderer:
         nearest = np.full((rows, cols), np.inf, dtype=np.float32)
         camera_to_world = self.camera.pose
         for target in targets:
+            window = self._window(target)
+            if window is None:
+                continue
+            top, bottom, left, right = window
+            rays = self.rays[top:bottom, left:right]
             world_to_target = np.linalg.inv(target.pose)
             to_target = world_to_target @ camera_to_world
             rotation, origin = to_target[:3, :3], to_target[:3, 3]
-            directions = self.rays @ rotation.T  # each ray in the target's frame
+            if origin[2] >= 0:
+                continue  # the camera is behind its print: only the blank back faces it
+            directions = rays @ rotation.T  # each ray in the target's frame
             dz = directions[..., 2]
             with np.errstate(divide="ignore", invalid="ignore"):
                 distance = -origin[2] / dz  # along the ray to the plane z = 0
@@ -88,13 +95,14 @@ class Renderer:
             texture_rows, texture_cols = target.texture.shape
             u = (x / target.width * texture_cols - 0.5).astype(np.float32)
             v = (y / target.height * texture_rows - 0.5).astype(np.float32)
+            closer = nearest[top:bottom, left:right]
             inside = (
                 (distance > 0)
                 & (x >= 0)
                 & (x < target.width)
                 & (y >= 0)
                 & (y < target.height)
-                & (distance < nearest)
+                & (distance < closer)
             )
             seen = cv2.remap(
                 _prefiltered(target.texture, u, v, inside),
@@ -103,8 +111,8 @@ class Renderer:
                 interpolation=cv2.INTER_LINEAR,
                 borderMode=cv2.BORDER_REPLICATE,
             )
-            image[inside] = seen[inside]
-            nearest[inside] = distance[inside]
+            image[top:bottom, left:right][inside] = seen[inside]
+            closer[inside] = distance[inside]
         image = cv2.resize(
             image, (self.camera.width, self.camera.height), interpolation=cv2.INTER_AREA
         )
@@ -113,6 +121,33 @@ class Renderer:
         if noise > 0:
             image = image + (rng or np.random.default_rng()).normal(0.0, noise, image.shape)
         return np.clip(np.rint(image), 0, 255).astype(np.uint8)
+
+    def _window(self, target: Target) -> tuple[int, int, int, int] | None:
+        """The rows and columns of the ray table a target can cover (all of it when a corner
+        lies behind the camera); None when it is out of view."""
+        rows, cols = self.rays.shape[:2]
+        corners = np.array(
+            [[0, 0, 0, 1], [target.width, 0, 0, 1], [0, target.height, 0, 1]], dtype=float
+        )
+        corners = np.vstack([corners, corners[1] + corners[2] - corners[0]])
+        in_camera = (np.linalg.inv(self.camera.pose) @ target.pose @ corners.T)[:3].T
+        if (in_camera[:, 2] <= 1e-6).any():
+            return 0, rows, 0, cols
+        # Projected without distortion, widened: distortion moves a point by far less than
+        # the margin near the target, and a ray outside the window cannot reach it anyway
+        # unless distortion is extreme, hence the generous margin.
+        at = in_camera[:, :2] / in_camera[:, 2:3]
+        us = at[:, 0] * self.camera.fx + self.camera.cx
+        vs = at[:, 1] * self.camera.fy + self.camera.cy
+        margin = 0.15 * max(self.camera.width, self.camera.height)
+        s = SUPERSAMPLING
+        left = int(max((us.min() - margin) * s, 0))
+        right = int(min((us.max() + margin) * s, cols))
+        top = int(max((vs.min() - margin) * s, 0))
+        bottom = int(min((vs.max() + margin) * s, rows))
+        if left >= right or top >= bottom:
+            return None
+        return top, bottom, left, right
 
 
 def _prefiltered(texture: Gray, u: Pixels, v: Pixels, inside: Pixels) -> Pixels:

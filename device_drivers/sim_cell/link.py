@@ -70,6 +70,8 @@ class CellServer:
             return {"sensors": self.world.sensed()}
         if op == "parts":
             return {"parts": [p.model_dump() for p in self.world.snapshot()]}
+        if op == "scene":
+            return self.world.scene()
         if op == "layout":  # a simulator without HTTP routes of its own (the UR emulator)
             self.world.replace(CellSetup.model_validate(request.get("setup")))
             return {"parts": [p.model_dump() for p in self.world.snapshot()]}

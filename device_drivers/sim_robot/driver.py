@@ -26,7 +26,7 @@ from runtime.interfaces.robot import (
 )
 from runtime.interfaces.robot_driver import RobotDriver, RobotStatus
 from runtime.kit.errors import RobotError
-from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.kinematics import Kinematics, se3_to_pose
 
 log = logging.getLogger(__name__)
 TOOL_OPENING = 0.1  # m: what the controller's own tool output opens (a generic gripper)
@@ -75,7 +75,7 @@ class SimRobot(RobotDriver):
         self._running = threading.Event()
         self._thread: threading.Thread | None = None
         # The parts around it, which its tool and a simulated gripper on it pick.
-        self.world = World(self._tcp)
+        self.world = World(self._tcp, flange=self._flange)
         self.cell = CellServer(self.world, identity.name)
 
     def _tcp(self) -> Pose:
@@ -83,6 +83,12 @@ class SimRobot(RobotDriver):
             position = self.core.tracker.position.copy()
             kinematics = self.core.kinematics
         return kinematics.tcp_pose(position)
+
+    def _flange(self) -> Pose:
+        with self.lock:
+            position = self.core.tracker.position.copy()
+            kinematics = self.core.kinematics
+        return se3_to_pose(kinematics.flange(position))
 
     async def start(self) -> None:
         self._running.set()

@@ -8,9 +8,9 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query, Response
 from pydantic import Field
 
-from device_drivers.sim_cell.world import CellSetup, Part
+from device_drivers.sim_cell.world import CellSetup, Frame, Part
 from device_drivers.sim_robot.driver import SimRobot
-from runtime.interfaces.common import Strict
+from runtime.interfaces.common import Pose, Strict
 from runtime.interfaces.robot import OperationalMode, RobotState
 
 
@@ -42,15 +42,28 @@ def sim_router(robot: SimRobot) -> APIRouter:
     router = APIRouter(prefix="/sim")
 
     @router.get("/cell/parts")
-    async def parts() -> list[Part]:
-        """Every part's true pose (held ones where the TCP carries them)."""
-        return robot.world.snapshot()
+    async def parts(frame: Frame = "base") -> list[Part]:
+        """Every part's true pose (held ones where the TCP carries them), in the robot's base
+        frame or in the world."""
+        return robot.world.snapshot(frame)
 
     @router.put("/cell")
-    async def cell(body: CellSetup) -> list[Part]:
-        """Lay out the table: the parts and the presence sensors."""
-        robot.world.replace(body)
-        return robot.world.snapshot()
+    async def cell(body: CellSetup, frame: Frame = "base") -> list[Part]:
+        """Lay out the table: the parts, the presence sensors, the flange's tag."""
+        robot.world.replace(body, frame)
+        return robot.world.snapshot(frame)
+
+    @router.put("/base")
+    async def base(body: Pose) -> dict[str, object]:
+        """Where the robot truly stands in the world (the simulation's truth, which robot-origin
+        calibration finds); the parts stay where they are in the world."""
+        robot.world.move_base(body)
+        return robot.world.scene()
+
+    @router.get("/scene")
+    async def scene() -> dict[str, object]:
+        """In the world: the robot's true base, the parts, the flange's tag."""
+        return robot.world.scene()
 
     @router.get("/cell/sensors")
     async def sensors() -> dict[str, bool]:

@@ -73,7 +73,8 @@ class Kinematics:
             if not self.model.existFrame(frame):
                 raise InvalidValue(f"frame {frame!r} is not in {path.name}")
         self._base = self.model.getFrameId(info.base_link)
-        flange = self.model.frames[self.model.getFrameId(info.flange_link)]
+        self._flange = self.model.getFrameId(info.flange_link)
+        flange = self.model.frames[self._flange]
         # The TCP becomes a frame of the model, so Jacobians can be taken at it directly.
         self._tcp = self.model.addFrame(
             pin.Frame(
@@ -115,6 +116,12 @@ class Kinematics:
     def tcp_pose(self, joints: FloatArray | list[float]) -> Pose:
         return se3_to_pose(self.tcp(joints))
 
+    def flange(self, joints: FloatArray | list[float]) -> pin.SE3:
+        """The flange's pose in the base frame (what a tag or tool is mounted on)."""
+        q = self._set(joints)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return self.data.oMf[self._base].actInv(self.data.oMf[self._flange])
+
     def jacobian(self, joints: FloatArray | list[float]) -> FloatArray:
         """6-by-n Jacobian of the TCP: linear velocity of the TCP point and angular velocity,
         both along the base frame's axes."""
@@ -155,6 +162,30 @@ class Kinematics:
         if not found:
             raise Unreachable("no joint position reaches that pose within the joint limits")
         return min(found, key=lambda q: float(np.sum((q - seed_q) ** 2)))
+
+    def solutions(
+        self, target: pin.SE3, seed: FloatArray | list[float], starts: int = 30
+    ) -> list[FloatArray]:
+        """The distinct joint positions (elbow up or down, wrist flipped, …) that put the TCP
+        at `target`, nearest the seed first: for a caller who must pick one that is free of
+        collisions, which the nearest may not be."""
+        goal = self._base_placement() * target
+        seed_q = np.clip(np.asarray(seed, dtype=float), self.lower, self.upper)
+        rng = np.random.default_rng(0)  # the same answer for the same question
+        found: list[FloatArray] = []
+        for attempt in range(starts + 1):
+            start = (
+                seed_q
+                if attempt == 0
+                else rng.uniform(np.maximum(self.lower, -np.pi), np.minimum(self.upper, np.pi))
+            )
+            solution = self._solve(goal, start, 1e-10)
+            if solution is None:
+                continue
+            solution = self._nearest_turn(solution, seed_q)
+            if not any(np.allclose(solution, q, atol=1e-3) for q in found):
+                found.append(solution)
+        return sorted(found, key=lambda q: float(np.sum((q - seed_q) ** 2)))
 
     def _solve(
         self, goal: pin.SE3, start: FloatArray, tolerance: float, max_iterations: int = 100

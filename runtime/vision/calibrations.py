@@ -30,6 +30,7 @@ from runtime.vision.models import (
     ExtrinsicResult,
     FrameReport,
     IntrinsicSessionView,
+    RobotOriginResult,
     calibration_variable,
 )
 from runtime.vision.operations import Operation, Operations
@@ -224,9 +225,14 @@ class Calibrations:
                     BOARD_SETTING, "calibration_board", result.board.model_dump()
                 )
             saved = [name]
-        elif isinstance(result, ExtrinsicResult):
-            name = frame_variable(result.camera)
-            frame = Frame(pose=result.pose)
+        elif isinstance(result, ExtrinsicResult | RobotOriginResult):
+            subject, pose = (
+                (result.camera, result.pose)
+                if isinstance(result, ExtrinsicResult)
+                else (result.robot, result.base)
+            )
+            name = frame_variable(subject)
+            frame = Frame(pose=pose)
             await self.storage.put(name, "frame", frame.model_dump(mode="json"))
             saved = [name]
         else:  # pragma: no cover - every operation kind is handled above

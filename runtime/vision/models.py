@@ -5,11 +5,12 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, field_validator
 
 from runtime.interfaces.camera import Intrinsics
 from runtime.interfaces.common import Pose, Strict
-from runtime.vision.boards import BoardSpec
+from runtime.vision.boards import DICTIONARIES, BoardSpec
+from runtime.vision.poses import PoseRegion
 
 NAME = r"^[a-z][a-z0-9_]{0,31}$"  # a device's local name
 
@@ -88,7 +89,7 @@ class OperationStatus(BaseModel):
     """A long operation (a solve, a robot-origin run): progress 0-1, its stage in words."""
 
     id: str
-    kind: Literal["intrinsic", "extrinsic"]
+    kind: Literal["intrinsic", "extrinsic", "robot_origin"]
     state: Literal["running", "done", "failed", "cancelled"]
     progress: float
     stage: str
@@ -114,3 +115,53 @@ class ExtrinsicResult(BaseModel):
     reprojection: float  # px, RMS over the frames
     spread_mm: float  # how far the frames' estimates lie apart
     spread_deg: float
+
+
+class FlangeTag(Strict):
+    """The ArUco tag on the robot's flange: its id, printed side (m) and dictionary."""
+
+    id: int = Field(default=0, ge=0, le=999)
+    size: float = Field(default=0.06, gt=0.005, le=0.5)
+    dictionary: str = Field(default="4x4_50", max_length=32)
+
+    @field_validator("dictionary")
+    @classmethod
+    def _known(cls, name: str) -> str:
+        if name not in DICTIONARIES:
+            raise ValueError(f"no ArUco dictionary {name!r} (e.g. 4x4_50, 5x5_100)")
+        return name
+
+
+class RobotOriginRequest(Strict):
+    """Calibrate where `robot` stands in the world: it visits `poses` poses generated in
+    `region` (or the taught joint waypoints named), `camera` finds the flange's tag at each."""
+
+    robot: str = Field(pattern=NAME)
+    camera: str = Field(pattern=NAME)
+    tag: FlangeTag = Field(default_factory=FlangeTag)
+    region: PoseRegion = Field(default_factory=PoseRegion)
+    poses: int = Field(default=12, ge=4, le=40)
+    waypoints: list[str] | None = Field(default=None, min_length=4, max_length=40)
+    speed: float = Field(default=0.5, gt=0, le=1)
+
+
+class OriginPose(BaseModel):
+    index: int
+    joints: list[float] | None = None
+    seen: bool = False
+    reason: str = ""  # why it was not used: unreachable, blocked, the tag not seen
+    residual_px: float | None = None
+    residual_mm: float | None = None
+    outlier: bool = False
+
+
+class RobotOriginResult(BaseModel):
+    robot: str
+    camera: str
+    base: Pose  # the robot's base in the world, as found
+    previous: Pose  # as it was stored before
+    moved_mm: float  # from the previous
+    moved_deg: float
+    tag_on_flange: Pose
+    rms_px: float
+    poses: list[OriginPose]

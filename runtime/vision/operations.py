@@ -17,7 +17,7 @@ from runtime.vision.models import OperationStatus
 
 KEEP = 50
 log = logging.getLogger(__name__)
-Kind = Literal["intrinsic", "extrinsic"]
+Kind = Literal["intrinsic", "extrinsic", "robot_origin"]
 
 
 class Operation:

@@ -6,15 +6,16 @@ from __future__ import annotations
 import contextlib
 import re
 from collections.abc import AsyncIterator
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import APIRouter, FastAPI, Request
+from fastapi import APIRouter, FastAPI, Header, Request
 from fastapi.responses import PlainTextResponse
 
 from runtime.clients.devices import Devices
 from runtime.kit.app import create_app
 from runtime.kit.errors import InvalidValue
 from runtime.kit.settings import RuntimeSettings
+from runtime.motion.client import MotionClient
 from runtime.variable_storage.client import StorageClient
 from runtime.vision.calibration_file import MAX_FILE, from_yaml, to_yaml
 from runtime.vision.calibrations import Calibrations
@@ -25,10 +26,14 @@ from runtime.vision.models import (
     IntrinsicSessionView,
     IntrinsicStart,
     OperationStatus,
+    RobotOriginRequest,
+    RobotOriginResult,
     calibration_variable,
 )
-from runtime.vision.operations import Operations
+from runtime.vision.operations import Operation, Operations
+from runtime.vision.origin_run import OriginRun
 
+LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 CAMERA = re.compile(r"^[a-z][a-z0-9_]{0,31}\Z")
 
 
@@ -38,7 +43,9 @@ def _camera(name: str) -> str:
     return name
 
 
-def vision_router(calibrations: Calibrations, operations: Operations) -> APIRouter:
+def vision_router(
+    calibrations: Calibrations, operations: Operations, origin: OriginRun
+) -> APIRouter:
     router = APIRouter(prefix="/vision")
 
     @router.post("/intrinsic", status_code=201)
@@ -69,6 +76,18 @@ def vision_router(calibrations: Calibrations, operations: Operations) -> APIRout
     async def extrinsic(body: ExtrinsicRequest) -> OperationStatus:
         """The camera's pose in the world from a board lying at a known pose."""
         return (await calibrations.start_extrinsic(body)).status()
+
+    @router.post("/robot_origin", status_code=202)
+    async def robot_origin(body: RobotOriginRequest, token: LeaseToken = None) -> OperationStatus:
+        """Where the robot stands in the world, from its flange tag seen at several poses:
+        the robot moves, under the caller's control lease (cancel stops it)."""
+        camera = await origin.prepare(body, token)
+        assert token is not None  # prepare checked the lease
+
+        async def work(op: Operation) -> RobotOriginResult:
+            return await origin.run(op, body, token, camera)
+
+        return operations.start("robot_origin", body.robot, work).status()
 
     @router.get("/operations/{op_id}")
     async def operation(op_id: str, wait: float = 0.0) -> OperationStatus:
@@ -121,8 +140,10 @@ def vision_router(calibrations: Calibrations, operations: Operations) -> APIRout
 def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     storage = StorageClient(urls["variable_storage"])
     devices = Devices(urls["device_manager"], "vision", settings.link.stale_after)
+    motion = MotionClient(urls["motion"])
     operations = Operations()
     calibrations = Calibrations(devices, storage, operations)
+    origin = OriginRun(devices, storage, motion, calibrations)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
@@ -132,8 +153,9 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
         finally:
             await operations.close()
             await devices.close()
+            await motion.aclose()
             await storage.aclose()
 
     app = create_app("vision", lifespan=lifespan)
-    app.include_router(vision_router(calibrations, operations))
+    app.include_router(vision_router(calibrations, operations, origin))
     return app

@@ -11,49 +11,18 @@ import json
 from collections.abc import Iterator
 from typing import Any
 
-import httpx
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
 from runtime.bench.harness.processes import Runtime, child_env, wait_for
 from runtime.bench.harness.views import board_views, in_world
-from runtime.kit.device_auth import DeviceAuth, known_secret
 from runtime.kit.settings import DeviceSpec
+from tests.support.vision import YAML, Cam
 
 CAMERA_SPEC = DeviceSpec(driver="sim-camera", name="sim-cam", options={"noise": 1.0, "fps": 20})
 BOARD = {"squares_x": 9, "squares_y": 6, "square": 0.03, "marker": 0.022, "dictionary": "5x5_100"}
 SIZE = (0.27, 0.18)
-YAML = {"Content-Type": "application/x-yaml"}
-
-
-class Cam:
-    """The camera added as `camera`, and its simulator's own routes (the world's side)."""
-
-    def __init__(self, runtime: Runtime) -> None:
-        self.runtime = runtime
-        uuid = runtime.own_device(CAMERA_SPEC)["uuid"]
-        added = runtime.api("POST", "/devices", json={"uuid": uuid, "local_name": "camera"})
-        assert added.status_code in (200, 201), added.text
-        wait_for(
-            lambda: runtime.api("GET", "/devices/camera").json()["status"] == "connected",
-            30,
-            what="the camera connected",
-        )
-        device = runtime.api("GET", "/devices/camera").json()
-        secret = known_secret(runtime.data_dir, device["uuid"])
-        self.sim = httpx.Client(
-            base_url=device["url"], timeout=10, auth=DeviceAuth(secret) if secret else None
-        )
-        self.truth: dict[str, Any] = self.sim.get("/sim/truth").json()
-        pose = self.truth["camera"]["pose"]
-        self.pose = np.eye(4)
-        self.pose[:3, :3] = Rotation.from_quat(pose["orientation"]).as_matrix()
-        self.pose[:3, 3] = pose["position"]
-
-    def put_board(self, pose: dict[str, Any] | None) -> None:
-        answer = self.sim.put("/sim/board", json={"pose": pose})
-        assert answer.status_code == 200, answer.text
 
 
 @pytest.fixture(scope="module")
@@ -63,7 +32,7 @@ def cam(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cam]:
     runtime = Runtime(home, env=child_env(home, OPENPENDANT_DEVICES=devices))
     runtime.wait_ready()
     try:
-        yield Cam(runtime)
+        yield Cam(runtime, CAMERA_SPEC)
     finally:
         runtime.stop()
     assert runtime.service_errors() == []
