@@ -8,9 +8,10 @@ import asyncio
 from pathlib import Path
 
 import pytest
+from scipy.spatial.transform import Rotation
 
 from device_drivers.sim_cell.link import CellClient, CellServer, address
-from device_drivers.sim_cell.world import CellSetup, Part, Sensor, World
+from device_drivers.sim_cell.world import CellSetup, FlangeTag, Part, Sensor, World
 from runtime.interfaces.common import Pose
 
 QUARTER_TURN = [0.0, 0.0, 0.7071068, 0.7071068]  # 90° about z
@@ -74,3 +75,27 @@ def test_the_devices_ask_the_world_over_its_socket(
 
     asyncio.run(main())
     assert address("arm", tmp_path) != address("arm", tmp_path / "elsewhere")
+
+
+def test_a_robot_set_down_elsewhere_leaves_the_parts_where_they_are_in_the_world() -> None:
+    tcp = Pose(position=[0.505, 0.0, 0.03])
+    flange = Pose(position=[0.505, 0.0, 0.13], orientation=[1.0, 0.0, 0.0, 0.0])  # z down
+    world = World(
+        lambda: tcp, setup().model_copy(update={"flange_tag": FlangeTag()}), flange=lambda: flange
+    )
+    world.move_base(Pose(position=[0.0, 0.1, 0.0]))
+    near = next(p for p in world.snapshot("world") if p.id == "near")
+    assert near.pose.position == pytest.approx([0.5, 0.0, 0.02])  # laid out before the move
+    in_base = next(p for p in world.snapshot() if p.id == "near")
+    assert in_base.pose.position == pytest.approx([0.5, -0.1, 0.02])
+    # The TCP is 10 cm from "near" now, but "far" is under it: that one is taken.
+    held = world.grasp(opening=0.085)
+    assert held is not None and held.id == "far"
+    scene = world.scene()
+    assert scene["base"]["position"] == pytest.approx([0.0, 0.1, 0.0])
+    tag = scene["flange_tag"]
+    # The tag's print faces along the flange's z (down here): its into-print z points up.
+    assert tag["pose"]["position"] == pytest.approx([0.505, 0.1, 0.125])
+    into_print = Rotation.from_quat(tag["pose"]["orientation"]).apply([0.0, 0.0, 1.0])
+    assert into_print == pytest.approx([0.0, 0.0, 1.0], abs=1e-9)
+    assert world.sensed() == {"at_pick": True}  # the sensor stays by the table, as its part
