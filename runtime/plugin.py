@@ -108,7 +108,12 @@ PLUGIN = Plugin(
         VariableType(
             "calibration_board",
             "a calibration board as printed: ChArUco or chessboard, squares and sizes",
-            "runtime.vision.boards:BoardSpec",
+            "runtime.imaging.boards:BoardSpec",
+        ),
+        VariableType(
+            "detector",
+            "how a detector finds things, through which camera",
+            "runtime.vision.detectors:DetectorConfig",
         ),
         VariableType(
             "program",

@@ -13,12 +13,12 @@ from scipy.spatial.transform import Rotation
 from device_drivers.sim_camera.driver import Board, SimCamera
 from device_drivers.sim_camera.optics import CameraModel, look_at
 from device_drivers.sim_cell.link import CellClient
+from runtime.imaging.boards import DICTIONARIES, BoardSpec
+from runtime.imaging.boards import Board as VisionBoard
 from runtime.interfaces.common import Pose
 from runtime.interfaces.device import DeviceIdentity
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue
-from runtime.vision.boards import DICTIONARIES, BoardSpec
-from runtime.vision.boards import Board as VisionBoard
 
 BOARD_DPI_M = 4000.0  # the printed board's texture: pixels per metre (0.25 mm a pixel)
 

@@ -12,16 +12,15 @@ from typing import Any
 
 import cv2
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from runtime.clients.devices import Devices
 from runtime.clients.kinds import CameraClient
+from runtime.imaging.boards import Board, BoardSpec, NotSeen
 from runtime.interfaces.camera import CaptureRequest, Image
 from runtime.interfaces.common import Pose
 from runtime.interfaces.variables import Frame
 from runtime.kit.errors import Conflict, DeviceError, InvalidValue, NotFound
 from runtime.variable_storage.client import StorageClient
-from runtime.vision.boards import Board, BoardSpec, NotSeen
 from runtime.vision.extrinsics import average, board_in_camera, camera_in_world
 from runtime.vision.intrinsics import MIN_FRAMES, IntrinsicSession
 from runtime.vision.models import (
@@ -34,6 +33,7 @@ from runtime.vision.models import (
     calibration_variable,
 )
 from runtime.vision.operations import Operation, Operations
+from runtime.vision.transforms import matrix_of, pose_of
 
 BOARD_SETTING = "vision.board"
 KEEP_SESSIONS = 8
@@ -41,18 +41,6 @@ KEEP_SESSIONS = 8
 
 def frame_variable(name: str) -> str:
     return f"frames.{name}"
-
-
-def matrix_of(pose: Pose) -> np.ndarray:
-    matrix = np.eye(4)
-    matrix[:3, :3] = Rotation.from_quat(pose.orientation).as_matrix()
-    matrix[:3, 3] = pose.position
-    return matrix
-
-
-def pose_of(matrix: np.ndarray) -> Pose:
-    quaternion = Rotation.from_matrix(matrix[:3, :3]).as_quat()
-    return Pose(position=matrix[:3, 3].tolist(), orientation=quaternion.tolist())
 
 
 def decode(image: Image) -> np.ndarray:

@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from runtime.imaging.boards import Board, BoardView, NotSeen
 from runtime.interfaces.camera import Intrinsics
 from runtime.kit.errors import InvalidValue
-from runtime.vision.boards import Board, BoardView, NotSeen
 from runtime.vision.models import CameraCalibration, Coverage, FrameReport, SessionFrame
 
 GRID = (4, 6)  # rows, columns of the coverage map

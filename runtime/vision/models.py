@@ -7,9 +7,9 @@ from typing import Literal
 
 from pydantic import BaseModel, Field, field_validator
 
+from runtime.imaging.boards import DICTIONARIES, BoardSpec
 from runtime.interfaces.camera import Intrinsics
 from runtime.interfaces.common import Pose, Strict
-from runtime.vision.boards import DICTIONARIES, BoardSpec
 from runtime.vision.poses import PoseRegion
 
 NAME = r"^[a-z][a-z0-9_]{0,31}$"  # a device's local name

@@ -14,20 +14,20 @@ import pinocchio as pin
 
 from runtime.cell.bases import base_in_world
 from runtime.clients.devices import Devices
+from runtime.imaging.markers import find_markers
 from runtime.interfaces.common import Pose
 from runtime.interfaces.variables import JointWaypoint
 from runtime.kit.errors import Conflict, OpenPendantError
-from runtime.motion.client import MotionClient
-from runtime.motion.models import MoveKind, MoveRequest, MoveState, Target
+from runtime.motion.client import MotionClient, MoveKind, MoveRequest, MoveState, Target
 from runtime.robotics.kinematics import Kinematics
 from runtime.variable_storage.client import StorageClient
-from runtime.vision.calibrations import Calibrations, matrix_of, pose_of
+from runtime.vision.calibrations import Calibrations
 from runtime.vision.extrinsics import camera_matrix
-from runtime.vision.markers import find_markers
 from runtime.vision.models import OriginPose, RobotOriginRequest, RobotOriginResult
 from runtime.vision.operations import Operation
 from runtime.vision.poses import flange_poses
 from runtime.vision.robot_origin import Camera, Sighting, solve_origin
+from runtime.vision.transforms import matrix_of, pose_of
 
 SETTLED = 1e-3  # rad/s: every joint slower than this, the arm is still
 SETTLE_TIMEOUT = 5.0  # s

@@ -12,6 +12,7 @@ from fastapi import APIRouter, FastAPI, Header, Request
 from fastapi.responses import PlainTextResponse
 
 from runtime.clients.devices import Devices
+from runtime.interfaces.detector import DetectRequest
 from runtime.kit.app import create_app
 from runtime.kit.errors import InvalidValue
 from runtime.kit.settings import RuntimeSettings
@@ -19,6 +20,8 @@ from runtime.motion.client import MotionClient
 from runtime.variable_storage.client import StorageClient
 from runtime.vision.calibration_file import MAX_FILE, from_yaml, to_yaml
 from runtime.vision.calibrations import Calibrations
+from runtime.vision.detection import Detection
+from runtime.vision.detectors import LocatedDetections
 from runtime.vision.models import (
     CameraCalibration,
     ExtrinsicRequest,
@@ -44,7 +47,7 @@ def _camera(name: str) -> str:
 
 
 def vision_router(
-    calibrations: Calibrations, operations: Operations, origin: OriginRun
+    calibrations: Calibrations, operations: Operations, origin: OriginRun, detection: Detection
 ) -> APIRouter:
     router = APIRouter(prefix="/vision")
 
@@ -88,6 +91,11 @@ def vision_router(
             return await origin.run(op, body, token, camera)
 
         return operations.start("robot_origin", body.robot, work).status()
+
+    @router.post("/detectors/{name}/detect")
+    async def detect(name: str, body: DetectRequest) -> LocatedDetections:
+        """Detect in a new image of the detector's camera."""
+        return await detection.detect(_camera(name), body)
 
     @router.get("/operations/{op_id}")
     async def operation(op_id: str, wait: float = 0.0) -> OperationStatus:
@@ -157,5 +165,6 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             await storage.aclose()
 
     app = create_app("vision", lifespan=lifespan)
-    app.include_router(vision_router(calibrations, operations, origin))
+    detection = Detection(storage, calibrations)
+    app.include_router(vision_router(calibrations, operations, origin, detection))
     return app

@@ -15,7 +15,7 @@ from runtime.services import services
 ROOT = Path(__file__).resolve().parents[2]
 SERVICE_PACKAGES = {spec.factory.split(":")[0].rsplit(".", 1)[0] for spec in services()}
 WEB = ("fastapi", "starlette", "uvicorn", "httpx", "websockets")
-PURE = ("runtime.robotics", "runtime.interfaces")
+PURE = ("runtime.robotics", "runtime.interfaces", "runtime.imaging")
 
 
 def modules(package_dir: Path) -> Iterator[tuple[str, Path]]:

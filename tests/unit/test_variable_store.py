@@ -76,6 +76,12 @@ ROUND_TRIP: dict[str, Any] = {
         "board": None,
         "calibrated": 1795000000.0,
     },
+    "detector": {
+        "method": "aruco",
+        "camera": "camera",
+        "dictionary": "4x4_50",
+        "marker_size": 0.032,
+    },
     "program": {
         "source": "blocks",
         "workspace_json": '{"blocks":{"blocks":[]}}',
@@ -121,6 +127,8 @@ REJECT: list[tuple[str, Any]] = [
     ("calibration_board", {"squares_x": 9, "squares_y": 6, "square": 0.03, "marker": 0.04}),
     ("calibration_board", {"squares_x": 9, "squares_y": 6, "square": 0.03, "dictionary": "7x7"}),
     ("camera_calibration", {"camera": "c", "intrinsics": {"width": 0}, "rms": 0.1}),
+    ("detector", {"method": "aruco", "camera": "Camera 1"}),
+    ("detector", {"camera": "camera", "dictionary": "9x9_9"}),
     ("no_such_type", 1),
 ]
 

@@ -13,8 +13,8 @@ from scipy.spatial.transform import Rotation
 
 from device_drivers.sim_camera.optics import CameraModel, Renderer, Target, look_at
 from runtime.bench.harness.views import board_views
+from runtime.imaging.boards import Board, BoardSpec, BoardView
 from runtime.kit.errors import InvalidValue
-from runtime.vision.boards import Board, BoardSpec, BoardView
 from runtime.vision.calibration_file import from_yaml, to_yaml
 from runtime.vision.extrinsics import average, board_in_camera, camera_in_world
 from runtime.vision.intrinsics import MIN_FRAMES, IntrinsicSession

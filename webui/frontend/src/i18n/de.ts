@@ -502,6 +502,7 @@ export const deBlocks: BlockWords = {
     Time: "Zeit",
     "I/O": "E/A",
     Gripper: "Greifer",
+    Vision: "Bildverarbeitung",
     "Stored variables": "Gespeichert",
     Program: "Programm",
     Variables: "Variablen",
@@ -548,6 +549,24 @@ export const deBlocks: BlockWords = {
       message0: "Greifer %1 hält ein Teil",
       tooltip: "Wahr, solange der Greifer ein Teil zwischen den Fingern meldet.",
     },
+    vision_detect: {
+      message0: "erkenne mit %1",
+      tooltip:
+        "Alles, was ein Detektor in einem neuen Bild seiner Kamera findet: eine Liste von Erkennungen (Marker-ID oder Klasse, Pose, Alter).",
+    },
+    vision_find: {
+      message0: "in %1 die Erkennung %2",
+      tooltip: "Die sicherste Erkennung mit dieser Marker-ID oder Klasse, oder nichts.",
+    },
+    vision_grip_pose: {
+      message0: "Greifpose von %1",
+      tooltip: "Eine Pose an der Erkennung, das Werkzeug ihr zugewandt (in der Basis des Roboters).",
+    },
+    vision_above: {
+      message0: "%2 mm über %1",
+      tooltip: "Die Greifpose der Erkennung, entlang z des Roboters angehoben: zum An- und Wegfahren.",
+    },
+    vision_count: { message0: "Anzahl Erkennungen in %1", tooltip: "Wie viele Erkennungen die Liste enthält." },
     waypoint_get: { message0: "Wegpunkt %1", tooltip: "Ein geteachter Wegpunkt." },
     pose_create: {
       message0: "Pose x %1 y %2 z %3 mm %4 Roll %5 Nick %6 Gier %7 °",

@@ -8,7 +8,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from runtime.vision.boards import DICTIONARIES
+from runtime.imaging.boards import DICTIONARIES
 
 
 @cache

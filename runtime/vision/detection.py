@@ -1,0 +1,76 @@
+"""Detecting with a stored detector: the detections in the camera frame (once the camera is
+calibrated) and in the world (once it is placed), with the age of the image they came from."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from runtime.interfaces.common import Pose
+from runtime.interfaces.detector import DetectRequest
+from runtime.kit.errors import Conflict, NotFound
+from runtime.variable_storage.client import StorageClient
+from runtime.vision.calibrations import Calibrations, frame_variable
+from runtime.vision.detectors import (
+    ArucoDetector,
+    DetectorConfig,
+    Located,
+    LocatedDetections,
+    detector_variable,
+)
+from runtime.vision.transforms import matrix_of, pose_of
+
+
+class Detection:
+    def __init__(self, storage: StorageClient, calibrations: Calibrations) -> None:
+        self.storage, self.calibrations = storage, calibrations
+
+    async def config(self, name: str) -> DetectorConfig:
+        try:
+            stored = await self.storage.get(detector_variable(name))
+        except NotFound:
+            raise NotFound(
+                f"no detector {name!r}: set one up as the detector variable "
+                f"{detector_variable(name)}",
+                code="no_such_detector",
+            ) from None
+        return DetectorConfig.model_validate(stored.value)
+
+    async def detect(self, name: str, request: DetectRequest) -> LocatedDetections:
+        config = await self.config(name)
+        try:
+            intrinsics = (await self.calibrations.calibration(config.camera)).intrinsics
+        except Conflict:
+            intrinsics = None  # boxes only: a pose needs the camera's intrinsics
+        try:
+            frame = await self.storage.get(frame_variable(config.camera))
+            camera = matrix_of(Pose.model_validate(frame.value["pose"]))
+        except NotFound:
+            camera = None
+
+        async def grab() -> tuple[np.ndarray, float]:
+            return await self.calibrations.grab(config.camera)
+
+        found = await ArucoDetector(config, grab, intrinsics).detect(request)
+        located = [
+            Located(
+                **d.model_dump(),
+                world_pose=None
+                if d.pose is None or camera is None
+                else pose_of(camera @ matrix_of(d.pose)),
+            )
+            for d in found.detections
+            if d.confidence >= request.min_confidence
+        ]
+        return LocatedDetections(
+            ts=found.ts,
+            age=max(time.time() - found.ts, 0.0),
+            detector=name,
+            camera=config.camera,
+            width=found.width,
+            height=found.height,
+            calibrated=intrinsics is not None,
+            placed=intrinsics is not None and camera is not None,
+            detections=located,
+        )
