@@ -21,6 +21,7 @@ from runtime.robotics.timing import SAMPLE_PERIOD, TimedPath, at_rest, time_scal
 from runtime.robotics.world import World
 
 PREVIEW_POINTS = 300
+ALTERNATIVES = 8  # a pose's other joint solutions tried when the nearest collides there
 
 
 @dataclass(frozen=True)
@@ -76,7 +77,7 @@ class MovePlanner:
         kind = request.kind
         around = False
         if kind is MoveKind.joint:
-            goal = self._joints(points[0], start)
+            goal = self._joint_goal(points[0], start, checker)
             vertices = np.array([start, goal])
             collision = checker.path(vertices)  # the straight joint line
             if collision is not None and request.avoid_obstacles:
@@ -113,6 +114,18 @@ class MovePlanner:
             return point.joints
         assert point.pose is not None
         return self.kinematics.inverse(point.pose, seed)
+
+    def _joint_goal(self, point: Point, start: FloatArray, checker: PathChecker) -> FloatArray:
+        """A pose's joints for a joint move: the solution reached from the start, unless the
+        arm would collide there (the elbow or wrist folded into the base, say) and another
+        of the pose's solutions would not: then the nearest of those."""
+        goal = self._joints(point, start)
+        if point.pose is None or checker.configuration(goal) is None:
+            return goal
+        for other in self.kinematics.solutions(point.pose, start)[:ALTERNATIVES]:
+            if checker.configuration(other) is None:
+                return other
+        return goal  # refused with the first solution's collision, as it would be
 
     def _pose(self, point: Point) -> pin.SE3:
         if point.pose is not None:

@@ -216,3 +216,32 @@ def test_a_line_out_of_reach_fails_before_any_motion() -> None:
     # Said as what it is: the target is out of reach (it had been called a singularity).
     assert err.value.code == "unreachable"
     assert "out of reach" in err.value.message
+
+
+def test_a_joint_move_to_a_pose_takes_another_solution_where_the_nearest_collides() -> None:
+    """The pose LEFT's TCP is at, from LEFT: its own joints would put the elbow in a ball
+    placed there; elbow down (or another branch) reaches the same pose clear of it."""
+    kinematics = MovePlanner(world_with({}), "r", None).kinematics
+    target = kinematics.tcp(LEFT).copy()
+    model, data = kinematics.model, kinematics.data
+    q = pin.neutral(model)
+    q[kinematics.order] = LEFT
+    pin.framesForwardKinematics(model, data, q)
+    base = data.oMf[kinematics.base_frame]
+    elbow = base.actInv(data.oMf[model.getFrameId("forearm_link")]).translation
+    ball = SceneObject(shape="sphere", size=[0.06], pose={"position": elbow.tolist()})
+    world = world_with({"ball": ball})
+    planner = MovePlanner(world, "r", None)
+    assert PathChecker(world, "r").configuration(LEFT) is not None  # the nearest collides
+    request = MoveRequest.model_validate(
+        {"kind": "joint", "target": {"pose": {"position": [0, 0, 0]}}}
+    )
+    start = np.array([1.0, -1.57, 0.5, -1.0, -1.57, 0.0])  # clear of it; reaches LEFT from here
+    assert np.allclose(kinematics.inverse(target, start), LEFT, atol=1e-3)
+    plan = planner.plan(request, start, [Point(None, target)])
+    assert plan.report.ok, plan.report
+    goal = np.array(plan.report.goal)
+    assert not np.allclose(goal, LEFT, atol=1e-3)
+    reached = kinematics.tcp(goal)
+    assert np.allclose(reached.translation, target.translation, atol=1e-6)
+    assert np.allclose(reached.rotation, target.rotation, atol=1e-6)
