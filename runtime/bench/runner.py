@@ -30,6 +30,7 @@ MODULES = (
     "modbus",
     "io_panel",
     "ur",
+    "vision",
 )
 
 
