@@ -82,6 +82,7 @@ RULES: tuple[Rule, ...] = (
     rule(("DELETE",), "/vision/intrinsic/{}/frames/{}", PROGRAM),
     rule(("POST",), "/vision/operations/{}/save", PROGRAM),
     rule(("POST",), "/vision/detectors/{}/detect", OPERATE),
+    rule(("PUT",), "/vision/detectors/{}/template", PROGRAM),
     rule(("PUT",), "/vision/cameras/{}/calibration.yaml", PROGRAM),
     # Programs: running them is an operator's, editing them a programmer's.
     rule(("POST",), "/programs/{}/(run|pause|resume|step)", OPERATE),

@@ -19,6 +19,7 @@ from runtime.bench.runner import Figure
 from runtime.bench.stats import percentile, quick
 from runtime.imaging.boards import Board, BoardSpec
 from runtime.imaging.markers import find_markers
+from runtime.imaging.template import find_template
 from runtime.interfaces.common import Pose
 from runtime.vision.intrinsics import IntrinsicSession
 from runtime.vision.poses import PoseRegion, flange_poses
@@ -28,6 +29,7 @@ FIGURES = (
     "aruco_fps_640",
     "aruco_fps_1280",
     "aruco_fps_1920",
+    "template_match_ms",
     "intrinsic_solve_s",
     "robot_origin_solve_ms",
 )
@@ -53,6 +55,35 @@ def _aruco(width: int, height: int, seconds: float) -> Figure:
         target=target,
         meets_target=fps >= ARUCO_TARGET_FPS if target else None,
         details={"size": f"{width}x{height}", "markers": sorted(found), "threads": 1},
+    )
+
+
+def _template(repeats: int) -> Figure:
+    """A part's face cut from a 1280x800 view of the cell, found again in it (turned by any
+    angle in 10° steps, scaled 0.9-1.1)."""
+    model = camera_model(SimCameraOptions())
+    scene = World(lambda: Pose()).scene()
+    image = Renderer(model).render(cell_targets(scene, "4x4_50"), noise=1.0)
+    centre = model.matrix @ (np.linalg.inv(model.pose) @ np.array([0.45, 0.0, 0.04, 1.0]))[:3]
+    u, v = (centre[:2] / centre[2]).round().astype(int)
+    template = image[v - 30 : v + 30, u - 30 : u + 30]
+    times, found = [], []
+    for _ in range(repeats):
+        started = time.perf_counter()
+        found = find_template(image, template)
+        times.append((time.perf_counter() - started) * 1000)
+    return Figure(
+        "template_match_ms",
+        percentile(times, 50),
+        "ms",
+        details={
+            "image": f"{model.width}x{model.height}",
+            "template": "60x60",
+            "angles": "0-350 by 10°, refined",
+            "scales": "0.9-1.1 by 0.1",
+            "matches": len(found),
+            "threads": 1,
+        },
     )
 
 
@@ -132,6 +163,7 @@ def run() -> list[Figure]:
     try:
         seconds = 1.0 if quick() else 5.0
         figures = [_aruco(width, height, seconds) for width, height in SIZES]
+        figures.append(_template(3 if quick() else 20))
         figures.append(_intrinsic(10 if quick() else 30))
         figures.append(_robot_origin(3 if quick() else 20))
     finally:

@@ -3,13 +3,15 @@ calibrated) and in the world (once it is placed), with the age of the image they
 
 from __future__ import annotations
 
+import base64
 import time
 
+import cv2
 import numpy as np
 
 from runtime.interfaces.common import Pose
 from runtime.interfaces.detector import DetectRequest
-from runtime.kit.errors import Conflict, NotFound
+from runtime.kit.errors import Conflict, InvalidValue, NotFound
 from runtime.variable_storage.client import StorageClient
 from runtime.vision.calibrations import Calibrations, frame_variable
 from runtime.vision.detectors import (
@@ -17,8 +19,10 @@ from runtime.vision.detectors import (
     DetectorConfig,
     Located,
     LocatedDetections,
+    TemplateTeaching,
     detector_variable,
 )
+from runtime.vision.template_detector import TemplateDetector
 from runtime.vision.transforms import matrix_of, pose_of
 
 
@@ -52,7 +56,12 @@ class Detection:
         async def grab() -> tuple[np.ndarray, float]:
             return await self.calibrations.grab(config.camera)
 
-        found = await ArucoDetector(config, grab, intrinsics).detect(request)
+        detector: ArucoDetector | TemplateDetector = (
+            TemplateDetector(config, grab, intrinsics, camera)
+            if config.method == "template"
+            else ArucoDetector(config, grab, intrinsics)
+        )
+        found = await detector.detect(request)
         located = [
             Located(
                 **d.model_dump(),
@@ -74,3 +83,34 @@ class Detection:
             placed=intrinsics is not None and camera is not None,
             detections=located,
         )
+
+    async def teach(self, name: str, request: TemplateTeaching) -> DetectorConfig:
+        """A template cut from a new image of the camera (the box the user drew), stored as
+        the detector `name` (its other settings kept if it already was one)."""
+        gray, _ = await self.calibrations.grab(request.camera)
+        box = request.box
+        height, width = gray.shape[:2]
+        if box.x + box.width > width or box.y + box.height > height:
+            raise InvalidValue(
+                f"the box reaches outside the {width}x{height} image", code="box_outside"
+            )
+        cut = gray[box.y : box.y + box.height, box.x : box.x + box.width]
+        ok, png = cv2.imencode(".png", cut)
+        if not ok:  # pragma: no cover - a crop of a decoded frame always encodes
+            raise InvalidValue("the template could not be encoded")
+        try:
+            current = (await self.config(name)).model_dump()
+        except NotFound:
+            current = {}
+        if current.get("method") != "template" or current.get("camera") != request.camera:
+            current = {}
+        fields = {
+            **current,
+            "method": "template",
+            "camera": request.camera,
+            "template": base64.b64encode(png.tobytes()).decode(),
+            **request.model_dump(exclude={"camera", "box"}, exclude_none=True),
+        }
+        config = DetectorConfig.model_validate(fields)
+        await self.storage.put(detector_variable(name), "detector", config.model_dump(mode="json"))
+        return config

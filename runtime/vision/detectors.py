@@ -13,7 +13,7 @@ from typing import Literal
 
 import cv2
 import numpy as np
-from pydantic import BaseModel, Field, field_validator
+from pydantic import BaseModel, Field, field_validator, model_validator
 
 from runtime.imaging.boards import DICTIONARIES
 from runtime.imaging.markers import find_markers
@@ -33,19 +33,41 @@ from runtime.vision.robot_origin import tag_corners
 from runtime.vision.transforms import pose_of
 
 Grab = Callable[[], Awaitable[tuple[np.ndarray, float]]]
+MAX_TEMPLATE_BASE64 = 700_000  # a 512 KB PNG
 
 
 def detector_variable(name: str) -> str:
     return f"detectors.{name}"
 
 
-class DetectorConfig(Strict):
-    """A detector as the user set it up (the variable type `detector`)."""
+class TemplateRegion(Strict):
+    """Where in the image to look (px): the rest is not searched."""
 
-    method: Literal["aruco"] = "aruco"
+    x: int = Field(ge=0, le=20000)
+    y: int = Field(ge=0, le=20000)
+    width: int = Field(ge=8, le=20000)
+    height: int = Field(ge=8, le=20000)
+
+
+class DetectorConfig(Strict):
+    """A detector as the user set it up (the variable type `detector`): ArUco markers of a
+    dictionary and printed size, or a taught template (a PNG, base64) found turned by any
+    angle and within a range of scales."""
+
+    method: Literal["aruco", "template"] = "aruco"
     camera: str = Field(pattern=NAME)
+    # ArUco
     dictionary: str = Field(default="4x4_50", max_length=32)
     marker_size: float = Field(default=0.032, gt=0.001, le=1.0)  # m, the black square's side
+    # Template
+    template: str | None = Field(default=None, max_length=MAX_TEMPLATE_BASE64)
+    label: str = Field(default="part", min_length=1, max_length=32)
+    region: TemplateRegion | None = None
+    angle_step: float = Field(default=10.0, ge=1.0, le=90.0)
+    scales: tuple[float, float, float] = (0.9, 1.1, 0.1)  # lowest, highest, step
+    threshold: float = Field(default=0.75, gt=0.0, le=1.0)
+    max_matches: int = Field(default=10, ge=1, le=100)
+    height: float = Field(default=0.0, ge=-10, le=10)  # m: the matched face's z in the world
 
     @field_validator("dictionary")
     @classmethod
@@ -53,6 +75,33 @@ class DetectorConfig(Strict):
         if name not in DICTIONARIES:
             raise ValueError(f"no ArUco dictionary {name!r} (e.g. 4x4_50, 5x5_100)")
         return name
+
+    @field_validator("scales")
+    @classmethod
+    def _range(cls, scales: tuple[float, float, float]) -> tuple[float, float, float]:
+        low, high, step = scales
+        if not 0.2 <= low <= high <= 5.0 or not 0 <= step <= 1 or (step == 0 and low != high):
+            raise ValueError("scales are (lowest, highest, step), between 0.2 and 5")
+        if step > 0 and (high - low) / step > 20:
+            raise ValueError("at most 20 scale steps")
+        return scales
+
+    @model_validator(mode="after")
+    def _taught(self) -> DetectorConfig:
+        if self.method == "template" and self.template is None:
+            raise ValueError("a template detector needs its template: teach one")
+        return self
+
+
+class TemplateTeaching(Strict):
+    """A template taught from the camera's image: the box drawn on it (px), and the
+    detector's settings to change with it."""
+
+    camera: str = Field(pattern=NAME)
+    box: TemplateRegion
+    label: str | None = Field(default=None, min_length=1, max_length=32)
+    height: float | None = Field(default=None, ge=-10, le=10)
+    region: TemplateRegion | None = None
 
 
 class ArucoDetector(DetectorInterface):

@@ -21,7 +21,7 @@ from runtime.variable_storage.client import StorageClient
 from runtime.vision.calibration_file import MAX_FILE, from_yaml, to_yaml
 from runtime.vision.calibrations import Calibrations
 from runtime.vision.detection import Detection
-from runtime.vision.detectors import LocatedDetections
+from runtime.vision.detectors import DetectorConfig, LocatedDetections, TemplateTeaching
 from runtime.vision.models import (
     CameraCalibration,
     ExtrinsicRequest,
@@ -96,6 +96,11 @@ def vision_router(
     async def detect(name: str, body: DetectRequest) -> LocatedDetections:
         """Detect in a new image of the detector's camera."""
         return await detection.detect(_camera(name), body)
+
+    @router.put("/detectors/{name}/template")
+    async def teach(name: str, body: TemplateTeaching) -> DetectorConfig:
+        """Teach a template detector the pattern inside a box drawn on a new camera image."""
+        return await detection.teach(_camera(name), body)
 
     @router.get("/operations/{op_id}")
     async def operation(op_id: str, wait: float = 0.0) -> OperationStatus:

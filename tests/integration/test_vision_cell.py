@@ -16,6 +16,7 @@ import json
 from collections.abc import Iterator
 from typing import Any
 
+import cv2
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
@@ -194,6 +195,59 @@ def assert_in_a_row(cell: Cell) -> None:
         off = float(np.hypot(x - ROW[index][0], y - ROW[index][1]) * 1000)
         assert off < 3.0, (name, off, part)
         assert z == pytest.approx(0.02, abs=1e-6)
+
+
+def test_a_template_taught_from_a_box_on_the_image_finds_its_part(
+    cell: tuple[Cell, Cam],
+) -> None:
+    """Part 2's face (its tag) taught by a box around it; then, the part turned by 50° and
+    moved, it is found there: within 1.5 mm in the world (the face's height set), turned by
+    50° within 1° from where it was found as taught (a template's x is the image's)."""
+    robot_cell, cam = cell
+    runtime = robot_cell.runtime
+    lay_out(robot_cell)
+    robot_cell.place(START)  # the flange's tag out of the way
+    centre = project(cam, PARTS["part2"][:2] + [0.04])
+    box = {"x": round(centre[0]) - 30, "y": round(centre[1]) - 30, "width": 60, "height": 60}
+    body = {"camera": "camera", "box": box, "label": "bracket", "height": 0.04}
+    taught = runtime.api("PUT", "/vision/detectors/shape/template", json=body)
+    assert taught.status_code == 200, taught.text
+    assert taught.json()["method"] == "template" and taught.json()["label"] == "bracket"
+    outside = {**body, "box": {**box, "x": 1270}}
+    refused = runtime.api("PUT", "/vision/detectors/shape/template", json=outside)
+    assert refused.status_code == 422 and refused.json()["error"]["code"] == "box_outside"
+
+    def one(expected: list[float]) -> float:
+        found = runtime.api("POST", "/vision/detectors/shape/detect", json={}, timeout=30).json()
+        [match] = [d for d in found["detections"] if d["confidence"] > 0.9]
+        assert match["label"] == "bracket"
+        at = match["world_pose"]
+        off = np.linalg.norm(np.subtract(at["position"], expected)) * 1000
+        assert off < 1.5, (off, at)
+        return float(Rotation.from_quat(at["orientation"]).as_euler("xyz", degrees=True)[2])
+
+    as_taught = one([*PARTS["part2"][:2], 0.04])
+    turned = Rotation.from_euler("z", 50, degrees=True)
+    moved = {"position": [0.47, -0.05, 0.02], "orientation": turned.as_quat().tolist()}
+    layout = {
+        "parts": [{"id": "part2", "size": [0.04, 0.04, 0.04], "pose": moved, "tag": 2}],
+        "flange_tag": {"id": 0, "size": 0.06},
+    }
+    answer = robot_cell.robot.http.put("/sim/cell", params={"frame": "world"}, json=layout)
+    assert answer.status_code == 200, answer.text
+    yaw = one([0.47, -0.05, 0.04])
+    assert abs((yaw - as_taught - 50 + 180) % 360 - 180) < 1.0, (yaw, as_taught)
+
+
+def project(cam: Cam, point: list[float]) -> np.ndarray:
+    """Where a point of the world appears in the camera's image (its ground truth)."""
+    truth = cam.truth["camera"]
+    matrix = np.array([[truth["fx"], 0, truth["cx"]], [0, truth["fy"], truth["cy"]], [0, 0, 1]])
+    in_camera = np.linalg.inv(cam.pose) @ np.array([*point, 1.0])
+    pixel, _ = cv2.projectPoints(
+        in_camera[:3].reshape(1, 3), np.zeros(3), np.zeros(3), matrix, np.array(truth["distortion"])
+    )
+    return np.asarray(pixel.ravel())
 
 
 def test_cancelling_a_run_stops_the_robot_and_stores_nothing(cell: tuple[Cell, Cam]) -> None:

@@ -77,10 +77,18 @@ ROUND_TRIP: dict[str, Any] = {
         "calibrated": 1795000000.0,
     },
     "detector": {
-        "method": "aruco",
+        "method": "template",
         "camera": "camera",
         "dictionary": "4x4_50",
         "marker_size": 0.032,
+        "template": "iVBORw0KGgo=",
+        "label": "bracket",
+        "region": {"x": 10, "y": 20, "width": 300, "height": 200},
+        "angle_step": 5.0,
+        "scales": [0.9, 1.1, 0.05],
+        "threshold": 0.8,
+        "max_matches": 4,
+        "height": 0.04,
     },
     "program": {
         "source": "blocks",
@@ -129,6 +137,8 @@ REJECT: list[tuple[str, Any]] = [
     ("camera_calibration", {"camera": "c", "intrinsics": {"width": 0}, "rms": 0.1}),
     ("detector", {"method": "aruco", "camera": "Camera 1"}),
     ("detector", {"camera": "camera", "dictionary": "9x9_9"}),
+    ("detector", {"method": "template", "camera": "camera"}),
+    ("detector", {"camera": "camera", "scales": [1.2, 0.8, 0.1]}),
     ("no_such_type", 1),
 ]
 
