@@ -16,7 +16,6 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from runtime.kit.errors import InvalidValue
@@ -129,6 +128,10 @@ def _residuals(
 def _refine(
     sightings: list[Sighting], size: float, camera: Camera, base: np.ndarray, tag: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    # Imported here, in the one process that solves: scipy.optimize is 65 MB of memory that
+    # the launcher would otherwise preload and every runtime process would map.
+    from scipy.optimize import least_squares
+
     corners = tag_corners(size)
     fit = least_squares(
         _residuals,
