@@ -29,6 +29,13 @@ PLUGIN = Plugin(
             simulated=True,
         ),
         Driver(
+            "opencv-camera",
+            "camera",
+            "device_drivers.opencv_camera.entry:create",
+            options="device_drivers.opencv_camera.entry:OpenCVCameraOptions",
+            description="a camera OpenCV opens: USB, a stream, a video file or an image folder",
+        ),
+        Driver(
             "ur-rtde",
             "robot",
             "device_drivers.ur_rtde.entry:create",

@@ -6,18 +6,17 @@ calibrating it finds); its ground truth is for tests, at the simulator's own rou
 from __future__ import annotations
 
 import asyncio
-import base64
 import threading
 import time
 from dataclasses import dataclass
 from typing import Any
 
-import cv2
 import numpy as np
 
 from device_drivers.sim_camera.optics import CameraModel, Gray, Renderer, Target
 from device_drivers.sim_camera.scene import cell_targets
 from device_drivers.sim_cell.link import CellClient
+from runtime.imaging.encoding import encoded
 from runtime.interfaces.camera import (
     CameraDriver,
     CameraInfo,
@@ -103,22 +102,9 @@ class SimCamera(CameraDriver):
         scene = await self.cell.ask("scene") if self.cell is not None else None
         self.scene = scene if scene is not None and "error" not in scene else None
         pixels = await asyncio.to_thread(self._render, self.scene)
-        if request.encoding == "png":
-            ok, encoded = cv2.imencode(".png", pixels)
-        else:
-            ok, encoded = cv2.imencode(".jpg", pixels, [cv2.IMWRITE_JPEG_QUALITY, request.quality])
-        if not ok:
-            raise DeviceError(f"the frame could not be encoded as {request.encoding}")
         self.frames += 1
         self.last_frame = taken
-        return Image(
-            seqno=self.frames,
-            ts=taken,
-            width=self.camera.width,
-            height=self.camera.height,
-            encoding=request.encoding,
-            data=base64.b64encode(encoded.tobytes()).decode(),
-        )
+        return encoded(pixels, request, self.frames, taken)
 
     def _render(self, scene: dict[str, Any] | None) -> Gray:
         assert self._renderer is not None

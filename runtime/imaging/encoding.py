@@ -1,0 +1,30 @@
+"""A frame as the standard camera interface sends it: PNG (lossless, for calibration) or
+JPEG at the asked quality, base64 in an Image."""
+
+from __future__ import annotations
+
+import base64
+
+import cv2
+import numpy as np
+
+from runtime.interfaces.camera import CaptureRequest, Image
+from runtime.kit.errors import DeviceError
+
+
+def encoded(pixels: np.ndarray, request: CaptureRequest, seqno: int, taken: float) -> Image:
+    if request.encoding == "png":
+        ok, data = cv2.imencode(".png", pixels)
+    else:
+        ok, data = cv2.imencode(".jpg", pixels, [cv2.IMWRITE_JPEG_QUALITY, request.quality])
+    if not ok:
+        raise DeviceError(f"the frame could not be encoded as {request.encoding}", status=500)
+    height, width = pixels.shape[:2]
+    return Image(
+        seqno=seqno,
+        ts=taken,
+        width=width,
+        height=height,
+        encoding=request.encoding,
+        data=base64.b64encode(data.tobytes()).decode(),
+    )
