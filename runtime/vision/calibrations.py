@@ -43,12 +43,12 @@ def frame_variable(name: str) -> str:
     return f"frames.{name}"
 
 
-def decode(image: Image) -> np.ndarray:
+def decode(image: Image, colour: bool = False) -> np.ndarray:
     data = np.frombuffer(base64.b64decode(image.data), np.uint8)
-    gray = cv2.imdecode(data, cv2.IMREAD_GRAYSCALE)
-    if gray is None:
+    pixels = cv2.imdecode(data, cv2.IMREAD_COLOR if colour else cv2.IMREAD_GRAYSCALE)
+    if pixels is None:
         raise DeviceError(f"the camera sent an image that is not a {image.encoding}")
-    return np.asarray(gray)
+    return np.asarray(pixels)
 
 
 class Calibrations:
@@ -71,12 +71,13 @@ class Calibrations:
             ) from None
         return BoardSpec.model_validate(stored.value)
 
-    async def grab(self, camera: str) -> tuple[np.ndarray, float]:
-        """A new greyscale frame from an added camera (lossless) and when it was taken."""
+    async def grab(self, camera: str, colour: bool = False) -> tuple[np.ndarray, float]:
+        """A new frame from an added camera (lossless; grey unless `colour`) and when it was
+        taken."""
         client = await self.devices.client(camera, "camera")
         assert isinstance(client, CameraClient)
         image = await client.capture(CaptureRequest(encoding="png"))
-        return await asyncio.to_thread(decode, image), image.ts
+        return await asyncio.to_thread(decode, image, colour), image.ts
 
     async def calibration(self, camera: str) -> CameraCalibration:
         try:

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import base64
 import time
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -22,13 +23,14 @@ from runtime.vision.detectors import (
     TemplateTeaching,
     detector_variable,
 )
+from runtime.vision.neural_detector import NeuralDetector
 from runtime.vision.template_detector import TemplateDetector
 from runtime.vision.transforms import matrix_of, pose_of
 
 
 class Detection:
-    def __init__(self, storage: StorageClient, calibrations: Calibrations) -> None:
-        self.storage, self.calibrations = storage, calibrations
+    def __init__(self, storage: StorageClient, calibrations: Calibrations, models: Path) -> None:
+        self.storage, self.calibrations, self.models = storage, calibrations, models
 
     async def config(self, name: str) -> DetectorConfig:
         try:
@@ -54,13 +56,15 @@ class Detection:
             camera = None
 
         async def grab() -> tuple[np.ndarray, float]:
-            return await self.calibrations.grab(config.camera)
+            return await self.calibrations.grab(config.camera, colour=config.method == "neural")
 
-        detector: ArucoDetector | TemplateDetector = (
-            TemplateDetector(config, grab, intrinsics, camera)
-            if config.method == "template"
-            else ArucoDetector(config, grab, intrinsics)
-        )
+        detector: ArucoDetector | TemplateDetector | NeuralDetector
+        if config.method == "template":
+            detector = TemplateDetector(config, grab, intrinsics, camera)
+        elif config.method == "neural":
+            detector = NeuralDetector(config, grab, self.models, intrinsics, camera)
+        else:
+            detector = ArucoDetector(config, grab, intrinsics)
         found = await detector.detect(request)
         located = [
             Located(
@@ -83,6 +87,12 @@ class Detection:
             placed=intrinsics is not None and camera is not None,
             detections=located,
         )
+
+    def model_files(self) -> list[str]:
+        """The ONNX models a neural detector may name."""
+        if not self.models.is_dir():
+            return []
+        return sorted(p.name for p in self.models.glob("*.onnx") if p.is_file())
 
     async def teach(self, name: str, request: TemplateTeaching) -> DetectorConfig:
         """A template cut from a new image of the camera (the box the user drew), stored as

@@ -51,10 +51,12 @@ class TemplateRegion(Strict):
 
 class DetectorConfig(Strict):
     """A detector as the user set it up (the variable type `detector`): ArUco markers of a
-    dictionary and printed size, or a taught template (a PNG, base64) found turned by any
-    angle and within a range of scales."""
+    dictionary and printed size, a taught template (a PNG, base64) found turned by any
+    angle and within a range of scales, or a neural network (a YOLO-style ONNX model the
+    user put in the data directory's `models/`). A template's or a network's detections are
+    placed in the world on the plane z = `height`."""
 
-    method: Literal["aruco", "template"] = "aruco"
+    method: Literal["aruco", "template", "neural"] = "aruco"
     camera: str = Field(pattern=NAME)
     # ArUco
     dictionary: str = Field(default="4x4_50", max_length=32)
@@ -68,6 +70,12 @@ class DetectorConfig(Strict):
     threshold: float = Field(default=0.75, gt=0.0, le=1.0)
     max_matches: int = Field(default=10, ge=1, le=100)
     height: float = Field(default=0.0, ge=-10, le=10)  # m: the matched face's z in the world
+    # Neural
+    model: str | None = Field(default=None, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}\.onnx$")
+    classes: list[str] = Field(default_factory=list, max_length=1000)
+    layout: Literal["yolov5", "yolov8"] = "yolov8"
+    input_size: int = Field(default=640, ge=32, le=2048, multiple_of=32)
+    iou: float = Field(default=0.45, gt=0.0, le=1.0)  # overlap over which the weaker box goes
 
     @field_validator("dictionary")
     @classmethod
@@ -90,6 +98,8 @@ class DetectorConfig(Strict):
     def _taught(self) -> DetectorConfig:
         if self.method == "template" and self.template is None:
             raise ValueError("a template detector needs its template: teach one")
+        if self.method == "neural" and self.model is None:
+            raise ValueError("a neural detector needs its model: the name of an .onnx file")
         return self
 
 

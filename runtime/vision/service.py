@@ -97,6 +97,11 @@ def vision_router(
         """Detect in a new image of the detector's camera."""
         return await detection.detect(_camera(name), body)
 
+    @router.get("/models")
+    async def models() -> list[str]:
+        """The ONNX models in the data directory's `models/`, for a neural detector."""
+        return detection.model_files()
+
     @router.put("/detectors/{name}/template")
     async def teach(name: str, body: TemplateTeaching) -> DetectorConfig:
         """Teach a template detector the pattern inside a box drawn on a new camera image."""
@@ -170,6 +175,6 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             await storage.aclose()
 
     app = create_app("vision", lifespan=lifespan)
-    detection = Detection(storage, calibrations)
+    detection = Detection(storage, calibrations, settings.data_dir / "models")
     app.include_router(vision_router(calibrations, operations, origin, detection))
     return app

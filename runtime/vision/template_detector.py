@@ -20,8 +20,7 @@ from runtime.interfaces.detector import Box, Detection, Detections, DetectorInfo
 from runtime.interfaces.detector import Detector as DetectorInterface
 from runtime.kit.errors import InvalidValue
 from runtime.vision.detectors import DetectorConfig, Grab
-from runtime.vision.extrinsics import camera_matrix
-from runtime.vision.transforms import pose_of
+from runtime.vision.plane import on_plane, pose_on_plane
 
 REACH = 20.0  # px along the pattern's x to a second point, for its direction on the plane
 
@@ -102,35 +101,14 @@ class TemplateDetector(DetectorInterface):
         if self.intrinsics is None or self.camera is None:
             return None
         radians = np.radians(match.angle)
-        pixels = np.array(
-            [
-                [match.x, match.y],
-                [match.x + REACH * np.cos(radians), match.y - REACH * np.sin(radians)],
-            ]
-        )
-        centre, along = (self._on_plane(p) for p in pixels)
+        ends = [
+            on_plane(pixel, self.intrinsics, self.camera, self.config.height)
+            for pixel in (
+                np.array([match.x, match.y]),
+                np.array([match.x + REACH * np.cos(radians), match.y - REACH * np.sin(radians)]),
+            )
+        ]
+        centre, along = ends
         if centre is None or along is None:
             return None
-        x = along - centre
-        x[2] = 0.0
-        x /= np.linalg.norm(x)
-        z = np.array([0.0, 0.0, 1.0])
-        world = np.eye(4)
-        world[:3, :3] = np.column_stack([x, np.cross(z, x), z])
-        world[:3, 3] = centre
-        return pose_of(np.linalg.inv(self.camera) @ world)
-
-    def _on_plane(self, pixel: np.ndarray) -> np.ndarray | None:
-        assert self.intrinsics is not None
-        assert self.camera is not None
-        normalized = cv2.undistortPoints(
-            pixel.reshape(1, 1, 2),
-            camera_matrix(self.intrinsics),
-            np.array(self.intrinsics.distortion, dtype=float),
-        ).ravel()
-        ray = self.camera[:3, :3] @ np.array([normalized[0], normalized[1], 1.0])
-        origin = self.camera[:3, 3]
-        if abs(ray[2]) < 1e-9:
-            return None
-        distance = (self.config.height - origin[2]) / ray[2]
-        return None if distance <= 0 else origin + distance * ray
+        return pose_on_plane(centre, along - centre, self.camera)

@@ -89,6 +89,11 @@ ROUND_TRIP: dict[str, Any] = {
         "threshold": 0.8,
         "max_matches": 4,
         "height": 0.04,
+        "model": None,
+        "classes": [],
+        "layout": "yolov8",
+        "input_size": 640,
+        "iou": 0.45,
     },
     "program": {
         "source": "blocks",
@@ -138,6 +143,8 @@ REJECT: list[tuple[str, Any]] = [
     ("detector", {"method": "aruco", "camera": "Camera 1"}),
     ("detector", {"camera": "camera", "dictionary": "9x9_9"}),
     ("detector", {"method": "template", "camera": "camera"}),
+    ("detector", {"method": "neural", "camera": "camera"}),
+    ("detector", {"method": "neural", "camera": "camera", "model": "../../etc/passwd.onnx"}),
     ("detector", {"camera": "camera", "scales": [1.2, 0.8, 0.1]}),
     ("no_such_type", 1),
 ]
