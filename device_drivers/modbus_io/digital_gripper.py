@@ -101,12 +101,18 @@ class DigitalGripper(GripperDriver):
         await self._set("close", False)
         await self._set("open", True)
         await self._follow("opened", True)
-        return self.state()
+        return await self._settled()
 
     async def close(self, motion: GripperMotion) -> GripperState:
         await self._set("open", False)
         await self._set("close", True)
         await self._follow("gripped", True)
+        return await self._settled()
+
+    async def _settled(self) -> GripperState:
+        """The state as the inputs read now: the block's last poll may be older than the
+        move (an open reported "holds a part" from before it opened)."""
+        await self.block.poll_once()
         return self.state()
 
     async def move(self, motion: GripperMotion) -> GripperState:

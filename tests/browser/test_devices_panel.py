@@ -155,8 +155,16 @@ def test_system_panel_lists_the_services(runtime: Runtime, tablet: BrowserContex
     page.get_by_test_id("nav-system").tap()
     expect(page).to_have_url(re.compile(r"#/system$"))
     rows = page.get_by_test_id("service")
-    expect(rows).to_have_count(6)
-    for name in ("webui", "variable_storage", "device_manager", "jog", "motion", "program"):
+    expect(rows).to_have_count(7)
+    for name in (
+        "webui",
+        "variable_storage",
+        "device_manager",
+        "jog",
+        "motion",
+        "program",
+        "vision",
+    ):
         expect(rows.filter(has_text=name)).to_contain_text("ok")
 
 

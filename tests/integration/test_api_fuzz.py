@@ -25,7 +25,7 @@ from runtime.bench.harness.processes import Runtime
 # No real-time margins here: runs alongside the rest (tests/suite.py).
 pytestmark = pytest.mark.concurrent
 
-SERVICES = ("device_manager", "variable_storage", "jog", "motion", "program", "webui")
+SERVICES = ("device_manager", "variable_storage", "jog", "motion", "program", "vision", "webui")
 SCHEMATHESIS = Path(sys.executable).with_name("schemathesis")
 
 

@@ -49,6 +49,7 @@ def test_health_reports_every_service(runtime: Runtime) -> None:
         "jog",
         "motion",
         "program",
+        "vision",
     }
     assert all(s["status"] == "ok" for s in body["services"].values())
 
