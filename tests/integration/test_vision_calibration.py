@@ -20,9 +20,14 @@ from runtime.bench.harness.views import board_views, in_world
 from runtime.kit.settings import DeviceSpec
 from tests.support.vision import YAML, Cam
 
-CAMERA_SPEC = DeviceSpec(driver="sim-camera", name="sim-cam", options={"noise": 1.0, "fps": 20})
-BOARD = {"squares_x": 9, "squares_y": 6, "square": 0.03, "marker": 0.022, "dictionary": "5x5_100"}
-SIZE = (0.27, 0.18)
+# 50 mm squares: from a camera a metre above, a 30 mm board's pose was up to 1.1 mm off.
+CAMERA_SPEC = DeviceSpec(
+    driver="sim-camera",
+    name="sim-cam",
+    options={"noise": 1.0, "fps": 20, "square": 0.05, "marker": 0.037},
+)
+BOARD = {"squares_x": 9, "squares_y": 6, "square": 0.05, "marker": 0.037, "dictionary": "5x5_100"}
+SIZE = (0.45, 0.30)
 
 
 @pytest.fixture(scope="module")
@@ -152,14 +157,15 @@ def test_the_camera_is_placed_in_the_world_and_a_cancelled_run_stores_nothing(ca
     assert runtime.api("GET", "/variables/frames.camera").status_code == 404
 
     started = runtime.api(
-        "POST", "/vision/extrinsic", json={"camera": "camera", "board_pose": on_table}
+        "POST", "/vision/extrinsic", json={"camera": "camera", "board_pose": on_table, "frames": 5}
     )
     assert started.status_code == 202, started.text
     status = finished(runtime, started.json())
     result = status["result"]
-    assert result["frames"] == 3 and result["reprojection"] < 0.3
+    assert result["frames"] == 5 and result["reprojection"] < 0.3
     position = np.array(result["pose"]["position"])
-    assert np.linalg.norm(position - cam.pose[:3, 3]) < 0.001
+    off_mm = np.linalg.norm(position - cam.pose[:3, 3]) * 1000
+    assert off_mm < 1.0, off_mm  # 0.05-0.2 mm measured
     turned = Rotation.from_quat(result["pose"]["orientation"]).as_matrix() @ cam.pose[:3, :3].T
     assert np.degrees(Rotation.from_matrix(turned).magnitude()) < 0.1
     saved = runtime.api("POST", f"/vision/operations/{status['id']}/save")
