@@ -78,18 +78,21 @@ def test_a_board_on_the_table_is_found_where_it_lies(camera: DriverProc) -> None
     intrinsics = np.array(
         [[model["fx"], 0, model["cx"]], [0, model["fy"], model["cy"]], [0, 0, 1]], dtype=float
     )
-    ok, rvec, tvec = cv2.solvePnP(
-        objects, pixels, intrinsics, np.array(model["distortion"]), flags=cv2.SOLVEPNP_IPPE
-    )
+    distortion = np.array(model["distortion"])
+    ok, rvec, tvec = cv2.solvePnP(objects, pixels, intrinsics, distortion, flags=cv2.SOLVEPNP_IPPE)
     assert ok
+    # IPPE's closed form alone was up to 0.16° off (a clean run failed at 0.101°); refined
+    # over the corners' reprojection: within 0.1 mm and 0.05°.
+    rvec, tvec = cv2.solvePnPRefineLM(objects, pixels, intrinsics, distortion, rvec, tvec)
     in_camera = np.eye(4)
     in_camera[:3, :3] = cv2.Rodrigues(rvec)[0]
     in_camera[:3, 3] = tvec.ravel()
     found = matrix(model["pose"]) @ in_camera
     placed = matrix(truth["board"]["pose"])
-    assert np.linalg.norm(found[:3, 3] - placed[:3, 3]) < 0.001
-    angle = Rotation.from_matrix(found[:3, :3].T @ placed[:3, :3]).magnitude()
-    assert np.degrees(angle) < 0.1
+    off_mm = np.linalg.norm(found[:3, 3] - placed[:3, 3]) * 1000
+    assert off_mm < 1.0, off_mm
+    angle = np.degrees(Rotation.from_matrix(found[:3, :3].T @ placed[:3, :3]).magnitude())
+    assert angle < 0.1, angle
 
 
 def test_an_empty_table_shows_no_board_and_bad_poses_change_nothing(camera: DriverProc) -> None:
