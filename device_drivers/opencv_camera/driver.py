@@ -127,6 +127,10 @@ class OpenCVCamera(CameraDriver):
                         self.changed.notify_all()
             except SourceLost as exc:
                 self._lost(str(exc))
+            except Exception as exc:  # a corrupt stream must not end the reader for good
+                log.exception("camera %s failed", self.source)
+                self._lost(f"{type(exc).__name__}: {exc}")
+                self._stop.wait(self.reconnect)
             finally:
                 source.close()
 

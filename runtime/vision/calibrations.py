@@ -89,6 +89,22 @@ class Calibrations:
             ) from None
         return CameraCalibration.model_validate(stored.value)
 
+    async def camera_pose(self, camera: str) -> np.ndarray | None:
+        """Where the camera stands in the world (`frames.<camera>`), None if not placed."""
+        try:
+            stored = await self.storage.get(frame_variable(camera))
+        except NotFound:
+            return None
+        if stored.type != "frame":
+            raise Conflict(f"{stored.name} is a {stored.type}, not a frame", code="bad_frame")
+        frame = Frame.model_validate(stored.value)
+        if frame.parent != "world":
+            raise Conflict(
+                f"{stored.name} is given in {frame.parent}: place the camera in the world",
+                code="bad_frame",
+            )
+        return matrix_of(frame.pose)
+
     # Intrinsic ------------------------------------------------------------------------------
 
     async def start_intrinsic(self, camera: str, board: BoardSpec | None) -> IntrinsicSessionView:

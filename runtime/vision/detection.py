@@ -10,11 +10,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from runtime.interfaces.common import Pose
 from runtime.interfaces.detector import DetectRequest
 from runtime.kit.errors import Conflict, InvalidValue, NotFound
 from runtime.variable_storage.client import StorageClient
-from runtime.vision.calibrations import Calibrations, frame_variable
+from runtime.vision.calibrations import Calibrations
 from runtime.vision.detectors import (
     ArucoDetector,
     DetectorConfig,
@@ -49,11 +48,7 @@ class Detection:
             intrinsics = (await self.calibrations.calibration(config.camera)).intrinsics
         except Conflict:
             intrinsics = None  # boxes only: a pose needs the camera's intrinsics
-        try:
-            frame = await self.storage.get(frame_variable(config.camera))
-            camera = matrix_of(Pose.model_validate(frame.value["pose"]))
-        except NotFound:
-            camera = None
+        camera = await self.calibrations.camera_pose(config.camera)
 
         async def grab() -> tuple[np.ndarray, float]:
             return await self.calibrations.grab(config.camera, colour=config.method == "neural")

@@ -5,6 +5,7 @@ out frames that disagree with the rest."""
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -14,7 +15,7 @@ import numpy as np
 
 from runtime.imaging.boards import Board, BoardView, NotSeen
 from runtime.interfaces.camera import Intrinsics
-from runtime.kit.errors import InvalidValue
+from runtime.kit.errors import Conflict, InvalidValue
 from runtime.vision.models import CameraCalibration, Coverage, FrameReport, SessionFrame
 
 GRID = (4, 6)  # rows, columns of the coverage map
@@ -56,10 +57,23 @@ class IntrinsicSession:
         self.size: tuple[int, int] | None = None  # width, height
         self.frames: list[Kept] = []
         self.rejected = 0
+        # Captures run in worker threads and a solve in another: frames change under the
+        # lock, and not at all while a solve works on them.
+        self.lock = threading.Lock()
+        self.solving = False
 
     # Capturing ------------------------------------------------------------------------------
 
     def add(self, gray: np.ndarray, taken: float) -> FrameReport:
+        with self.lock:
+            self._idle()
+            return self._add(gray, taken)
+
+    def _idle(self) -> None:
+        if self.solving:
+            raise Conflict("a solve is running: change the frames after it", code="solving")
+
+    def _add(self, gray: np.ndarray, taken: float) -> FrameReport:
         height, width = gray.shape[:2]
         if self.size is not None and self.size != (width, height):
             self.rejected += 1
@@ -101,9 +115,11 @@ class IntrinsicSession:
         )
 
     def remove(self, index: int) -> None:
-        if not 0 <= index < len(self.frames):
-            raise InvalidValue(f"no frame {index + 1}", code="no_such_frame")
-        del self.frames[index]
+        with self.lock:
+            self._idle()
+            if not 0 <= index < len(self.frames):
+                raise InvalidValue(f"no frame {index + 1}", code="no_such_frame")
+            del self.frames[index]
 
     def _similar(self, view: BoardView, normal: np.ndarray) -> int | None:
         """An earlier frame that saw the board where this one does, turned the same way."""
@@ -209,6 +225,16 @@ class IntrinsicSession:
 
     def solve(self, progress: Progress) -> Solution:
         """Runs off the event loop (seconds for dozens of frames)."""
+        with self.lock:
+            self._idle()
+            self.solving = True
+        try:
+            return self._solve(progress)
+        finally:
+            with self.lock:
+                self.solving = False
+
+    def _solve(self, progress: Progress) -> Solution:
         if len(self.frames) < MIN_SOLVE or self.size is None:
             raise InvalidValue(
                 f"{len(self.frames)} frames kept: a solve needs {MIN_SOLVE} at least",

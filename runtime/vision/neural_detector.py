@@ -84,7 +84,14 @@ class NeuralDetector(DetectorInterface):
         with _lock:
             net = load(self.path)
             net.setInput(blob)
-            output = np.asarray(net.forward())
+            try:
+                output = np.asarray(net.forward())
+            except cv2.error as exc:
+                raise InvalidValue(
+                    f"{self.config.model} did not run on a {size}x{size} input "
+                    f"(is input_size the model's?): {exc.msg.strip()[:200]}",
+                    code="bad_model",
+                ) from None
         height, width = image.shape[:2]
         try:
             return decode(

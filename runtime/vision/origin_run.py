@@ -27,7 +27,7 @@ from runtime.vision.models import OriginPose, RobotOriginRequest, RobotOriginRes
 from runtime.vision.operations import Operation
 from runtime.vision.poses import flange_poses
 from runtime.vision.robot_origin import Camera, Sighting, solve_origin
-from runtime.vision.transforms import matrix_of, pose_of
+from runtime.vision.transforms import pose_of
 
 SETTLED = 1e-3  # rad/s: every joint slower than this, the arm is still
 SETTLE_TIMEOUT = 5.0  # s
@@ -50,18 +50,15 @@ class OriginRun:
         """Everything checked before the robot moves: the lease, the camera's calibrations."""
         await self.devices.check_lease(request.robot, token)
         intrinsics = (await self.calibrations.calibration(request.camera)).intrinsics
-        try:
-            frame = await self.storage.get(f"frames.{request.camera}")
-        except OpenPendantError:
+        placed = await self.calibrations.camera_pose(request.camera)
+        if placed is None:
             raise Conflict(
                 f"{request.camera} is not placed in the world yet: calibrate its pose first",
                 code="camera_not_placed",
-            ) from None
+            )
         await self.devices.entry(request.camera, "camera")
         return Camera(
-            camera_matrix(intrinsics),
-            np.array(intrinsics.distortion, dtype=float),
-            matrix_of(Pose.model_validate(frame.value["pose"])),
+            camera_matrix(intrinsics), np.array(intrinsics.distortion, dtype=float), placed
         )
 
     async def run(

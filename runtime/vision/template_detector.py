@@ -69,6 +69,12 @@ class TemplateDetector(DetectorInterface):
         if region is not None:
             left, top = region.x, region.y
             gray = gray[top : top + region.height, left : left + region.width]
+            if min(gray.shape[:2]) < min(self.pattern.shape[:2]):
+                raise InvalidValue(
+                    "the detector's region lies outside the camera's image or is smaller "
+                    "than its template",
+                    code="bad_region",
+                )
         found = find_template(
             gray,
             self.pattern,

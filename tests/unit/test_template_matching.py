@@ -57,3 +57,30 @@ def test_nothing_is_found_where_the_pattern_is_not() -> None:
 def test_at_most_the_matches_asked_for_best_first() -> None:
     found = find_template(scene(PLACED), pattern(), max_matches=2)
     assert len(found) == 2 and found[0].score >= found[1].score
+
+
+def test_a_region_outside_the_image_is_a_clear_error() -> None:
+    import asyncio
+    import base64
+
+    from runtime.interfaces.detector import DetectRequest
+    from runtime.kit.errors import InvalidValue
+    from runtime.vision.detectors import DetectorConfig
+    from runtime.vision.template_detector import TemplateDetector
+
+    ok, png = cv2.imencode(".png", pattern())
+    assert ok
+    config = DetectorConfig.model_validate(
+        {
+            "method": "template",
+            "camera": "camera",
+            "template": base64.b64encode(png.tobytes()).decode(),
+            "region": {"x": 5000, "y": 0, "width": 100, "height": 100},
+        }
+    )
+
+    async def grab() -> tuple[np.ndarray, float]:
+        return scene(PLACED), 0.0
+
+    with pytest.raises(InvalidValue, match="region lies outside"):
+        asyncio.run(TemplateDetector(config, grab, None, None).detect(DetectRequest()))

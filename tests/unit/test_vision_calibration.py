@@ -14,7 +14,7 @@ from scipy.spatial.transform import Rotation
 from device_drivers.sim_camera.optics import CameraModel, Renderer, Target, look_at
 from runtime.bench.harness.views import board_views
 from runtime.imaging.boards import Board, BoardSpec, BoardView
-from runtime.kit.errors import InvalidValue
+from runtime.kit.errors import Conflict, InvalidValue
 from runtime.vision.calibration_file import from_yaml, to_yaml
 from runtime.vision.extrinsics import average, board_in_camera, camera_in_world
 from runtime.vision.intrinsics import MIN_FRAMES, IntrinsicSession
@@ -212,3 +212,16 @@ def test_the_camera_is_placed_in_the_world_from_a_board_at_a_known_pose(
     turned = Rotation.from_matrix(mean.matrix[:3, :3] @ CAMERA.pose[:3, :3].T).magnitude()
     assert np.degrees(turned) < 0.1
     assert mean.spread_m < 0.001 and mean.spread_deg < 0.1
+
+
+def test_frames_do_not_change_while_a_solve_runs(renderer: Renderer) -> None:
+    session = session_of(renderer, CHARUCO, 4)
+    session.solving = True  # as while a solve works in its thread
+    with pytest.raises(Conflict, match="a solve is running"):
+        session.remove(0)
+    with pytest.raises(Conflict, match="a solve is running"):
+        session.add(np.full((400, 640), 128, np.uint8), 0.0)
+    with pytest.raises(Conflict, match="a solve is running"):
+        session.solve(lambda _p, _s: None)
+    session.solving = False
+    assert len(session.frames) == 4
