@@ -9,11 +9,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import cv2
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import AfterValidator, Field, model_validator
 
 from runtime.interfaces.common import Strict
 
@@ -24,6 +24,16 @@ DICTIONARIES: dict[str, int] = {
 }
 REFINE = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_MAX_ITER, 50, 1e-4)
 MIN_CORNERS = 6  # below this a view pins down too little (and a homography needs 4)
+
+
+def known_dictionary(name: str) -> str:
+    if name not in DICTIONARIES:
+        raise ValueError(f"no ArUco dictionary {name!r} (e.g. 4x4_50, 5x5_100, 6x6_250)")
+    return name
+
+
+# A marker dictionary's name, as OpenCV's predefined ones are called (lower case, no DICT_).
+Dictionary = Annotated[str, Field(max_length=32), AfterValidator(known_dictionary)]
 
 
 def dictionary_size(name: str) -> int:

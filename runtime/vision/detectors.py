@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 from pydantic import BaseModel, Field, field_validator, model_validator
 
-from runtime.imaging.boards import DICTIONARIES
+from runtime.imaging.boards import Dictionary
 from runtime.imaging.markers import find_markers
 from runtime.interfaces.camera import Intrinsics
 from runtime.interfaces.common import Pose, Strict
@@ -59,7 +59,7 @@ class DetectorConfig(Strict):
     method: Literal["aruco", "template", "neural"] = "aruco"
     camera: str = Field(pattern=NAME)
     # ArUco
-    dictionary: str = Field(default="4x4_50", max_length=32)
+    dictionary: Dictionary = "4x4_50"
     marker_size: float = Field(default=0.032, gt=0.001, le=1.0)  # m, the black square's side
     # Template
     template: str | None = Field(default=None, max_length=MAX_TEMPLATE_BASE64)
@@ -76,13 +76,6 @@ class DetectorConfig(Strict):
     layout: Literal["yolov5", "yolov8"] = "yolov8"
     input_size: int = Field(default=640, ge=32, le=2048, multiple_of=32)
     iou: float = Field(default=0.45, gt=0.0, le=1.0)  # overlap over which the weaker box goes
-
-    @field_validator("dictionary")
-    @classmethod
-    def _known(cls, name: str) -> str:
-        if name not in DICTIONARIES:
-            raise ValueError(f"no ArUco dictionary {name!r} (e.g. 4x4_50, 5x5_100)")
-        return name
 
     @field_validator("scales")
     @classmethod

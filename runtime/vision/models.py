@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, Field, field_validator
+from pydantic import BaseModel, Field
 
-from runtime.imaging.boards import DICTIONARIES, BoardSpec
+from runtime.imaging.boards import BoardSpec, Dictionary
 from runtime.interfaces.camera import Intrinsics
 from runtime.interfaces.common import Pose, Strict
 from runtime.vision.poses import PoseRegion
@@ -122,14 +122,7 @@ class FlangeTag(Strict):
 
     id: int = Field(default=0, ge=0, le=999)
     size: float = Field(default=0.06, gt=0.005, le=0.5)
-    dictionary: str = Field(default="4x4_50", max_length=32)
-
-    @field_validator("dictionary")
-    @classmethod
-    def _known(cls, name: str) -> str:
-        if name not in DICTIONARIES:
-            raise ValueError(f"no ArUco dictionary {name!r} (e.g. 4x4_50, 5x5_100)")
-        return name
+    dictionary: Dictionary = "4x4_50"
 
 
 class RobotOriginRequest(Strict):
