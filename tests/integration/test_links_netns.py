@@ -175,6 +175,7 @@ def test_a_link_drop_during_a_held_jog_halts_it_and_nothing_resumes(hosts: Hosts
         with jog.held(press):
             jog.drain(0.6)
             assert hosts.robot.moving()
+            seq_before = hosts.robot.last_seq()
             dropped = time.monotonic()
             hosts.wire.down()
             try:
@@ -187,10 +188,18 @@ def test_a_link_drop_during_a_held_jog_halts_it_and_nothing_resumes(hosts: Hosts
                 assert told < 0.5, f"the client heard of the lost link after {told:.2f} s"
                 print(f"link dropped: the client was told after {told * 1000:.0f} ms")
                 assert hosts.link_status() in ("stale", "disconnected")
-                # The board halted the robot by itself: the runtime's session went silent.
+                # The board halted the robot by itself: the runtime's session went silent. The
+                # arm can be still before that (its last jog command expires first), so the
+                # halt is waited for, not read once.
                 wait_for(hosts.robot.stopped, 2, what="the robot halted on its board")
-                halts = [c for c in hosts.robot.commands() if c["type"] == "halt"]
-                assert halts[-1]["tag"] in ("session silent", "command stream closed")
+                halt = wait_for(
+                    lambda: next(
+                        (c for c in hosts.robot.commands(seq_before) if c["type"] == "halt"), None
+                    ),
+                    2,
+                    what="the board's own halt",
+                )
+                assert halt["tag"] in ("session silent", "command stream closed"), halt
                 jog.drain(max(0.0, 5.0 - (time.monotonic() - dropped)))  # a 5 s outage
                 at_rest = hosts.robot.q()
                 seq = hosts.robot.last_seq()
