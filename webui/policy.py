@@ -54,6 +54,7 @@ RULES: tuple[Rule, ...] = (
     rule(("POST",), "/motion/moves/{}/cancel", VIEW),
     rule(SOCKET, "/programs/_ws", VIEW),
     rule(SOCKET, "/devices/ws", VIEW),
+    rule(SOCKET, "/devices/{}/frames/ws", VIEW),
     rule(SOCKET, "/variables/_events", VIEW),
     # Services' own link socket: never through the gateway.
     rule((*SOCKET, *ANY), "/devices/_links", INTERNAL),

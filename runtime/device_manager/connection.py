@@ -46,6 +46,7 @@ CONNECT_TIMEOUT = 1.0
 CALL_TIMEOUT = 5.0
 MAX_INFO = 256 * 1024  # bytes of GET /info
 MAX_STATE = 1 << 20  # bytes of one state message
+MAX_STREAMED = 1 << 25  # bytes of one streamed message (a lossless 4K image)
 MAX_ERROR = 300  # characters of a shown error
 MAX_QUEUED = 1000  # commands waiting for a slow link: more means it is not a link any more
 MAX_ROUTED = 4096  # recent command ids whose refusals go back to their sender
@@ -182,6 +183,24 @@ class DeviceConnection:
         except ValueError:
             content = None
         return response.status_code, content
+
+    async def open_stream(self, path: str, query: str = "") -> ClientConnection:
+        """A socket of the driver's own (a camera's frames), signed as this runtime's, while
+        the device is connected; large messages allowed (an image)."""
+        if not self.live:
+            code = "link_stale" if self.status == "stale" else "device_disconnected"
+            raise Unavailable(f"{self.name} is {self.status}: {self.last_error}", code=code)
+        secret = self._secret()
+        ws_url = self.record.url.replace("http://", "ws://", 1).replace("https://", "wss://", 1)
+        headers = {HEADER: sign(secret, "GET", path)} if secret else {}
+        return await websockets.connect(
+            ws_url + path + (f"?{query}" if query else ""),
+            open_timeout=CONNECT_TIMEOUT,
+            close_timeout=0.2,
+            max_size=MAX_STREAMED,
+            additional_headers=headers,
+            compression=None,  # images are compressed already
+        )
 
     def _require(self, generation: int) -> None:
         if self.generation != generation:

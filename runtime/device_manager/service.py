@@ -12,6 +12,7 @@ from fastapi.responses import JSONResponse
 
 from runtime.device_manager.calls import CallRequest, call_device, stop_all
 from runtime.device_manager.cell import cell_parts
+from runtime.device_manager.frames import relay_frames
 from runtime.device_manager.leases import LeaseGranted, LeaseInfo, LeaseRequest
 from runtime.device_manager.models import (
     AddDeviceRequest,
@@ -21,6 +22,7 @@ from runtime.device_manager.models import (
     RepointRequest,
 )
 from runtime.device_manager.registry import DeviceRegistry
+from runtime.interfaces.camera import Encoding
 from runtime.interfaces.robot import RobotInfo, ToolSetup
 from runtime.kit.app import create_app
 from runtime.kit.discovery import Browser
@@ -50,6 +52,14 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
         await fanout.serve(
             ws, registry.snapshot_messages(states), max_rate_hz=max_rate, acked=batch
         )
+
+    @router.websocket("/{local_name}/frames/ws")
+    async def frames(
+        ws: WebSocket, local_name: str, encoding: Encoding = "jpeg", quality: int = 80
+    ) -> None:
+        """A camera's live frames, each a JSON text message (when it was taken, its size)
+        then the image; the next comes after the viewer sends any text (it drew this one)."""
+        await relay_frames(ws, registry, local_name, encoding, quality)
 
     @router.websocket("/_links")
     async def links(ws: WebSocket) -> None:

@@ -68,8 +68,9 @@ class Image(BaseModel):
 
 
 class Camera(ABC):
-    """Frames are also streamed over `WS /frames/ws`: one binary message per frame, the next
-    sent only after the consumer acknowledges the last, so old frames never queue."""
+    """Frames are also streamed over `WS /frames/ws`: per frame a text message (the frame's
+    fields but `data`, as JSON) and a binary one (the encoded image), the next sent only
+    after the consumer acknowledges the last, so old frames never queue."""
 
     @endpoint("POST", "/capture", body=CaptureRequest, returns=Image)
     @abstractmethod

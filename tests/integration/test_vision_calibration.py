@@ -8,12 +8,15 @@ Not `concurrent`: the camera is a device on a link that goes stale under a starv
 from __future__ import annotations
 
 import json
+import time
 from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from websockets.exceptions import InvalidStatus
+from websockets.sync.client import connect
 
 from runtime.bench.harness.processes import Runtime, child_env, wait_for
 from runtime.bench.harness.views import board_views, in_world
@@ -178,3 +181,28 @@ def test_the_camera_is_placed_in_the_world_and_a_cancelled_run_stores_nothing(ca
 
     no_pose = runtime.api("POST", "/vision/extrinsic", json={"camera": "camera"})
     assert no_pose.status_code == 422 and no_pose.json()["error"]["code"] == "no_board_pose"
+
+
+def test_a_cameras_frames_reach_a_viewer_through_the_gateway_at_its_pace(cam: Cam) -> None:
+    """The UI's live view: the camera's frames relayed by the device manager, each told when
+    it was taken, the next only after the viewer drew the last; only cameras stream."""
+    runtime = cam.runtime
+    url = runtime.ws_url("/devices/camera/frames/ws?encoding=jpeg&quality=60")
+    with connect(url, additional_headers=runtime.auth("viewer"), max_size=2**24) as ws:
+        about = json.loads(ws.recv(timeout=30))
+        image = ws.recv(timeout=30)
+        assert isinstance(image, bytes) and image[:2] == b"\xff\xd8"
+        assert (about["width"], about["height"], about["encoding"]) == (1280, 800, "jpeg")
+        time.sleep(0.5)
+        back = time.time()
+        ws.send("drawn")
+        second = json.loads(ws.recv(timeout=30))
+        assert isinstance(ws.recv(timeout=30), bytes)
+        assert second["seqno"] > about["seqno"] and second["ts"] >= back - 0.05
+    with connect(
+        runtime.ws_url("/devices/nocam/frames/ws"), additional_headers=runtime.auth()
+    ) as ws:
+        refused = json.loads(ws.recv(timeout=10))
+        assert refused["type"] == "error" and refused["error"]["code"] == "device_not_found"
+    with pytest.raises(InvalidStatus):  # a signed-in user's only
+        connect(runtime.ws_url("/devices/camera/frames/ws"), open_timeout=5)
