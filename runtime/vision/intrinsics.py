@@ -16,7 +16,13 @@ import numpy as np
 from runtime.imaging.boards import Board, BoardView, NotSeen
 from runtime.interfaces.camera import Intrinsics
 from runtime.kit.errors import Conflict, InvalidValue
-from runtime.vision.models import CameraCalibration, Coverage, FrameReport, SessionFrame
+from runtime.vision.models import (
+    Advice,
+    CameraCalibration,
+    Coverage,
+    FrameReport,
+    SessionFrame,
+)
 
 GRID = (4, 6)  # rows, columns of the coverage map
 MIN_FRAMES = 10  # for a solve to be trusted (one can be asked for from MIN_SOLVE)
@@ -171,11 +177,11 @@ class IntrinsicSession:
                 cells[r, c] += 1
             tilts[kept.tilt] += 1
         covered = float((cells > 0).mean())
-        hints = self._hints(cells, tilts)
+        advice = self._advice(cells, tilts)
         ready = (
             len(self.frames) >= MIN_FRAMES
             and covered >= READY_COVERAGE
-            and not any("tilt" in h for h in hints)
+            and not any(a.code == "tilt" for a in advice)
         )
         return Coverage(
             rows=rows,
@@ -183,14 +189,15 @@ class IntrinsicSession:
             cells=cells.tolist(),
             covered=round(covered, 3),
             tilts=tilts,
-            hints=hints,
+            hints=[a.text() for a in advice],
+            advice=advice,
             ready=ready,
         )
 
-    def _hints(self, cells: np.ndarray, tilts: dict[str, int]) -> list[str]:
-        hints: list[str] = []
+    def _advice(self, cells: np.ndarray, tilts: dict[str, int]) -> list[Advice]:
         if not self.frames:
-            return ["hold the board in front of the camera"]
+            return [Advice(code="start")]
+        advice: list[Advice] = []
         rows, columns = GRID
         empty: dict[str, int] = {}
         for r in range(rows):
@@ -200,13 +207,13 @@ class IntrinsicSession:
                     empty[name] = empty.get(name, 0) + 1
         # The image's corners first: distortion is largest there and only they pin it down.
         order = sorted(empty, key=lambda name: (not name.endswith("corner"), -empty[name]))
-        hints.extend(f"show the board in the image's {name}" for name in order[:2])
+        advice.extend(Advice(code="show", region=name) for name in order[:2])
         tilted = [name for name in ("left", "right", "up", "down") if tilts[name] > 0]
         if len(tilted) < 2:
-            hints.append("tilt the board towards the camera's sides (about 30°)")
+            advice.append(Advice(code="tilt"))
         if len(self.frames) < MIN_FRAMES:
-            hints.append(f"{MIN_FRAMES - len(self.frames)} more frames at least")
-        return hints
+            advice.append(Advice(code="more", count=MIN_FRAMES - len(self.frames)))
+        return advice
 
     def frame_views(self) -> list[SessionFrame]:
         return [

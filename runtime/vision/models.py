@@ -32,6 +32,23 @@ class CameraCalibration(Strict):
     calibrated: float = Field(ge=0)  # when (Unix time)
 
 
+class Advice(BaseModel):
+    """What to show the camera next, as a code a UI words in its language (and in English)."""
+
+    code: Literal["start", "show", "tilt", "more"]
+    region: str = ""  # show: "top left corner", "left edge", "centre", …
+    count: int = 0  # more: frames still needed
+
+    def text(self) -> str:
+        if self.code == "start":
+            return "hold the board in front of the camera"
+        if self.code == "show":
+            return f"show the board in the image's {self.region}"
+        if self.code == "tilt":
+            return "tilt the board towards the camera's sides (about 30°)"
+        return f"{self.count} more frames at least"
+
+
 class Coverage(BaseModel):
     """Where in the image the board's corners have been seen (counts per cell, rows of
     `columns` cells), and how the board was tilted towards the camera in each frame."""
@@ -42,6 +59,7 @@ class Coverage(BaseModel):
     covered: float  # the share of cells seen at least once
     tilts: dict[str, int]  # flat, left, right, up, down: frames tilted so
     hints: list[str]  # what to show the camera next
+    advice: list[Advice] = Field(default_factory=list)  # the same, as codes
     ready: bool  # enough frames, image covered and tilted: a solve can be trusted
 
 

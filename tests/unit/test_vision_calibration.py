@@ -74,6 +74,10 @@ def test_a_guided_session_says_what_to_show_then_solves_to_the_true_camera(
     assert not guidance.ready
     assert any("corner" in hint for hint in guidance.hints)
     assert any("tilt" in hint for hint in guidance.hints)
+    codes = [a.code for a in guidance.advice]  # the same, for a UI to word in its language
+    assert "tilt" in codes and any(
+        a.code == "show" and "corner" in a.region for a in guidance.advice
+    )
     for index, pose in enumerate(poses[1:], start=1):
         assert session.add(shoot(renderer, board, pose, index), float(index)).accepted
     coverage = session.coverage()
