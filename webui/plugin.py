@@ -20,12 +20,13 @@ def _panel(id: str, order: int, en: str, de: str) -> Panel:
 
 PLUGIN = Plugin(
     name="ui",
-    description="The Jog, Program, Scene, I/O, Devices, System and Users panels",
+    description="The Jog, Program, Scene, I/O, Vision, Devices, System and Users panels",
     panels=(
         _panel("jog", 10, "Jog", "Verfahren"),
         _panel("program", 20, "Program", "Programm"),
         _panel("scene", 30, "Scene", "Zelle"),
         _panel("io", 35, "I/O", "E/A"),
+        _panel("vision", 37, "Vision", "Kamera"),
         _panel("devices", 40, "Devices", "Geräte"),
         _panel("system", 50, "System", "System"),
         _panel("users", 60, "Users", "Benutzer"),

@@ -28,7 +28,7 @@ from tests.browser.conftest import (
 )
 from tests.integration.test_jog import mouse_recording
 
-PANELS = ("jog", "program", "scene", "io", "devices", "system")
+PANELS = ("jog", "program", "scene", "io", "vision", "devices", "system")
 
 
 @pytest.fixture(scope="module")

@@ -13,6 +13,7 @@ import "./program-panel";
 import "./scene-panel";
 import "./system-panel";
 import "./users-panel";
+import "./vision-panel";
 
 export interface Panel {
   id: string;
@@ -46,6 +47,12 @@ const builtIn: Record<string, Panel> = {
     title: () => t("app.panel.io"),
     icon: icons.io,
     render: () => html`<op-io-panel></op-io-panel>`,
+  },
+  vision: {
+    id: "vision",
+    title: () => t("app.panel.vision"),
+    icon: icons.vision,
+    render: () => html`<op-vision-panel></op-vision-panel>`,
   },
   devices: {
     id: "devices",

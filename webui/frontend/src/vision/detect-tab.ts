@@ -1,0 +1,114 @@
+import { LitElement, html } from "lit";
+import { errorText } from "../api";
+import { t } from "../i18n";
+import { shared } from "../styles";
+import type { Overlay } from "./camera-view";
+import { type Detections, detect, detectionList, detectorsOf, overlayOf } from "./detections";
+import { visionStyles } from "./styles";
+
+// Detecting with the camera's stored detectors: once, or again and again (each detection as
+// soon as the last answered), the boxes laid over the live picture.
+
+export class OpDetectTab extends LitElement {
+  static properties = {
+    camera: { type: String },
+    detectors: { state: true },
+    chosen: { state: true },
+    found: { state: true },
+    running: { state: true },
+    error: { state: true },
+  };
+  declare camera: string;
+  declare detectors: string[];
+  declare chosen: string;
+  declare found: Detections | null;
+  declare running: boolean;
+  declare error: string;
+
+  static styles = [shared, visionStyles];
+
+  constructor() {
+    super();
+    this.camera = "";
+    this.detectors = [];
+    this.chosen = "";
+    this.found = null;
+    this.running = false;
+    this.error = "";
+  }
+
+  disconnectedCallback(): void {
+    super.disconnectedCallback();
+    this.running = false;
+    this.emit({});
+  }
+
+  protected willUpdate(changed: Map<string, unknown>): void {
+    if (changed.has("camera")) {
+      this.running = false;
+      this.found = null;
+      void this.load();
+    }
+  }
+
+  private emit(overlay: Overlay): void {
+    this.dispatchEvent(new CustomEvent("overlay", { detail: overlay, bubbles: true, composed: true }));
+  }
+
+  private async load(): Promise<void> {
+    try {
+      this.detectors = this.camera ? await detectorsOf(this.camera) : [];
+      if (!this.detectors.includes(this.chosen)) this.chosen = this.detectors[0] ?? "";
+    } catch (err) {
+      this.error = errorText(err);
+    }
+  }
+
+  private async once(): Promise<boolean> {
+    this.error = "";
+    try {
+      this.found = await detect(this.chosen);
+      this.emit(overlayOf(this.found));
+      return true;
+    } catch (err) {
+      this.error = errorText(err);
+      return false;
+    }
+  }
+
+  private async keepDetecting(): Promise<void> {
+    this.running = true;
+    const camera = this.camera;
+    while (this.running && this.isConnected && this.camera === camera) {
+      if (!(await this.once())) break;
+    }
+    this.running = false;
+  }
+
+  render() {
+    const none = this.detectors.length === 0;
+    return html`
+      ${none
+        ? html`<p class="muted" data-testid="detect-none">${t("vision.detect.none", { camera: this.camera })}</p>`
+        : html`<div class="fields">
+            <label>${t("vision.detect.detector")}
+              <select data-testid="detect-detector" .value=${this.chosen}
+                @change=${(e: Event) => (this.chosen = (e.target as HTMLSelectElement).value)}>
+                ${this.detectors.map((d) => html`<option value=${d} ?selected=${d === this.chosen}>${d}</option>`)}
+              </select></label>
+          </div>
+          <div class="actions">
+            <button class="primary" data-testid="detect-once" ?disabled=${this.running}
+              @click=${() => void this.once()}>${t("vision.detect.once")}</button>
+            ${this.running
+              ? html`<button data-testid="detect-stop" @click=${() => (this.running = false)}>${t("vision.detect.stop")}</button>`
+              : html`<button data-testid="detect-live" @click=${() => void this.keepDetecting()}>${t("vision.detect.live")}</button>`}
+            <button @click=${() => void this.load()}>${t("vision.detect.reload")}</button>
+          </div>`}
+      ${detectionList(this.found)}
+      ${this.error ? html`<p class="error" role="alert" data-testid="detect-error">${this.error}</p>` : ""}
+    `;
+  }
+}
+
+customElements.define("op-detect-tab", OpDetectTab);

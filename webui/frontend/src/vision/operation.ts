@@ -1,0 +1,71 @@
+import { html, type TemplateResult } from "lit";
+import { api } from "../api";
+import { t } from "../i18n";
+
+// A long vision operation (a solve, a robot-origin run): followed until it ends, its
+// progress and stage shown with a Cancel button; what it found is stored only on Save.
+
+export interface OperationStatus<R = Record<string, unknown>> {
+  id: string;
+  kind: "intrinsic" | "extrinsic" | "robot_origin";
+  state: "running" | "done" | "failed" | "cancelled";
+  progress: number;
+  stage: string;
+  error: string;
+  result: R | null;
+}
+
+const POLL_MS = 250;
+
+/** Calls `seen` with each status until the operation ends (or `wanted` says stop). */
+export async function follow<R>(
+  started: OperationStatus<R>,
+  seen: (status: OperationStatus<R>) => void,
+  wanted: () => boolean,
+): Promise<OperationStatus<R>> {
+  let status = started;
+  seen(status);
+  while (status.state === "running" && wanted()) {
+    await new Promise((resolve) => window.setTimeout(resolve, POLL_MS));
+    status = await api<OperationStatus<R>>(
+      "GET",
+      `/api/vision/operations/${encodeURIComponent(status.id)}`,
+    );
+    seen(status);
+  }
+  return status;
+}
+
+export function cancelOperation(id: string): Promise<unknown> {
+  return api("POST", `/api/vision/operations/${encodeURIComponent(id)}/cancel`);
+}
+
+export async function saveOperation(id: string): Promise<string[]> {
+  const saved = await api<{ saved: string[] }>(
+    "POST",
+    `/api/vision/operations/${encodeURIComponent(id)}/save`,
+  );
+  return saved.saved;
+}
+
+/** The operation's progress bar, stage and Cancel, or how it ended. */
+export function operationView(
+  op: OperationStatus<unknown> | null,
+  cancel: () => void,
+): TemplateResult | string {
+  if (op === null) return "";
+  if (op.state === "running") {
+    return html`<div class="operation" data-testid="op-running">
+      <progress max="1" value=${op.progress}></progress>
+      <span>${Math.round(op.progress * 100)} % · ${op.stage}</span>
+      <button class="danger" data-testid="op-cancel" @click=${cancel}>${t("vision.cancel")}</button>
+    </div>`;
+  }
+  if (op.state === "failed") {
+    return html`<p class="error" role="alert" data-testid="op-failed">${op.error}</p>`;
+  }
+  if (op.state === "cancelled") {
+    return html`<p class="muted" data-testid="op-cancelled">${t("vision.cancelled")}</p>`;
+  }
+  return "";
+}
