@@ -31,6 +31,7 @@ MODULES = (
     "io_panel",
     "ur",
     "vision",
+    "camera_view",
 )
 
 

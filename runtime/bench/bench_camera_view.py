@@ -1,0 +1,103 @@
+"""A camera frame until the Vision panel in a browser has drawn it: the simulated camera's
+capture (1280x800), JPEG encoding, the driver's frame socket, the device manager's relay,
+the gateway, the browser's decode and the canvas. Each frame carries when it was taken; the
+panel notes when it drew it (the same machine's clock). The next frame is asked for once
+the last is drawn, as on a tablet. The browser is Debian's headless Chromium through
+Playwright (`make bench`); where either is missing the figures are not measured."""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
+from runtime.bench.harness.processes import Runtime, child_env, wait_for
+from runtime.bench.runner import Figure
+from runtime.bench.stats import percentile, quick
+from runtime.kit.settings import DeviceSpec
+
+FIGURES = ("camera_to_ui_latency_p50", "camera_to_ui_latency_p99", "camera_to_ui_fps")
+TARGET_P50 = 100.0  # ms
+CAMERA = DeviceSpec(driver="sim-camera", name="bench-cam", options={"fps": 30, "noise": 1.0})
+
+
+def _add_camera(runtime: Runtime) -> None:
+    uuid = runtime.own_device(CAMERA)["uuid"]
+    added = runtime.api("POST", "/devices", json={"uuid": uuid, "local_name": "camera"})
+    added.raise_for_status()
+    wait_for(
+        lambda: runtime.api("GET", "/devices/camera").json()["status"] == "connected",
+        30,
+        what="the camera connected",
+    )
+
+
+def _measure(page: Any, seconds: float) -> tuple[list[float], float]:
+    view = page.locator("op-camera-view")
+    view.and_(page.locator("[data-frames]")).wait_for(timeout=20_000)
+    page.wait_for_timeout(2000)  # warmed up: the socket open, the first frames decoded
+    start = view.evaluate("(v) => { v.latencies.length = 0; return v.frames; }")
+    began = time.monotonic()
+    page.wait_for_timeout(seconds * 1000)
+    frames, latencies = view.evaluate("(v) => [v.frames, [...v.latencies]]")
+    rate = (frames - start) / (time.monotonic() - began)
+    return [value * 1000 for value in latencies], rate
+
+
+def run() -> list[Figure]:
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        print(
+            "  camera_view: not measured: needs playwright (pip install '.[dev]')", file=sys.stderr
+        )
+        return []
+    if not Path(CHROMIUM).is_file():
+        print(f"  camera_view: not measured: needs {CHROMIUM} (Debian's chromium)", file=sys.stderr)
+        return []
+    seconds = 5.0 if quick() else 20.0
+    with tempfile.TemporaryDirectory(prefix="openpendant-bench-camera-") as folder:
+        home = Path(folder)
+        devices = json.dumps([CAMERA.model_dump()])
+        runtime = Runtime(home, env=child_env(home, OPENPENDANT_DEVICES=devices))
+        try:
+            runtime.wait_ready()
+            _add_camera(runtime)
+            cookie = runtime.session_cookie("viewer")
+            with sync_playwright() as playwright:
+                browser = playwright.chromium.launch(
+                    executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS
+                )
+                context = browser.new_context(viewport={"width": 1280, "height": 800})
+                context.add_cookies([{"name": "op_session", "value": cookie, "url": runtime.url}])
+                page = context.new_page()
+                page.goto(f"{runtime.url}/#/vision")
+                latencies, rate = _measure(page, seconds)
+                browser.close()
+        finally:
+            runtime.stop()
+    p50 = percentile(latencies, 50)
+    details = {
+        "samples": len(latencies),
+        "path": "sim camera capture → JPEG → driver socket → device manager → gateway → "
+        "browser decode → canvas",
+        "image": "1280x800 JPEG q75",
+        "camera_fps_limit": CAMERA.options["fps"],
+        "max_ms": max(latencies),
+    }
+    return [
+        Figure(
+            "camera_to_ui_latency_p50",
+            p50,
+            "ms",
+            target=f"≤ {TARGET_P50:g}",
+            meets_target=p50 <= TARGET_P50,
+            details=details,
+        ),
+        Figure("camera_to_ui_latency_p99", percentile(latencies, 99), "ms", details=details),
+        Figure("camera_to_ui_fps", rate, "fps", details=details),
+    ]
