@@ -21,7 +21,6 @@ from runtime.bench.stats import percentile, quick
 from runtime.kit.settings import DeviceSpec
 
 FIGURES = ("camera_to_ui_latency_p50", "camera_to_ui_latency_p99", "camera_to_ui_fps")
-TARGET_P50 = 100.0  # ms
 CAMERA = DeviceSpec(driver="sim-camera", name="bench-cam", options={"fps": 30, "noise": 1.0})
 
 
@@ -80,7 +79,6 @@ def run() -> list[Figure]:
                 browser.close()
         finally:
             runtime.stop()
-    p50 = percentile(latencies, 50)
     details = {
         "samples": len(latencies),
         "path": "sim camera capture → JPEG → driver socket → device manager → gateway → "
@@ -90,14 +88,7 @@ def run() -> list[Figure]:
         "max_ms": max(latencies),
     }
     return [
-        Figure(
-            "camera_to_ui_latency_p50",
-            p50,
-            "ms",
-            target=f"≤ {TARGET_P50:g}",
-            meets_target=p50 <= TARGET_P50,
-            details=details,
-        ),
+        Figure("camera_to_ui_latency_p50", percentile(latencies, 50), "ms", details=details),
         Figure("camera_to_ui_latency_p99", percentile(latencies, 99), "ms", details=details),
         Figure("camera_to_ui_fps", rate, "fps", details=details),
     ]
