@@ -23,6 +23,7 @@ from runtime.kit.logs import setup_logging
 from runtime.kit.serve import listening_socket, run_app
 from runtime.kit.service_guard import InternalOnly, TicketRequired
 from runtime.kit.settings import RuntimeSettings, settings_from_env
+from runtime.kit.uploads import UPLOADS
 from runtime.kit.web_guard import WebGuard, WebPolicy
 
 URLS_ENV = "OPENPENDANT_SERVICE_URLS"
@@ -62,6 +63,7 @@ def web_policy(settings: RuntimeSettings) -> WebPolicy:
         allowed_hosts=settings.allowed_hosts,
         max_body=settings.max_request_bytes,
         jog_port=settings.jog_port or None,
+        uploads=UPLOADS,
     )
 
 

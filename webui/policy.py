@@ -85,6 +85,8 @@ RULES: tuple[Rule, ...] = (
     rule(("POST",), "/vision/detectors/{}/detect", OPERATE),
     rule(("PUT",), "/vision/detectors/{}/template", PROGRAM),
     rule(("PUT",), "/vision/cameras/{}/calibration.yaml", PROGRAM),
+    # A network runs in OpenCV's parser: installing one is an administrator's.
+    rule(("PUT", "DELETE"), "/vision/models/{}", ADMIN),
     # Programs: running them is an operator's, editing them a programmer's.
     rule(("POST",), "/programs/{}/(run|pause|resume|step)", OPERATE),
     rule(("PUT",), "/programs/{}/breakpoints", OPERATE),

@@ -6,8 +6,9 @@ ASGI middleware in front of them.
 - An `Origin`, when a browser sends one, must be the UI's own (an allowed host at the UI's
   port): another site's page can neither change anything nor open a socket. Browsers send
   `Origin` with every cross-origin request that could change something and every WebSocket.
-- A request body must be JSON (or YAML where an import takes it): the body types a page of
-  another site can send without asking first (text/plain, forms) are refused.
+- A request body must be JSON (or YAML where an import takes it; a file's raw bytes only at
+  the upload paths the policy names, each with its own size bound): the body types a page
+  of another site can send without asking first (text/plain, forms) are refused.
 - Bodies are bounded, and every answer tells the browser not to sniff, frame or inline.
 """
 
@@ -25,6 +26,8 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 BODY_TYPES = frozenset({"application/json", "application/yaml", "application/x-yaml"})
 BODY_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
+# A file's raw bytes: not a type another site's page may send without a preflight it fails.
+UPLOAD_TYPE = "application/octet-stream"
 
 # Blockly styles its blocks inline and draws icons from data: URIs; nothing else is needed
 # from anywhere but this origin (the jog socket's own port is added per answer).
@@ -77,6 +80,8 @@ class WebPolicy:
     allowed_hosts: Iterable[str] = ()
     max_body: int = 16 * 1024 * 1024
     jog_port: int | None = None
+    # Path prefixes that take a file's raw bytes (PUT), and the largest each takes.
+    uploads: dict[str, int] = field(default_factory=dict)
     names: frozenset[str] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -115,9 +120,22 @@ class WebPolicy:
             403, "origin_not_allowed", f"requests from pages of {value[:80]!r} are not accepted"
         )
 
-    def check_body(self, method: str, headers: dict[str, str]) -> Refusal | None:
+    def upload_limit(self, method: str, path: str) -> int | None:
+        """The size bound of an upload path (None: not one)."""
+        if method != "PUT":
+            return None
+        return next(
+            (size for prefix, size in self.uploads.items() if path.startswith(prefix)), None
+        )
+
+    def body_limit(self, method: str, path: str) -> int:
+        return self.upload_limit(method, path) or self.max_body
+
+    def check_body(self, method: str, headers: dict[str, str], path: str = "") -> Refusal | None:
         if method not in BODY_METHODS:
             return None
+        upload = self.upload_limit(method, path)
+        limit = upload or self.max_body
         length = headers.get("content-length")
         chunked = "chunked" in headers.get("transfer-encoding", "").lower()
         if length is not None:
@@ -125,8 +143,8 @@ class WebPolicy:
                 size = int(length)
             except ValueError:
                 return Refusal(400, "bad_request", "Content-Length is not a number")
-            if size > self.max_body:
-                return self.too_large()
+            if size > limit:
+                return self.too_large(limit)
             if size == 0 and not chunked:
                 return None
         elif not chunked:
@@ -134,14 +152,17 @@ class WebPolicy:
         media = headers.get("content-type", "").split(";", 1)[0].strip().lower()
         if media in BODY_TYPES or media.endswith("+json"):
             return None
+        if upload is not None and media == UPLOAD_TYPE:
+            return None
         return Refusal(
             415,
             "unsupported_media_type",
             f"send the body as application/json (got {media[:60] or 'no Content-Type'})",
         )
 
-    def too_large(self) -> Refusal:
-        return Refusal(413, "too_large", f"the request body is larger than {self.max_body} bytes")
+    def too_large(self, limit: int | None = None) -> Refusal:
+        bound = limit or self.max_body
+        return Refusal(413, "too_large", f"the request body is larger than {bound} bytes")
 
     def content_security_policy(self, host_header: str | None) -> str:
         if self.jog_port is None or not host_header:
@@ -181,15 +202,16 @@ class WebGuard:
                 return
             await self.app(scope, receive, send)
             return
-        refusal = refusal or self.policy.check_body(scope["method"], headers)
+        limit = self.policy.body_limit(scope["method"], scope["path"])
+        refusal = refusal or self.policy.check_body(scope["method"], headers, scope["path"])
         send = self._with_headers(send, headers.get("host"))
         if refusal is not None:
             await _refuse(send, refusal)
             return
         if "content-length" not in headers and scope["method"] in BODY_METHODS:
-            body = await self._read_chunked(receive)
+            body = await self._read_chunked(receive, limit)
             if body is None:
-                await _refuse(send, self.policy.too_large())
+                await _refuse(send, self.policy.too_large(limit))
                 return
             receive = _replay(body, receive)
         await self.app(scope, receive, send)
@@ -213,7 +235,7 @@ class WebGuard:
 
         return sending
 
-    async def _read_chunked(self, receive: Receive) -> bytes | None:
+    async def _read_chunked(self, receive: Receive, limit: int) -> bytes | None:
         """A body without a length, read whole before the app sees it (None: too large)."""
         body = b""
         while True:
@@ -221,7 +243,7 @@ class WebGuard:
             if message["type"] != "http.request":
                 return body
             body += bytes(message.get("body", b""))
-            if len(body) > self.policy.max_body:
+            if len(body) > limit:
                 return None
             if not message.get("more_body", False):
                 return body

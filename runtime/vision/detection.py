@@ -83,12 +83,6 @@ class Detection:
             detections=located,
         )
 
-    def model_files(self) -> list[str]:
-        """The ONNX models a neural detector may name."""
-        if not self.models.is_dir():
-            return []
-        return sorted(p.name for p in self.models.glob("*.onnx") if p.is_file())
-
     async def teach(self, name: str, request: TemplateTeaching) -> DetectorConfig:
         """A template cut from a new image of the camera (the box the user drew), stored as
         the detector `name` (its other settings kept if it already was one)."""

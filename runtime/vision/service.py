@@ -22,6 +22,7 @@ from runtime.vision.calibration_file import MAX_FILE, from_yaml, to_yaml
 from runtime.vision.calibrations import Calibrations
 from runtime.vision.detection import Detection
 from runtime.vision.detectors import DetectorConfig, LocatedDetections, TemplateTeaching
+from runtime.vision.model_files import ModelFiles
 from runtime.vision.models import (
     CameraCalibration,
     ExtrinsicRequest,
@@ -47,7 +48,11 @@ def _camera(name: str) -> str:
 
 
 def vision_router(
-    calibrations: Calibrations, operations: Operations, origin: OriginRun, detection: Detection
+    calibrations: Calibrations,
+    operations: Operations,
+    origin: OriginRun,
+    detection: Detection,
+    model_files: ModelFiles,
 ) -> APIRouter:
     router = APIRouter(prefix="/vision")
 
@@ -100,7 +105,16 @@ def vision_router(
     @router.get("/models")
     async def models() -> list[str]:
         """The ONNX models in the data directory's `models/`, for a neural detector."""
-        return detection.model_files()
+        return model_files.names()
+
+    @router.put("/models/{name}")
+    async def add_model(name: str, request: Request) -> list[str]:
+        """A network's ONNX file (the raw bytes) kept as `name` once OpenCV has read it."""
+        return await model_files.add(name, await request.body())
+
+    @router.delete("/models/{name}")
+    async def remove_model(name: str) -> list[str]:
+        return model_files.remove(name)
 
     @router.put("/detectors/{name}/template")
     async def teach(name: str, body: TemplateTeaching) -> DetectorConfig:
@@ -175,6 +189,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             await storage.aclose()
 
     app = create_app("vision", lifespan=lifespan)
-    detection = Detection(storage, calibrations, settings.data_dir / "models")
-    app.include_router(vision_router(calibrations, operations, origin, detection))
+    models = ModelFiles(settings.data_dir / "models")
+    detection = Detection(storage, calibrations, models.folder)
+    app.include_router(vision_router(calibrations, operations, origin, detection, models))
     return app

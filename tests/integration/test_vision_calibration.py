@@ -22,6 +22,7 @@ from runtime.bench.harness.processes import Runtime, child_env, wait_for
 from runtime.bench.harness.views import board_views, in_world
 from runtime.kit.settings import DeviceSpec
 from tests.support.vision import YAML, Cam
+from tests.unit.test_neural_detector import CANDIDATES, model
 
 # 50 mm squares: from a camera a metre above, a 30 mm board's pose was up to 1.1 mm off.
 CAMERA_SPEC = DeviceSpec(
@@ -206,3 +207,27 @@ def test_a_cameras_frames_reach_a_viewer_through_the_gateway_at_its_pace(cam: Ca
         assert refused["type"] == "error" and refused["error"]["code"] == "device_not_found"
     with pytest.raises(InvalidStatus):  # a signed-in user's only
         connect(runtime.ws_url("/devices/camera/frames/ws"), open_timeout=5)
+
+
+def test_a_network_is_uploaded_by_an_administrator_and_kept_only_if_it_reads(cam: Cam) -> None:
+    """The neural detector's model as a tablet adds it: the file's bytes through the gateway
+    (not JSON), read by OpenCV before it is kept; anything else refused, nothing kept."""
+    runtime = cam.runtime
+    raw = {"Content-Type": "application/octet-stream"}
+    network = model(CANDIDATES)
+    added = runtime.api("PUT", "/vision/models/parts.onnx", content=network, headers=raw)
+    assert added.status_code == 200, added.text
+    assert added.json() == ["parts.onnx"]
+    assert runtime.api("GET", "/vision/models").json() == ["parts.onnx"]
+    junk = runtime.api("PUT", "/vision/models/junk.onnx", content=b"not a network", headers=raw)
+    assert junk.status_code == 422 and junk.json()["error"]["code"] == "bad_model"
+    named = runtime.api("PUT", "/vision/models/..onnx.exe", content=network, headers=raw)
+    assert named.status_code in (400, 422), named.text
+    programmer = runtime.api(
+        "PUT", "/vision/models/p.onnx", role="programmer", content=network, headers=raw
+    )
+    assert programmer.status_code == 403
+    assert runtime.api("GET", "/vision/models").json() == ["parts.onnx"]
+    assert sorted(p.name for p in (runtime.data_dir / "models").iterdir()) == ["parts.onnx"]
+    assert runtime.api("DELETE", "/vision/models/parts.onnx").json() == []
+    assert runtime.api("DELETE", "/vision/models/parts.onnx").status_code == 404

@@ -139,3 +139,30 @@ def test_the_path_is_read_whole_not_as_routing_matched_it() -> None:
     for full in ("/api/programs/a\n", "/api/programs\n", "/api/programsx/a", "/api/programs/../x"):
         with pytest.raises(PathRefused):
             below_prefix(full, "programs")
+
+
+def test_a_files_raw_bytes_are_taken_only_at_an_upload_path_within_its_own_bound() -> None:
+    app = FastAPI()
+
+    @app.put("/api/files/{name}")
+    async def upload(request: Request) -> dict[str, int]:
+        return {"bytes": len(await request.body())}
+
+    @app.put("/api/other")
+    async def other(request: Request) -> dict[str, int]:
+        return {"bytes": len(await request.body())}
+
+    policy = WebPolicy(ui_port=8080, max_body=64, uploads={"/api/files/": 1000})
+    app.add_middleware(WebGuard, policy=policy)
+    client = TestClient(app, base_url=UI)
+    raw = {"content-type": "application/octet-stream", "origin": UI}
+    taken = client.put("/api/files/net.onnx", content=b"x" * 900, headers=raw)
+    assert taken.status_code == 200 and taken.json() == {"bytes": 900}
+    assert client.put("/api/files/net.onnx", content=b"x" * 1001, headers=raw).status_code == 413
+    # Not at another path, not by POST, and the types a foreign page sends unasked never.
+    assert client.put("/api/other", content=b"x", headers=raw).status_code == 415
+    assert client.put("/api/other", content=b"{}" * 40, headers={"origin": UI}).status_code == 413
+    text = {"content-type": "text/plain", "origin": UI}
+    assert client.put("/api/files/net.onnx", content=b"x", headers=text).status_code == 415
+    foreign = {**raw, "origin": "http://attacker.example"}
+    assert client.put("/api/files/net.onnx", content=b"x", headers=foreign).status_code == 403
