@@ -207,3 +207,63 @@ def test_the_vision_panel_fits_a_phone(runtime: Runtime, cam: Cam, phone: Browse
     expect(page.get_by_test_id("intrinsic-start")).to_be_visible()
     assert fits_the_screen(page)
     assert errors.errors == []
+
+
+def test_a_marker_detector_is_set_up_in_the_panel_and_finds_the_parts_tags(
+    runtime: Runtime, cam: Cam, tablet: BrowserContext
+) -> None:
+    page, errors = open_panel(tablet, runtime)
+    page.get_by_test_id("detector-add").tap()
+    page.get_by_test_id("detector-name").fill("cell_tags")
+    page.get_by_test_id("detector-dictionary").select_option("4x4_50")
+    set_number(page.get_by_test_id("detector-marker-size"), "32")
+    page.get_by_test_id("detector-save").tap()
+    chosen = page.get_by_test_id("detect-detector")
+    expect(chosen).to_have_value("cell_tags")
+    stored = runtime.api("GET", "/variables/detectors.cell_tags").json()
+    assert stored["value"]["method"] == "aruco"
+    assert stored["value"]["marker_size"] == pytest.approx(0.032)
+    page.get_by_test_id("detect-once").tap()
+    found = page.get_by_test_id("detections")
+    for tag in ("1", "2", "3"):
+        expect(found.locator(f"li[data-label='{tag}']")).to_have_count(1)
+    # Detecting again and again until stopped, each answer drawn.
+    page.get_by_test_id("detect-live").tap()
+    expect(page.get_by_test_id("detect-stop")).to_be_visible()
+    page.get_by_test_id("detect-stop").tap()
+    expect(page.get_by_test_id("detect-live")).to_be_visible()
+    assert errors.errors == []
+
+
+def test_the_detect_block_offers_the_stored_detectors(
+    runtime: Runtime, cam: Cam, tablet: BrowserContext
+) -> None:
+    """A detector taught in the Vision panel (or stored anywhere) is a choice of the
+    program's detect block."""
+    taught = {"method": "aruco", "camera": "camera", "dictionary": "4x4_50"}
+    for name in ("tags", "taught_here"):
+        stored = runtime.api(
+            "PUT", f"/variables/detectors.{name}", json={"type": "detector", "value": taught}
+        )
+        assert stored.status_code == 200, stored.text
+    block = {
+        "type": "vision_detect",
+        "id": "look",
+        "x": 30,
+        "y": 30,
+        "fields": {"DETECTOR": "tags"},
+    }
+    workspace = {"blocks": {"languageVersion": 0, "blocks": [block]}}
+    saved = runtime.api("PUT", "/programs/look", json={"workspace": workspace})
+    assert saved.status_code == 200, saved.text
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/program")
+    page.get_by_test_id("program-select").select_option("look")
+    field = page.locator('g.blocklyDraggable[data-id="look"] .blocklyDropdownField').first
+    expect(field).to_be_visible(timeout=15_000)
+    field.tap()
+    menu = page.locator(".blocklyDropDownDiv .blocklyMenuItem")
+    for name in ("taught_here", "tags"):
+        expect(menu.get_by_text(name, exact=True)).to_be_visible()
+    assert errors.errors == []

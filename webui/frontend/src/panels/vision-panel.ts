@@ -33,7 +33,7 @@ export class OpVisionPanel extends LitElement {
   static properties = {
     camera: { state: true },
     step: { state: true },
-    overlay: { state: true },
+    overlays: { state: true },
     box: { state: true },
     calibration: { state: true },
     placed: { state: true },
@@ -41,7 +41,7 @@ export class OpVisionPanel extends LitElement {
   };
   declare camera: string;
   declare step: Step;
-  declare overlay: Overlay;
+  declare overlays: Partial<Record<Step, Overlay>>;
   declare box: Box | null;
   declare calibration: Calibration | null;
   declare placed: boolean;
@@ -106,6 +106,9 @@ export class OpVisionPanel extends LitElement {
       .file input {
         display: none;
       }
+      [hidden] {
+        display: none !important;
+      }
     `,
   ];
 
@@ -114,7 +117,7 @@ export class OpVisionPanel extends LitElement {
     new FeedController(this);
     this.camera = "";
     this.step = "detect";
-    this.overlay = {};
+    this.overlays = {};
     this.box = null;
     this.calibration = null;
     this.placed = false;
@@ -130,7 +133,7 @@ export class OpVisionPanel extends LitElement {
     if (!cameras.includes(this.camera)) this.camera = cameras[0] ?? "";
     if (this.camera !== this.shownFor) {
       this.shownFor = this.camera;
-      this.overlay = {};
+      this.overlays = {};
       this.box = null;
       void this.loadCalibration();
     }
@@ -193,28 +196,38 @@ export class OpVisionPanel extends LitElement {
     </div>`;
   }
 
-  private stepView() {
+  /** Every step stays made while the panel is open (hidden when not chosen): a solve or a
+   * robot-origin run goes on, and its Cancel is there, when the user looks at another. */
+  private stepView(step: Step) {
     const camera = this.camera;
-    switch (this.step) {
+    const active = step === this.step;
+    switch (step) {
       case "intrinsic":
-        return html`<op-intrinsic-tab .camera=${camera}
+        return html`<op-intrinsic-tab data-step=${step} ?hidden=${!active} .camera=${camera}
           @calibrated=${() => void this.loadCalibration()}></op-intrinsic-tab>`;
       case "placement":
-        return html`<op-placement-tab .camera=${camera}></op-placement-tab>`;
+        return html`<op-placement-tab data-step=${step} ?hidden=${!active} .camera=${camera}
+          @placed=${() => void this.loadCalibration()}></op-placement-tab>`;
       case "origin":
-        return html`<op-origin-tab .camera=${camera}></op-origin-tab>`;
+        return html`<op-origin-tab data-step=${step} ?hidden=${!active} .camera=${camera}></op-origin-tab>`;
       case "template":
-        return html`<op-template-tab .camera=${camera} .box=${this.box}></op-template-tab>`;
+        return html`<op-template-tab data-step=${step} ?hidden=${!active} .camera=${camera}
+          .box=${this.box}></op-template-tab>`;
       default:
-        return html`<op-detect-tab .camera=${camera}></op-detect-tab>`;
+        return html`<op-detect-tab data-step=${step} ?hidden=${!active} .active=${active}
+          .camera=${camera}></op-detect-tab>`;
     }
   }
 
   private choose(step: Step): void {
     this.step = step;
-    this.overlay = {};
-    this.box = null;
     void this.loadCalibration();
+  }
+
+  /** What a step lays over the picture, kept per step: shown while it is the chosen one. */
+  private onOverlay(e: CustomEvent<Overlay>): void {
+    const step = (e.target as HTMLElement).dataset.step as Step | undefined;
+    if (step) this.overlays = { ...this.overlays, [step]: e.detail };
   }
 
   render() {
@@ -233,17 +246,17 @@ export class OpVisionPanel extends LitElement {
       </div>
       ${this.calibrationBar()}
       <div class="layout">
-        <op-camera-view .camera=${this.camera} .overlay=${this.overlay}
+        <op-camera-view .camera=${this.camera} .overlay=${this.overlays[this.step] ?? {}}
           ?drawing=${this.step === "template"}
           @box=${(e: CustomEvent<Box>) => (this.box = e.detail)}></op-camera-view>
-        <section class="card" @overlay=${(e: CustomEvent<Overlay>) => (this.overlay = e.detail)}>
+        <section class="card" @overlay=${(e: CustomEvent<Overlay>) => this.onOverlay(e)}>
           <div class="steps" role="tablist">
             ${STEPS.map(
               (s) => html`<button role="tab" data-testid="vision-step-${s}" aria-pressed=${s === this.step}
                 @click=${() => this.choose(s)}>${t(`vision.step.${s}` as StringKey)}</button>`,
             )}
           </div>
-          ${this.stepView()}
+          ${STEPS.map((s) => this.stepView(s))}
         </section>
       </div>
       ${this.error ? html`<p class="error" role="alert" data-testid="vision-error">${this.error}</p>` : ""}

@@ -1,5 +1,5 @@
 // The runtime's blocks in Blockly: definitions and toolbox from GET /api/programs/_blocks, and
-// the dropdowns that list what the system has (robots, waypoints, I/O names).
+// the dropdowns that list what the system has (robots, waypoints, I/O names, detectors).
 
 import * as Blockly from "blockly";
 import { type StringKey, t } from "../i18n";
@@ -19,7 +19,14 @@ export interface BlockCatalog {
   words?: RuntimeWords;
 }
 
-export type ChoiceKind = "robots" | "waypoints" | "inputs" | "outputs" | "analogs" | "analog_outputs";
+export type ChoiceKind =
+  | "robots"
+  | "waypoints"
+  | "inputs"
+  | "outputs"
+  | "analogs"
+  | "analog_outputs"
+  | "detectors";
 
 const EMPTY_LABEL: Record<ChoiceKind, StringKey> = {
   robots: "program.choices.no_robots",
@@ -28,6 +35,7 @@ const EMPTY_LABEL: Record<ChoiceKind, StringKey> = {
   outputs: "program.choices.no_outputs",
   analogs: "program.choices.no_analogs",
   analog_outputs: "program.choices.no_analog_outputs",
+  detectors: "program.choices.no_detectors",
 };
 
 /** What the runtime has now; the panel keeps these current. */
@@ -38,6 +46,7 @@ export const choices: Record<ChoiceKind, string[]> = {
   outputs: [],
   analogs: [],
   analog_outputs: [],
+  detectors: [],
 };
 
 // Names used by loaded programs stay selectable even when the system no longer has them:
@@ -49,6 +58,7 @@ const used: Record<ChoiceKind, Set<string>> = {
   outputs: new Set(),
   analogs: new Set(),
   analog_outputs: new Set(),
+  detectors: new Set(),
 };
 
 const dynamicFields = new Map<string, ChoiceKind>(); // "<block type>/<field name>" -> kind

@@ -1,10 +1,12 @@
 // What the dropdowns of the robot, I/O and waypoint blocks offer: the robots added, the
-// digital inputs and outputs each has, the analog signals of the I/O blocks, the waypoints taught. Waypoints taught, renamed or
+// digital inputs and outputs each has, the analog signals of the I/O blocks, the waypoints taught,
+// the detectors stored. Waypoints taught, renamed or
 // deleted anywhere reach them at once over the waypoint feed.
 
 import { api } from "../api";
 import { feed } from "../live";
 import type { DeviceDetails } from "../types";
+import { DETECTOR_PREFIX } from "../vision/detections";
 import { type WaypointChange, WaypointFeed } from "./waypoint-feed";
 
 export const waypointFeed = new WaypointFeed(
@@ -69,4 +71,10 @@ export async function refreshChoices(): Promise<void> {
     ),
   );
   choices.waypoints = lists.flat().map((v) => v.name);
+  const detectors = await api<{ name: string }[]>("GET", "/api/variables?type=detector").catch(
+    () => [],
+  );
+  choices.detectors = detectors
+    .filter((v) => v.name.startsWith(DETECTOR_PREFIX))
+    .map((v) => v.name.slice(DETECTOR_PREFIX.length));
 }

@@ -107,6 +107,11 @@ export class OpCameraView extends LitElement {
     this.size = null;
   }
 
+  connectedCallback(): void {
+    super.connectedCallback();
+    if (this.camera && !this.streaming) this.open(); // attached again
+  }
+
   disconnectedCallback(): void {
     super.disconnectedCallback();
     this.close();
@@ -240,7 +245,7 @@ export class OpCameraView extends LitElement {
         ctx.fillText(mark.label, mark.x, Math.max(line * 9, mark.y - line * 2));
       }
     }
-    const box = this.drag ? this.dragBox() : this.drawn;
+    const box = this.drag ? this.dragBox() : this.drawing ? this.drawn : null;
     if (box) {
       ctx.setLineDash([line * 4, line * 3]);
       ctx.strokeStyle = "#3ea6ff";

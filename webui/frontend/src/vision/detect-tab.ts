@@ -4,6 +4,7 @@ import { t } from "../i18n";
 import { shared } from "../styles";
 import type { Overlay } from "./camera-view";
 import { type Detections, detect, detectionList, detectorsOf, overlayOf } from "./detections";
+import "./detector-form";
 import { visionStyles } from "./styles";
 
 // Detecting with the camera's stored detectors: once, or again and again (each detection as
@@ -12,38 +13,45 @@ import { visionStyles } from "./styles";
 export class OpDetectTab extends LitElement {
   static properties = {
     camera: { type: String },
+    active: { type: Boolean },
     detectors: { state: true },
     chosen: { state: true },
     found: { state: true },
     running: { state: true },
     error: { state: true },
+    adding: { state: true },
   };
   declare camera: string;
+  declare active: boolean;
   declare detectors: string[];
   declare chosen: string;
   declare found: Detections | null;
   declare running: boolean;
   declare error: string;
+  declare adding: boolean;
 
   static styles = [shared, visionStyles];
 
   constructor() {
     super();
     this.camera = "";
+    this.active = true;
     this.detectors = [];
     this.chosen = "";
     this.found = null;
     this.running = false;
     this.error = "";
+    this.adding = false;
   }
 
   disconnectedCallback(): void {
     super.disconnectedCallback();
     this.running = false;
-    this.emit({});
   }
 
   protected willUpdate(changed: Map<string, unknown>): void {
+    if (changed.has("active") && !this.active) this.running = false; // not while unseen
+    if (changed.has("active") && this.active) void this.load();
     if (changed.has("camera")) {
       this.running = false;
       this.found = null;
@@ -64,6 +72,12 @@ export class OpDetectTab extends LitElement {
     }
   }
 
+  private async added(name: string): Promise<void> {
+    this.adding = false;
+    await this.load();
+    if (this.detectors.includes(name)) this.chosen = name;
+  }
+
   private async once(): Promise<boolean> {
     this.error = "";
     try {
@@ -79,7 +93,7 @@ export class OpDetectTab extends LitElement {
   private async keepDetecting(): Promise<void> {
     this.running = true;
     const camera = this.camera;
-    while (this.running && this.isConnected && this.camera === camera) {
+    while (this.running && this.active && this.isConnected && this.camera === camera) {
       if (!(await this.once())) break;
     }
     this.running = false;
@@ -105,6 +119,13 @@ export class OpDetectTab extends LitElement {
               : html`<button data-testid="detect-live" @click=${() => void this.keepDetecting()}>${t("vision.detect.live")}</button>`}
             <button @click=${() => void this.load()}>${t("vision.detect.reload")}</button>
           </div>`}
+      <div class="actions">
+        <button data-testid="detector-add" aria-pressed=${this.adding}
+          @click=${() => (this.adding = !this.adding)}>${t("vision.detect.add")}</button>
+      </div>
+      ${this.adding
+        ? html`<op-detector-form .camera=${this.camera} @saved=${(e: CustomEvent<string>) => void this.added(e.detail)}></op-detector-form>`
+        : ""}
       ${detectionList(this.found)}
       ${this.error ? html`<p class="error" role="alert" data-testid="detect-error">${this.error}</p>` : ""}
     `;

@@ -113,9 +113,9 @@ export class OpIntrinsicTab extends LitElement {
     void this.loadBoard();
   }
 
-  disconnectedCallback(): void {
-    super.disconnectedCallback();
-    this.emit({});
+  protected willUpdate(changed: Map<string, unknown>): void {
+    // A session is one camera's: another camera chosen starts from the board again.
+    if (changed.has("camera") && this.view && this.view.camera !== this.camera) this.reset();
   }
 
   private async loadBoard(): Promise<void> {

@@ -92,6 +92,7 @@ export class OpPlacementTab extends LitElement {
       const started = await api<OperationStatus<Placement>>("POST", "/api/vision/extrinsic", body);
       const camera = this.camera;
       await follow(started, (s) => (this.op = s), () => this.camera === camera && this.isConnected);
+
     } catch (err) {
       this.error = errorText(err);
     } finally {
@@ -102,6 +103,7 @@ export class OpPlacementTab extends LitElement {
   private async save(): Promise<void> {
     try {
       this.saved = (await saveOperation(this.op!.id)).join(", ");
+      this.dispatchEvent(new CustomEvent("placed", { bubbles: true, composed: true }));
     } catch (err) {
       this.error = errorText(err);
     }

@@ -50,11 +50,6 @@ export class OpTemplateTab extends LitElement {
     this.error = "";
   }
 
-  disconnectedCallback(): void {
-    super.disconnectedCallback();
-    this.emit({});
-  }
-
   private emit(overlay: Overlay): void {
     this.dispatchEvent(new CustomEvent("overlay", { detail: overlay, bubbles: true, composed: true }));
   }
