@@ -1,19 +1,24 @@
 """The Vision panel by touch (issue 17), against the simulated camera above the simulated
 UR5's table: the live picture; the intrinsic-calibration wizard from the board's settings to
-a stored calibration, the board moved between captures as a person would move it; a template
-taught by drawing a box around a part with a finger, then found; the panel on a phone."""
+a stored calibration, the board moved between captures as a person would move it; a
+calibration file imported and the camera placed from a board at a typed pose; a template
+taught by drawing a box around a part with a finger, then found; a marker detector set up
+and run; the detect block's choices; the panel on a phone."""
 
 from __future__ import annotations
 
 import json
 import re
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
+from scipy.spatial.transform import Rotation
 
-from runtime.bench.harness.processes import Runtime, child_env
+from runtime.bench.harness.processes import Runtime, child_env, wait_for
 from runtime.bench.harness.views import board_views, in_world
 from runtime.kit.settings import default_devices
 from tests.browser.conftest import (
@@ -22,7 +27,7 @@ from tests.browser.conftest import (
     PageErrors,
     fits_the_screen,
 )
-from tests.support.vision import CAMERA_SPEC, Cam
+from tests.support.vision import CAMERA_SPEC, Cam, board_on_table, truth_yaml
 
 BOARD_SIZE = (0.45, 0.30)  # the simulated camera's board here: 9 x 6 squares of 50 mm
 IMAGE = (1280, 800)
@@ -121,6 +126,48 @@ def test_the_intrinsic_wizard_calibrates_the_camera_and_stores_it(
     assert stored["value"]["intrinsics"]["fy"] == pytest.approx(truth["fy"], rel=0.005)
     board = runtime.api("GET", "/variables/vision.board").json()["value"]
     assert (board["square"], board["marker"]) == pytest.approx((0.05, 0.037))
+    cam.put_board(None)
+    assert errors.errors == []
+
+
+def test_the_camera_is_placed_from_an_imported_calibration_and_a_board_typed_in(
+    runtime: Runtime, cam: Cam, tablet: BrowserContext, tmp_path: Path
+) -> None:
+    """OpenCV's file imported with the panel's button; the board laid on the table at a
+    pose typed in the panel (mm and degrees); the camera's pose found and saved."""
+    board = {"squares_x": 9, "squares_y": 6, "square": 0.05, "marker": 0.037}
+    setting = {"type": "calibration_board", "value": {**board, "dictionary": "5x5_100"}}
+    assert runtime.api("PUT", "/variables/vision.board", json=setting).status_code == 200
+    calibration = tmp_path / "camera.yaml"
+    calibration.write_text(truth_yaml(cam))
+    page, errors = open_panel(tablet, runtime)
+    page.get_by_test_id("vision-import").set_input_files(str(calibration))
+    truth = cam.truth["camera"]["fx"]
+
+    def imported() -> bool:
+        stored = runtime.api("GET", "/variables/calibration.camera").json()
+        return bool(stored["value"]["intrinsics"]["fx"] == pytest.approx(truth))
+
+    wait_for(imported, 10, what="the file's calibration stored")
+    expect(page.get_by_test_id("vision-calibrated")).to_contain_text("(0.00 px)")
+
+    on_table = board_on_table()
+    cam.put_board(on_table)
+    page.get_by_test_id("vision-step-placement").tap()
+    x, y, z = (round(v * 1000) for v in on_table["position"])
+    for field, value in (("x", x), ("y", y), ("z", z), ("roll", 180), ("pitch", 0), ("yaw", 0)):
+        set_number(page.get_by_test_id(f"board-{field}"), str(value))
+    page.get_by_test_id("placement-run").tap()
+    expect(page.get_by_test_id("placement-result")).to_be_visible(timeout=30_000)
+    page.get_by_test_id("placement-save").tap()
+    expect(page.get_by_test_id("placement-saved")).to_contain_text("frames.camera")
+    expect(page.get_by_test_id("vision-placed")).to_contain_text("Placed in the world")
+    found = runtime.api("GET", "/variables/frames.camera").json()["value"]
+    assert found["parent"] == "world"
+    off = np.subtract(found["pose"]["position"], cam.pose[:3, 3])
+    assert np.linalg.norm(off) < 0.002, off
+    turned = Rotation.from_quat(found["pose"]["orientation"]).as_matrix().T @ cam.pose[:3, :3]
+    assert np.degrees(Rotation.from_matrix(turned).magnitude()) < 0.2
     cam.put_board(None)
     assert errors.errors == []
 
@@ -262,8 +309,14 @@ def test_the_detect_block_offers_the_stored_detectors(
     page.get_by_test_id("program-select").select_option("look")
     field = page.locator('g.blocklyDraggable[data-id="look"] .blocklyDropdownField').first
     expect(field).to_be_visible(timeout=15_000)
-    field.tap()
     menu = page.locator(".blocklyDropDownDiv .blocklyMenuItem")
-    for name in ("taught_here", "tags"):
-        expect(menu.get_by_text(name, exact=True)).to_be_visible()
+
+    def offered() -> bool:
+        # The lists are read as the panel opens: a menu opened sooner shows the block's own.
+        field.tap()
+        listed = all(menu.get_by_text(n, exact=True).count() == 1 for n in ("taught_here", "tags"))
+        page.keyboard.press("Escape")
+        return listed
+
+    wait_for(offered, 10, what="the stored detectors offered")
     assert errors.errors == []

@@ -56,12 +56,11 @@ class Cam:
         assert answer.status_code == 200, answer.text
 
 
-def place_the_camera(cam: Cam) -> None:
-    """Its true intrinsics imported (their calibration is tested on its own), and its pose
-    in the world calibrated from the board on the table."""
+def truth_yaml(cam: Cam) -> str:
+    """The camera's true intrinsics as an OpenCV calibration file."""
     truth = cam.truth["camera"]
     matrix = [truth["fx"], 0, truth["cx"], 0, truth["fy"], truth["cy"], 0, 0, 1]
-    text = (
+    return (
         "%YAML:1.0\n---\n"
         f"image_width: {truth['width']}\nimage_height: {truth['height']}\n"
         "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: d\n"
@@ -69,14 +68,28 @@ def place_the_camera(cam: Cam) -> None:
         "distortion_coefficients: !!opencv-matrix\n   rows: 5\n   cols: 1\n   dt: d\n"
         f"   data: {truth['distortion']}\n"
     )
-    runtime = cam.runtime
-    imported = runtime.api(
-        "PUT", "/vision/cameras/camera/calibration.yaml", content=text.encode(), headers=YAML
-    )
-    assert imported.status_code == 200, imported.text
+
+
+def board_on_table() -> dict[str, list[float]]:
+    """The board lying face up with its centre under the camera (its first corner at
+    x 225 mm, y 150 mm: the board's y runs down its rows, the world's y the other way)."""
     board = Rotation.from_euler("x", 180, degrees=True)
     at = np.array([0.45, 0.0, 0.0]) - board.apply([0.225, 0.15, 0.0])
-    on_table = {"position": at.tolist(), "orientation": board.as_quat().tolist()}
+    return {"position": at.tolist(), "orientation": board.as_quat().tolist()}
+
+
+def place_the_camera(cam: Cam) -> None:
+    """Its true intrinsics imported (their calibration is tested on its own), and its pose
+    in the world calibrated from the board on the table."""
+    runtime = cam.runtime
+    imported = runtime.api(
+        "PUT",
+        "/vision/cameras/camera/calibration.yaml",
+        content=truth_yaml(cam).encode(),
+        headers=YAML,
+    )
+    assert imported.status_code == 200, imported.text
+    on_table = board_on_table()
     cam.put_board(on_table)
     body = {
         "camera": "camera",
