@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import time
 from urllib.parse import quote
 
 import httpx
@@ -19,6 +20,7 @@ from runtime.kit.internal import HEADER as INTERNAL_HEADER
 from runtime.kit.internal import internal_headers
 from runtime.kit.request_start import HEADER as REQUEST_START
 from runtime.kit.request_start import stamp
+from runtime.kit.uploads import UPLOAD_TIMEOUT, UPLOADS
 from runtime.kit.websocket import until_either_ends
 
 USER_HEADER = "X-OpenPendant-User"
@@ -146,15 +148,22 @@ class ServiceProxy:
         # When the request reached the runtime (a client's own value is replaced): services
         # that promise a reaction time count from here, e.g. a program stop.
         headers[REQUEST_START] = received
+        body = await request.body()
+        start, wait = float(received), deadline.GATEWAY_TIMEOUT
+        if request.scope["path"].startswith(tuple(UPLOADS)):
+            # A file: its transfer from a tablet does not count against the service's time,
+            # and the service has longer to check it.
+            start, wait = time.time(), UPLOAD_TIMEOUT
         # Given up on at the timeout below (504): the service must not apply it later.
-        headers[deadline.HEADER] = deadline.for_request(float(received))
+        headers[deadline.HEADER] = deadline.for_request(start, wait)
         try:
             upstream = await self.http.request(
                 request.method,
                 url,
                 params=request.query_params,
                 headers=headers,
-                content=await request.body(),
+                content=body,
+                timeout=httpx.Timeout(wait, connect=2.0),
             )
         except httpx.TimeoutException:
             return error_response(504, "service_timeout", f"{service} did not answer in time")

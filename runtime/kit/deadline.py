@@ -31,8 +31,8 @@ class DeadlinePassed(OpenPendantError):
     code = "deadline_passed"
 
 
-def for_request(received: float) -> str:
-    return f"{received + GATEWAY_TIMEOUT - MARGIN:.6f}"
+def for_request(received: float, timeout: float = GATEWAY_TIMEOUT) -> str:
+    return f"{received + timeout - MARGIN:.6f}"
 
 
 def check() -> None:

@@ -128,16 +128,18 @@ class WebPolicy:
             (size for prefix, size in self.uploads.items() if path.startswith(prefix)), None
         )
 
-    def body_limit(self, method: str, path: str) -> int:
-        return self.upload_limit(method, path) or self.max_body
-
     def check_body(self, method: str, headers: dict[str, str], path: str = "") -> Refusal | None:
         if method not in BODY_METHODS:
             return None
-        upload = self.upload_limit(method, path)
+        media = headers.get("content-type", "").split(";", 1)[0].strip().lower()
+        upload = self.upload_limit(method, path) if media == UPLOAD_TYPE else None
         limit = upload or self.max_body
         length = headers.get("content-length")
         chunked = "chunked" in headers.get("transfer-encoding", "").lower()
+        if upload is not None and length is None:
+            # Its length known first: a file is never read into memory before the sign-in
+            # behind this guard has been checked.
+            return Refusal(411, "length_required", "send the file with its Content-Length")
         if length is not None:
             try:
                 size = int(length)
@@ -149,10 +151,7 @@ class WebPolicy:
                 return None
         elif not chunked:
             return None
-        media = headers.get("content-type", "").split(";", 1)[0].strip().lower()
-        if media in BODY_TYPES or media.endswith("+json"):
-            return None
-        if upload is not None and media == UPLOAD_TYPE:
+        if media in BODY_TYPES or media.endswith("+json") or upload is not None:
             return None
         return Refusal(
             415,
@@ -202,16 +201,15 @@ class WebGuard:
                 return
             await self.app(scope, receive, send)
             return
-        limit = self.policy.body_limit(scope["method"], scope["path"])
         refusal = refusal or self.policy.check_body(scope["method"], headers, scope["path"])
         send = self._with_headers(send, headers.get("host"))
         if refusal is not None:
             await _refuse(send, refusal)
             return
         if "content-length" not in headers and scope["method"] in BODY_METHODS:
-            body = await self._read_chunked(receive, limit)
+            body = await self._read_chunked(receive)
             if body is None:
-                await _refuse(send, self.policy.too_large(limit))
+                await _refuse(send, self.policy.too_large())
                 return
             receive = _replay(body, receive)
         await self.app(scope, receive, send)
@@ -235,18 +233,18 @@ class WebGuard:
 
         return sending
 
-    async def _read_chunked(self, receive: Receive, limit: int) -> bytes | None:
+    async def _read_chunked(self, receive: Receive) -> bytes | None:
         """A body without a length, read whole before the app sees it (None: too large)."""
-        body = b""
+        body = bytearray()
         while True:
             message = await receive()
             if message["type"] != "http.request":
-                return body
-            body += bytes(message.get("body", b""))
-            if len(body) > limit:
+                return bytes(body)
+            body += message.get("body", b"")
+            if len(body) > self.policy.max_body:
                 return None
             if not message.get("more_body", False):
-                return body
+                return bytes(body)
 
 
 def _replay(body: bytes, receive: Receive) -> Receive:

@@ -40,6 +40,9 @@ def detector_variable(name: str) -> str:
     return f"detectors.{name}"
 
 
+MODEL_FILE = r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}\.onnx$"  # a network in the models folder
+
+
 class TemplateRegion(Strict):
     """Where in the image to look (px): the rest is not searched."""
 
@@ -71,7 +74,7 @@ class DetectorConfig(Strict):
     max_matches: int = Field(default=10, ge=1, le=100)
     height: float = Field(default=0.0, ge=-10, le=10)  # m: the matched face's z in the world
     # Neural
-    model: str | None = Field(default=None, pattern=r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}\.onnx$")
+    model: str | None = Field(default=None, pattern=MODEL_FILE)
     classes: list[str] = Field(default_factory=list, max_length=1000)
     layout: Literal["yolov5", "yolov8"] = "yolov8"
     input_size: int = Field(default=640, ge=32, le=2048, multiple_of=32)

@@ -11,14 +11,14 @@ from pathlib import Path
 
 import cv2
 
+from runtime.kit import deadline
 from runtime.kit.errors import InvalidValue, NotFound
 from runtime.kit.uploads import MAX_MODEL_BYTES
-
-MODEL_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}\.onnx\Z")
+from runtime.vision.detectors import MODEL_FILE
 
 
 def _checked(name: str) -> str:
-    if not MODEL_NAME.match(name):
+    if not re.fullmatch(MODEL_FILE, name):
         raise InvalidValue(
             f"{name[:80]!r} is not a model file's name: letters, digits, _ . - ending in .onnx",
             code="bad_name",
@@ -59,6 +59,7 @@ class ModelFiles:
                     f"{name} is not a network OpenCV can read: {exc.msg.strip()[:200]}",
                     code="bad_model",
                 ) from None
+            deadline.check()  # the gateway has not given up on this upload: keep it
             os.replace(part, self.folder / name)
         finally:
             part.unlink(missing_ok=True)

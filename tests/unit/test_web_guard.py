@@ -3,6 +3,7 @@ size, and the headers every answer carries."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from typing import Any
 
 import pytest
@@ -161,6 +162,15 @@ def test_a_files_raw_bytes_are_taken_only_at_an_upload_path_within_its_own_bound
     assert client.put("/api/files/net.onnx", content=b"x" * 1001, headers=raw).status_code == 413
     # Not at another path, not by POST, and the types a foreign page sends unasked never.
     assert client.put("/api/other", content=b"x", headers=raw).status_code == 415
+    assert client.post("/api/files/net.onnx", content=b"x", headers=raw).status_code == 415
+    # JSON there is bounded as anywhere; a file comes with its length, never read unbounded.
+    assert client.put("/api/files/x", content=b"{}" * 40, headers={"origin": UI}).status_code == 413
+
+    def chunks() -> Iterator[bytes]:
+        yield b"x" * 10
+
+    unsized = client.put("/api/files/net.onnx", content=chunks(), headers=raw)
+    assert unsized.status_code == 411 and unsized.json()["error"]["code"] == "length_required"
     assert client.put("/api/other", content=b"{}" * 40, headers={"origin": UI}).status_code == 413
     text = {"content-type": "text/plain", "origin": UI}
     assert client.put("/api/files/net.onnx", content=b"x", headers=text).status_code == 415
