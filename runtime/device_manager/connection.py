@@ -46,7 +46,7 @@ CONNECT_TIMEOUT = 1.0
 CALL_TIMEOUT = 5.0
 MAX_INFO = 256 * 1024  # bytes of GET /info
 MAX_STATE = 1 << 20  # bytes of one state message
-MAX_STREAMED = 1 << 25  # bytes of one streamed message (a lossless 4K image)
+MAX_STREAMED = 1 << 24  # bytes of one streamed message (an image): the gateway's bound too
 MAX_ERROR = 300  # characters of a shown error
 MAX_QUEUED = 1000  # commands waiting for a slow link: more means it is not a link any more
 MAX_ROUTED = 4096  # recent command ids whose refusals go back to their sender
@@ -190,16 +190,8 @@ class DeviceConnection:
         if not self.live:
             code = "link_stale" if self.status == "stale" else "device_disconnected"
             raise Unavailable(f"{self.name} is {self.status}: {self.last_error}", code=code)
-        secret = self._secret()
-        ws_url = self.record.url.replace("http://", "ws://", 1).replace("https://", "wss://", 1)
-        headers = {HEADER: sign(secret, "GET", path)} if secret else {}
-        return await websockets.connect(
-            ws_url + path + (f"?{query}" if query else ""),
-            open_timeout=CONNECT_TIMEOUT,
-            close_timeout=0.2,
-            max_size=MAX_STREAMED,
-            additional_headers=headers,
-            compression=None,  # images are compressed already
+        return await self._open(
+            self.record.url, path, self._secret(), query=query, max_size=MAX_STREAMED
         )
 
     def _require(self, generation: int) -> None:
@@ -440,14 +432,21 @@ class DeviceConnection:
             raise WrongDevice(f"another device (uuid {shown}) answers at {url}")
         return info
 
-    async def _open(self, url: str, path: str, secret: str | None) -> ClientConnection:
+    async def _open(
+        self,
+        url: str,
+        path: str,
+        secret: str | None,
+        query: str = "",
+        max_size: int = MAX_STATE,
+    ) -> ClientConnection:
         ws_url = url.replace("http://", "ws://", 1).replace("https://", "wss://", 1)
         headers = {HEADER: sign(secret, "GET", path)} if secret else {}
         return await websockets.connect(
-            ws_url + path,
+            ws_url + path + (f"?{query}" if query else ""),
             open_timeout=CONNECT_TIMEOUT,
             close_timeout=0.2,
-            max_size=MAX_STATE,
+            max_size=max_size,
             additional_headers=headers,
             # A state 100 times a second is ~150 kB/s plain: nothing for a cell's network,
             # while deflating it costs both ends CPU (a driver may run on a small board).

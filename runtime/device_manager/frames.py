@@ -47,8 +47,11 @@ async def relay_frames(
 
     async def up() -> None:
         while True:
-            text = await ws.receive_text()  # "drawn": the viewer wants the next frame
-            await upstream.send(json.dumps({"ack": text[:16]}))
+            message = await ws.receive()
+            if message["type"] == "websocket.disconnect":
+                return
+            # Any message is "drawn": the viewer wants the next frame.
+            await upstream.send(json.dumps({"ack": True}))
 
     async with upstream:
         await until_either_ends(ws, down(), up(), expected=(websockets.WebSocketException,))

@@ -200,6 +200,9 @@ def test_a_cameras_frames_reach_a_viewer_through_the_gateway_at_its_pace(cam: Ca
         second = json.loads(ws.recv(timeout=30))
         assert isinstance(ws.recv(timeout=30), bytes)
         assert second["seqno"] > about["seqno"] and second["ts"] >= back - 0.05
+        ws.send(b"\x00")  # any message acknowledges (the service logs no error for bytes)
+        assert json.loads(ws.recv(timeout=30))["seqno"] > second["seqno"]
+        assert isinstance(ws.recv(timeout=30), bytes)
     with connect(
         runtime.ws_url("/devices/nocam/frames/ws"), additional_headers=runtime.auth()
     ) as ws:
