@@ -37,13 +37,20 @@ def _add_camera(runtime: Runtime) -> None:
 
 def _measure(page: Any, seconds: float) -> tuple[list[float], float]:
     view = page.locator("op-camera-view")
-    view.and_(page.locator("[data-frames]")).wait_for(timeout=20_000)
-    page.wait_for_timeout(2000)  # warmed up: the socket open, the first frames decoded
+    # Warmed up: the socket open, a few frames decoded and drawn.
+    page.wait_for_function(
+        "() => (document.querySelector('op-app')?.shadowRoot"
+        "?.querySelector('op-vision-panel')?.shadowRoot"
+        "?.querySelector('op-camera-view')?.frames ?? 0) >= 10",
+        timeout=30_000,
+    )
     start = view.evaluate("(v) => { v.latencies.length = 0; return v.frames; }")
     began = time.monotonic()
     page.wait_for_timeout(seconds * 1000)
     frames, latencies = view.evaluate("(v) => [v.frames, [...v.latencies]]")
     rate = (frames - start) / (time.monotonic() - began)
+    if not latencies:
+        raise RuntimeError("the Vision panel drew no frame")
     return [value * 1000 for value in latencies], rate
 
 

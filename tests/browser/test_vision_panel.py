@@ -11,13 +11,14 @@ import json
 import re
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
 from scipy.spatial.transform import Rotation
 
+from runtime.bench.harness.jog import RobotView
 from runtime.bench.harness.processes import Runtime, child_env, wait_for
 from runtime.bench.harness.views import board_views, in_world
 from runtime.kit.settings import default_devices
@@ -25,9 +26,18 @@ from tests.browser.conftest import (
     BROWSER_LINK_TIMEOUT,
     Finger,
     PageErrors,
+    add_robot,
     fits_the_screen,
 )
-from tests.support.vision import CAMERA_SPEC, Cam, board_on_table, truth_yaml
+from tests.support.vision import (
+    CAMERA_SPEC,
+    HOME,
+    REGION,
+    Cam,
+    board_on_table,
+    place_the_camera,
+    truth_yaml,
+)
 
 BOARD_SIZE = (0.45, 0.30)  # the simulated camera's board here: 9 x 6 squares of 50 mm
 IMAGE = (1280, 800)
@@ -93,7 +103,7 @@ def test_the_intrinsic_wizard_calibrates_the_camera_and_stores_it(
     expect(report).to_contain_text("no board in view")
     expect(page.get_by_test_id("intrinsic-hints")).to_contain_text("Hold the board")
 
-    views = board_views(cam.truth["camera"], BOARD_SIZE, 13)
+    views = board_views(cam.truth["camera"], BOARD_SIZE, 11)
     for index, view in enumerate(views):
         cam.put_board(in_world(cam.pose, view))
         capture.tap()
@@ -319,4 +329,47 @@ def test_the_detect_block_offers_the_stored_detectors(
         return listed
 
     wait_for(offered, 10, what="the stored detectors offered")
+    assert errors.errors == []
+
+
+def test_a_robot_origin_run_moves_only_under_this_tablets_control_and_cancel_stops_it(
+    runtime: Runtime, cam: Cam, tablet: BrowserContext
+) -> None:
+    """Run needs the tablet's control of the robot (taken on the Jog panel); the run's
+    progress shows, and its Cancel stops the robot and stores nothing. (A whole run and its
+    result are tested through the API in integration/test_vision_cell.py.) Last in this
+    file: the arm ends over the table."""
+    place_the_camera(cam)
+    add_robot(runtime)
+    robot = RobotView(runtime)
+    robot.wait_stopped()
+    assert robot.http.put("/sim/joints", json={"joints": HOME}).status_code == 200
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/vision")
+    page.get_by_test_id("vision-step-origin").tap()
+    expect(page.get_by_test_id("origin-robot")).to_have_value("robot")
+    expect(page.get_by_test_id("origin-run")).to_be_disabled()  # no control yet
+    page.get_by_test_id("nav-jog").tap()
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("You have control")
+    enable = page.get_by_test_id("enable")
+    if enable.count():
+        enable.tap()
+    expect(page.get_by_test_id("disable")).to_be_visible()
+
+    page.get_by_test_id("nav-vision").tap()
+    page.get_by_test_id("vision-step-origin").tap()
+    centres, sizes = cast(list[float], REGION["centre"]), cast(list[float], REGION["size"])
+    for axis, centre, size in zip("xyz", centres, sizes, strict=True):
+        set_number(page.get_by_test_id(f"origin-centre-{axis}"), str(round(centre * 1000)))
+        set_number(page.get_by_test_id(f"origin-size-{axis}"), str(round(size * 1000)))
+    set_number(page.get_by_test_id("origin-speed"), "30")
+    page.get_by_test_id("origin-run").tap()
+    expect(page.get_by_test_id("op-running")).to_be_visible()
+    wait_for(lambda: not robot.stopped(), 30, what="the robot moving to the first pose")
+    page.get_by_test_id("op-cancel").tap()
+    expect(page.get_by_test_id("op-cancelled")).to_be_visible(timeout=10_000)
+    robot.wait_stopped(2.0)
+    assert runtime.api("GET", "/variables/frames.robot").status_code == 404
     assert errors.errors == []

@@ -135,6 +135,8 @@ export class OpVisionPanel extends LitElement {
       this.shownFor = this.camera;
       this.overlays = {};
       this.box = null;
+      this.calibration = null;
+      this.placed = false;
       void this.loadCalibration();
     }
   }

@@ -143,6 +143,15 @@ export class OpCameraView extends LitElement {
 
   private open(): void {
     this.close();
+    // Nothing of the last camera's picture is shown as this one's.
+    this.bitmap?.close();
+    this.bitmap = null;
+    this.about = null;
+    this.drawn = null;
+    this.problem = "";
+    this.size = null;
+    const canvas = this.canvas;
+    canvas?.getContext("2d")?.clearRect(0, 0, canvas.width, canvas.height);
     if (!this.camera) return;
     const camera = this.camera;
     this.streaming = camera;

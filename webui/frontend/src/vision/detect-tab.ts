@@ -1,6 +1,7 @@
 import { LitElement, html } from "lit";
 import { errorText } from "../api";
 import { t } from "../i18n";
+import { session } from "../session";
 import { shared } from "../styles";
 import type { Overlay } from "./camera-view";
 import { type Detections, detect, detectionList, detectorsOf, overlayOf } from "./detections";
@@ -80,9 +81,12 @@ export class OpDetectTab extends LitElement {
 
   private async once(): Promise<boolean> {
     this.error = "";
+    const camera = this.camera;
     try {
-      this.found = await detect(this.chosen);
-      this.emit(overlayOf(this.found));
+      const found = await detect(this.chosen);
+      if (camera !== this.camera) return false; // another camera chosen meanwhile
+      this.found = found;
+      this.emit(overlayOf(found));
       return true;
     } catch (err) {
       this.error = errorText(err);
@@ -121,6 +125,7 @@ export class OpDetectTab extends LitElement {
           </div>`}
       <div class="actions">
         <button data-testid="detector-add" aria-pressed=${this.adding}
+          ?disabled=${!session.can("programmer")}
           @click=${() => (this.adding = !this.adding)}>${t("vision.detect.add")}</button>
       </div>
       ${this.adding

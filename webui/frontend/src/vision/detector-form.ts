@@ -105,7 +105,10 @@ export class OpDetectorForm extends LitElement {
     this.error = "";
     this.uploading = 0;
     const request = new XMLHttpRequest();
-    request.open("PUT", `/api/vision/models/${encodeURIComponent(file.name)}`);
+    // The file's own name as a model's name may be (letters, digits, _ . -, ending .onnx).
+    const stem = file.name.replace(/\.onnx$/i, "").replace(/[^A-Za-z0-9_.-]+/g, "_").replace(/^[^A-Za-z0-9]+/, "");
+    const name = `${stem.slice(0, 60) || "model"}.onnx`;
+    request.open("PUT", `/api/vision/models/${encodeURIComponent(name)}`);
     request.setRequestHeader("content-type", "application/octet-stream");
     if (session.csrf) request.setRequestHeader("x-csrf-token", session.csrf);
     request.upload.onprogress = (p) => {
@@ -115,7 +118,7 @@ export class OpDetectorForm extends LitElement {
       this.uploading = null;
       if (request.status >= 200 && request.status < 300) {
         this.models = JSON.parse(request.responseText) as string[];
-        this.set({ model: file.name });
+        this.set({ model: name });
         return;
       }
       const body = (() => {
@@ -232,7 +235,8 @@ export class OpDetectorForm extends LitElement {
               <input data-testid="detector-classes" .value=${d.classes}
                 @input=${(e: Event) => this.set({ classes: (e.target as HTMLInputElement).value })} /></label>`}
       <div class="actions">
-        <button class="primary" data-testid="detector-save" ?disabled=${this.busy || !this.camera}
+        <button class="primary" data-testid="detector-save"
+          ?disabled=${this.busy || !this.camera || !session.can("programmer")}
           @click=${() => void this.save()}>${t("vision.save")}</button>
       </div>
       ${this.error ? html`<p class="error" role="alert" data-testid="detector-error">${this.error}</p>` : ""}

@@ -1,6 +1,7 @@
 import { LitElement, html } from "lit";
 import { api, errorText } from "../api";
 import { type StringKey, t } from "../i18n";
+import { session } from "../session";
 import { shared } from "../styles";
 import type { Overlay } from "./camera-view";
 import { type OperationStatus, cancelOperation, follow, operationView, saveOperation } from "./operation";
@@ -274,7 +275,8 @@ export class OpIntrinsicTab extends LitElement {
           : ""}
       </div>
       <div class="actions">
-        <button class="primary" data-testid="intrinsic-start" ?disabled=${this.busy || !this.camera}
+        <button class="primary" data-testid="intrinsic-start"
+          ?disabled=${this.busy || !this.camera || !session.can("programmer")}
           @click=${() => this.start()}>${t("vision.intrinsic.start")}</button>
       </div>`;
   }

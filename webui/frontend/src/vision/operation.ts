@@ -31,6 +31,7 @@ export async function follow<R>(
       "GET",
       `/api/vision/operations/${encodeURIComponent(status.id)}`,
     );
+    if (!wanted()) break; // the step moved on while this was asked
     seen(status);
   }
   return status;

@@ -34,6 +34,10 @@ interface OriginResult {
   poses: OriginPose[];
 }
 
+// The run going on, kept beyond this element: the panel is made anew each time it is shown,
+// and a run that moves the robot must still show its progress and Cancel when it is back.
+let running: OperationStatus<OriginResult> | null = null;
+
 interface Region {
   centre: [number, number, number];
   size: [number, number, number];
@@ -85,6 +89,19 @@ export class OpOriginTab extends LitElement {
   connectedCallback(): void {
     super.connectedCallback();
     control.addEventListener("change", this.onControl);
+    if (running !== null && this.op === null) void this.watch(running);
+  }
+
+  private async watch(started: OperationStatus<OriginResult>): Promise<void> {
+    const ended = await follow(
+      started,
+      (s) => {
+        this.op = s;
+        running = s.state === "running" ? s : null;
+      },
+      () => this.isConnected,
+    );
+    if (ended.state !== "running") running = null;
   }
 
   disconnectedCallback(): void {
@@ -126,7 +143,7 @@ export class OpOriginTab extends LitElement {
         body,
         token ? { "X-Lease-Token": token } : {},
       );
-      await follow(started, (s) => (this.op = s), () => this.isConnected);
+      await this.watch(started);
     });
   }
 
@@ -150,12 +167,12 @@ export class OpOriginTab extends LitElement {
         <dt>${t("vision.origin.rms")}</dt>
         <dd>${r.rms_px.toFixed(3)} px</dd>
       </dl>
-      <ul class="rows" data-testid="origin-poses">
+      <ul class="rows" data-testid="origin-pose-list">
         ${r.poses.map(
           (p) => html`<li data-outlier=${p.outlier}>
             <span>#${p.index + 1}</span>
             <span>${p.seen
-              ? `${p.residual_px?.toFixed(2) ?? "–"} px · ${p.residual_mm?.toFixed(2) ?? "–"} mm`
+              ? `${p.residual_px?.toFixed(2) ?? "–"} px · ${p.residual_mm === null ? "–" : lengthWithUnit(p.residual_mm / 1000)}`
               : p.reason}${p.outlier ? ` · ${t("vision.intrinsic.left_out")}` : ""}</span>
           </li>`,
         )}
@@ -210,7 +227,8 @@ export class OpOriginTab extends LitElement {
           ? ""
           : html`<button data-testid="origin-control" ?disabled=${!robot || !session.can("operator")}
               @click=${() => void this.act(() => control.take(robot))}>${t("jog.control.take")}</button>`}
-        <button class="primary" data-testid="origin-run" ?disabled=${this.busy || running || !mine || !this.camera}
+        <button class="primary" data-testid="origin-run"
+          ?disabled=${this.busy || running || !mine || !this.camera || !session.can("programmer")}
           @click=${() => void this.run(robot)}>${t("vision.origin.run")}</button>
       </div>
       ${robots.length ? "" : html`<p class="muted">${t("vision.origin.no_robot")}</p>`}

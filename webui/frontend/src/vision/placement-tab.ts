@@ -2,6 +2,7 @@ import { LitElement, html } from "lit";
 import { api, errorText } from "../api";
 import { t } from "../i18n";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
+import { session } from "../session";
 import { shared } from "../styles";
 import type { Pose } from "../types";
 import { lengthWithUnit } from "../units";
@@ -68,6 +69,14 @@ export class OpPlacementTab extends LitElement {
     void this.loadVariables();
   }
 
+  protected willUpdate(changed: Map<string, unknown>): void {
+    // Another camera: what was found for the last one is not this one's.
+    if (changed.has("camera") && changed.get("camera") !== undefined) {
+      this.op = null;
+      this.saved = "";
+    }
+  }
+
   private async loadVariables(): Promise<void> {
     try {
       const all = await api<Stored[]>("GET", "/api/variables");
@@ -128,10 +137,11 @@ export class OpPlacementTab extends LitElement {
         <dt>${t("vision.placement.reprojection")}</dt>
         <dd>${r.reprojection.toFixed(3)} px</dd>
         <dt>${t("vision.placement.spread")}</dt>
-        <dd data-testid="placement-spread">${(r.spread_mm).toFixed(2)} mm, ${r.spread_deg.toFixed(3)}°</dd>
+        <dd data-testid="placement-spread">${lengthWithUnit(r.spread_mm / 1000)}, ${r.spread_deg.toFixed(3)}°</dd>
       </dl>
       <div class="actions">
-        <button class="primary" data-testid="placement-save" ?disabled=${this.saved !== ""}
+        <button class="primary" data-testid="placement-save"
+          ?disabled=${this.saved !== "" || !session.can("programmer")}
           @click=${() => void this.save()}>${t("vision.save")}</button>
       </div>
       ${this.saved ? html`<p class="chip ok" data-testid="placement-saved">${t("vision.saved", { names: this.saved })}</p>` : ""}
@@ -163,7 +173,8 @@ export class OpPlacementTab extends LitElement {
             ${numberField(`${t("vision.yaw")} (°)`, "board-yaw", p.yaw, (v) => this.set("yaw", v))}
           </div>`}
       <div class="actions">
-        <button class="primary" data-testid="placement-run" ?disabled=${this.busy || running || !this.camera}
+        <button class="primary" data-testid="placement-run"
+          ?disabled=${this.busy || running || !this.camera || !session.can("programmer")}
           @click=${() => void this.run()}>${t("vision.placement.run")}</button>
       </div>
       ${operationView(this.op, () => void cancelOperation(this.op!.id).catch((e) => (this.error = errorText(e))))}

@@ -1,6 +1,7 @@
 import { LitElement, html } from "lit";
 import { api, errorText } from "../api";
 import { t } from "../i18n";
+import { session } from "../session";
 import { shared } from "../styles";
 import { lengthFromField, lengthToField, lengthUnit } from "../units";
 import type { Box, Overlay } from "./camera-view";
@@ -48,6 +49,13 @@ export class OpTemplateTab extends LitElement {
     this.found = null;
     this.busy = false;
     this.error = "";
+  }
+
+  protected willUpdate(changed: Map<string, unknown>): void {
+    if (changed.has("camera") && changed.get("camera") !== undefined) {
+      this.taught = "";
+      this.found = null;
+    }
   }
 
   private emit(overlay: Overlay): void {
@@ -110,7 +118,8 @@ export class OpTemplateTab extends LitElement {
         ${b ? t("vision.template.box", { x: b.x, y: b.y, width: b.width, height: b.height }) : t("vision.template.draw")}
       </p>
       <div class="actions">
-        <button class="primary" data-testid="template-teach" ?disabled=${this.busy || !b || !this.camera}
+        <button class="primary" data-testid="template-teach"
+          ?disabled=${this.busy || !b || !this.camera || !session.can("programmer")}
           @click=${() => void this.teach()}>${t("vision.template.teach")}</button>
         <button data-testid="template-test" ?disabled=${this.busy || !this.taught}
           @click=${() => void this.test()}>${t("vision.template.test")}</button>
