@@ -7,6 +7,7 @@ Playwright (`make bench`); where either is missing the figures are not measured.
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import sys
 import tempfile
@@ -14,7 +15,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
+from runtime.bench.harness.browser import CHROMIUM, viewer_page
 from runtime.bench.harness.processes import Runtime, child_env, wait_for
 from runtime.bench.runner import Figure
 from runtime.bench.stats import percentile, quick
@@ -55,9 +56,7 @@ def _measure(page: Any, seconds: float) -> tuple[list[float], float]:
 
 
 def run() -> list[Figure]:
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
+    if importlib.util.find_spec("playwright") is None:
         print(
             "  camera_view: not measured: needs playwright (pip install '.[dev]')", file=sys.stderr
         )
@@ -73,17 +72,8 @@ def run() -> list[Figure]:
         try:
             runtime.wait_ready()
             _add_camera(runtime)
-            cookie = runtime.session_cookie("viewer")
-            with sync_playwright() as playwright:
-                browser = playwright.chromium.launch(
-                    executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS
-                )
-                context = browser.new_context(viewport={"width": 1280, "height": 800})
-                context.add_cookies([{"name": "op_session", "value": cookie, "url": runtime.url}])
-                page = context.new_page()
-                page.goto(f"{runtime.url}/#/vision")
+            with viewer_page(runtime, "vision") as page:
                 latencies, rate = _measure(page, seconds)
-                browser.close()
         finally:
             runtime.stop()
     details = {

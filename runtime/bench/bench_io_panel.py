@@ -7,6 +7,7 @@ where either is missing the figures are not measured and the run says so."""
 
 from __future__ import annotations
 
+import importlib.util
 import random
 import sys
 import tempfile
@@ -16,7 +17,7 @@ from typing import Any
 
 import httpx
 
-from runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
+from runtime.bench.harness.browser import CHROMIUM, viewer_page
 from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
 from runtime.bench.runner import Figure
 from runtime.bench.stats import percentile, quick
@@ -57,9 +58,7 @@ def _measure(page: Any, block: str, count: int) -> list[float]:
 
 
 def run() -> list[Figure]:
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
+    if importlib.util.find_spec("playwright") is None:
         print("  io_panel: not measured: needs playwright (pip install '.[dev]')", file=sys.stderr)
         return []
     if not Path(CHROMIUM).is_file():
@@ -83,17 +82,8 @@ def run() -> list[Figure]:
                 15,
                 what="the I/O block connected",
             )
-            cookie = runtime.session_cookie("viewer")
-            with sync_playwright() as playwright:
-                browser = playwright.chromium.launch(
-                    executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS
-                )
-                context = browser.new_context(viewport={"width": 1280, "height": 800})
-                context.add_cookies([{"name": "op_session", "value": cookie, "url": runtime.url}])
-                page = context.new_page()
-                page.goto(f"{runtime.url}/#/io")
+            with viewer_page(runtime, "io") as page:
                 latencies = _measure(page, block, count)
-                browser.close()
         finally:
             if block_proc is not None:
                 block_proc.stop()

@@ -13,24 +13,33 @@ export class ApiError extends Error {
   }
 }
 
-export async function api<T>(
+export function api<T>(
   method: string,
   path: string,
   body?: unknown,
   headers: Record<string, string> = {},
 ): Promise<T> {
+  if (body === undefined) return send<T>(method, path, undefined, headers);
+  return send<T>(method, path, JSON.stringify(body), { ...headers, "content-type": "application/json" });
+}
+
+/** A body sent as it is (a file's text or bytes) with its content type. */
+export function sendRaw<T>(method: string, path: string, body: BodyInit, type: string): Promise<T> {
+  return send<T>(method, path, body, { "content-type": type });
+}
+
+async function send<T>(
+  method: string,
+  path: string,
+  body: BodyInit | undefined,
+  headers: Record<string, string>,
+): Promise<T> {
   let response: Response;
   const sent: Record<string, string> = { ...headers };
-  if (body !== undefined) sent["content-type"] = "application/json";
   // A request that changes something shows the session's CSRF token (see webui/access.py).
   if (method !== "GET" && method !== "HEAD" && session.csrf) sent["x-csrf-token"] = session.csrf;
   try {
-    response = await fetch(path, {
-      method,
-      headers: sent,
-      body: body === undefined ? undefined : JSON.stringify(body),
-      credentials: "same-origin",
-    });
+    response = await fetch(path, { method, headers: sent, body, credentials: "same-origin" });
   } catch {
     throw new ApiError(t("app.unreachable"), "unreachable", 0);
   }

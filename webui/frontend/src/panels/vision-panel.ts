@@ -1,10 +1,11 @@
 import { LitElement, css, html } from "lit";
-import { api, errorText } from "../api";
+import { api, errorText, sendRaw } from "../api";
 import { type StringKey, t } from "../i18n";
 import { FeedController, feed } from "../live";
 import { session } from "../session";
 import { shared } from "../styles";
 import "../vision/camera-view";
+import { fileButton } from "../vision/styles";
 import type { Box, Overlay } from "../vision/camera-view";
 import "../vision/detect-tab";
 import "../vision/intrinsic-tab";
@@ -50,6 +51,7 @@ export class OpVisionPanel extends LitElement {
 
   static styles = [
     shared,
+    fileButton,
     css`
       .layout {
         display: grid;
@@ -89,22 +91,6 @@ export class OpVisionPanel extends LitElement {
       button[aria-pressed="true"] {
         border-color: var(--accent);
         color: var(--accent);
-      }
-      .file {
-        display: inline-flex;
-        align-items: center;
-        min-height: var(--touch);
-        padding: 0 18px;
-        border-radius: 10px;
-        border: 2px solid var(--line);
-        background: var(--raised);
-        font-weight: 600;
-        cursor: pointer;
-        color: var(--text);
-        text-decoration: none;
-      }
-      .file input {
-        display: none;
       }
       [hidden] {
         display: none !important;
@@ -165,17 +151,11 @@ export class OpVisionPanel extends LitElement {
     input.value = "";
     if (!file) return;
     this.error = "";
-    const response = await fetch(`/api/vision/cameras/${encodeURIComponent(this.camera)}/calibration.yaml`, {
-      method: "PUT",
-      headers: { "content-type": "application/x-yaml", "x-csrf-token": session.csrf ?? "" },
-      body: await file.text(),
-      credentials: "same-origin",
-    }).catch(() => null);
-    if (response === null) {
-      this.error = t("app.unreachable");
-    } else if (!response.ok) {
-      const body = (await response.json().catch(() => null)) as { error?: { message?: string } } | null;
-      this.error = body?.error?.message ?? t("app.request_failed", { status: response.status });
+    try {
+      const path = `/api/vision/cameras/${encodeURIComponent(this.camera)}/calibration.yaml`;
+      await sendRaw("PUT", path, await file.text(), "application/x-yaml");
+    } catch (err) {
+      this.error = errorText(err);
     }
     await this.loadCalibration();
   }

@@ -1,17 +1,17 @@
-import { LitElement, html } from "lit";
+import { html } from "lit";
 import { errorText } from "../api";
 import { t } from "../i18n";
 import { session } from "../session";
 import { shared } from "../styles";
-import type { Overlay } from "./camera-view";
 import { type Detections, detect, detectionList, detectorsOf, overlayOf } from "./detections";
 import "./detector-form";
+import { VisionStep } from "./step";
 import { visionStyles } from "./styles";
 
 // Detecting with the camera's stored detectors: once, or again and again (each detection as
 // soon as the last answered), the boxes laid over the live picture.
 
-export class OpDetectTab extends LitElement {
+export class OpDetectTab extends VisionStep {
   static properties = {
     camera: { type: String },
     active: { type: Boolean },
@@ -19,7 +19,6 @@ export class OpDetectTab extends LitElement {
     chosen: { state: true },
     found: { state: true },
     running: { state: true },
-    error: { state: true },
     adding: { state: true },
   };
   declare camera: string;
@@ -28,7 +27,6 @@ export class OpDetectTab extends LitElement {
   declare chosen: string;
   declare found: Detections | null;
   declare running: boolean;
-  declare error: string;
   declare adding: boolean;
 
   static styles = [shared, visionStyles];
@@ -41,7 +39,6 @@ export class OpDetectTab extends LitElement {
     this.chosen = "";
     this.found = null;
     this.running = false;
-    this.error = "";
     this.adding = false;
   }
 
@@ -58,10 +55,6 @@ export class OpDetectTab extends LitElement {
       this.found = null;
       void this.load();
     }
-  }
-
-  private emit(overlay: Overlay): void {
-    this.dispatchEvent(new CustomEvent("overlay", { detail: overlay, bubbles: true, composed: true }));
   }
 
   private async load(): Promise<void> {
@@ -86,7 +79,7 @@ export class OpDetectTab extends LitElement {
       const found = await detect(this.chosen);
       if (camera !== this.camera) return false; // another camera chosen meanwhile
       this.found = found;
-      this.emit(overlayOf(found));
+      this.emitOverlay(overlayOf(found));
       return true;
     } catch (err) {
       this.error = errorText(err);

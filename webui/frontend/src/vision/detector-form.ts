@@ -1,4 +1,4 @@
-import { LitElement, css, html } from "lit";
+import { LitElement, html } from "lit";
 import { api, errorText } from "../api";
 import { session } from "../session";
 import { t } from "../i18n";
@@ -6,7 +6,7 @@ import { shared } from "../styles";
 import { DETECTOR_PREFIX } from "./detections";
 import { lengthField, numberField } from "./fields";
 import { DICTIONARIES } from "./intrinsic-tab";
-import { visionStyles } from "./styles";
+import { fileButton, visionStyles } from "./styles";
 
 // A new detector for the camera, stored as `detectors.<name>` (the variable type checks
 // every setting): ArUco markers of a dictionary and printed size, or a YOLO-style network
@@ -43,27 +43,7 @@ export class OpDetectorForm extends LitElement {
   declare busy: boolean;
   declare error: string;
 
-  static styles = [
-    shared,
-    visionStyles,
-    css`
-      label.upload {
-        display: inline-flex;
-        align-items: center;
-        min-height: var(--touch);
-        padding: 0 18px;
-        border-radius: 10px;
-        border: 2px solid var(--line);
-        background: var(--raised);
-        color: var(--text);
-        font-weight: 600;
-        cursor: pointer;
-      }
-      label.upload input {
-        display: none;
-      }
-    `,
-  ];
+  static styles = [shared, visionStyles, fileButton];
 
   constructor() {
     super();
@@ -146,7 +126,7 @@ export class OpDetectorForm extends LitElement {
       </div>`;
     }
     return html`<div class="actions">
-      <label class="upload">${t("vision.detector.upload")}
+      <label class="file">${t("vision.detector.upload")}
         <input type="file" accept=".onnx" data-testid="model-upload" @change=${(e: Event) => this.upload(e)} /></label>
     </div>`;
   }

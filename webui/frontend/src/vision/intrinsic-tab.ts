@@ -1,10 +1,10 @@
-import { LitElement, html } from "lit";
+import { html } from "lit";
 import { api, errorText } from "../api";
 import { type StringKey, t } from "../i18n";
 import { session } from "../session";
 import { shared } from "../styles";
-import type { Overlay } from "./camera-view";
 import { type OperationStatus, cancelOperation, follow, operationView, saveOperation } from "./operation";
+import { VisionStep } from "./step";
 import { visionStyles } from "./styles";
 
 // The guided intrinsic calibration: the board as printed (remembered as `vision.board`),
@@ -73,7 +73,7 @@ export const DICTIONARIES = ["4x4_50", "4x4_100", "5x5_100", "5x5_250", "6x6_250
 const MIN_SOLVE = 4;
 const TILTS = ["flat", "left", "right", "up", "down"];
 
-export class OpIntrinsicTab extends LitElement {
+export class OpIntrinsicTab extends VisionStep {
   static properties = {
     camera: { type: String },
     board: { state: true },
@@ -81,8 +81,6 @@ export class OpIntrinsicTab extends LitElement {
     report: { state: true },
     op: { state: true },
     saved: { state: true },
-    busy: { state: true },
-    error: { state: true },
   };
   declare camera: string;
   declare board: BoardSpec;
@@ -90,8 +88,6 @@ export class OpIntrinsicTab extends LitElement {
   declare report: FrameReport | null;
   declare op: OperationStatus<Calibration> | null;
   declare saved: string;
-  declare busy: boolean;
-  declare error: string;
 
   private edited = false; // the stored board, read late, must not undo what was typed
 
@@ -105,8 +101,6 @@ export class OpIntrinsicTab extends LitElement {
     this.report = null;
     this.op = null;
     this.saved = "";
-    this.busy = false;
-    this.error = "";
   }
 
   connectedCallback(): void {
@@ -133,26 +127,10 @@ export class OpIntrinsicTab extends LitElement {
     }
   }
 
-  private emit(overlay: Overlay): void {
-    this.dispatchEvent(new CustomEvent("overlay", { detail: overlay, bubbles: true, composed: true }));
-  }
-
   private showOverlay(): void {
     const view = this.view;
-    if (!view) return this.emit({});
-    this.emit({ coverage: view.coverage, points: this.report?.accepted ? this.report.points : [] });
-  }
-
-  private async act(work: () => Promise<void>): Promise<void> {
-    this.busy = true;
-    this.error = "";
-    try {
-      await work();
-    } catch (err) {
-      this.error = errorText(err);
-    } finally {
-      this.busy = false;
-    }
+    if (!view) return this.emitOverlay({});
+    this.emitOverlay({ coverage: view.coverage, points: this.report?.accepted ? this.report.points : [] });
   }
 
   private path(): string {

@@ -1,4 +1,4 @@
-import { LitElement, html } from "lit";
+import { html } from "lit";
 import { api, errorText } from "../api";
 import { control } from "../control";
 import { t } from "../i18n";
@@ -10,6 +10,7 @@ import { lengthWithUnit } from "../units";
 import { DICTIONARIES } from "./intrinsic-tab";
 import { lengthField, numberField } from "./fields";
 import { type OperationStatus, cancelOperation, follow, operationView, saveOperation } from "./operation";
+import { VisionStep } from "./step";
 import { visionStyles } from "./styles";
 
 // Where a robot stands in the world: it visits poses generated in a box of its base frame
@@ -45,7 +46,7 @@ interface Region {
   spin: number;
 }
 
-export class OpOriginTab extends LitElement {
+export class OpOriginTab extends VisionStep {
   static properties = {
     camera: { type: String },
     robot: { state: true },
@@ -55,8 +56,6 @@ export class OpOriginTab extends LitElement {
     tag: { state: true },
     op: { state: true },
     saved: { state: true },
-    busy: { state: true },
-    error: { state: true },
   };
   declare camera: string;
   declare robot: string;
@@ -66,8 +65,6 @@ export class OpOriginTab extends LitElement {
   declare tag: { id: number; size: number; dictionary: string };
   declare op: OperationStatus<OriginResult> | null;
   declare saved: string;
-  declare busy: boolean;
-  declare error: string;
   private readonly onControl = () => this.requestUpdate();
 
   static styles = [shared, visionStyles];
@@ -82,8 +79,6 @@ export class OpOriginTab extends LitElement {
     this.tag = { id: 0, size: 0.06, dictionary: "4x4_50" };
     this.op = null;
     this.saved = "";
-    this.busy = false;
-    this.error = "";
   }
 
   connectedCallback(): void {
@@ -111,18 +106,6 @@ export class OpOriginTab extends LitElement {
 
   private robots(): string[] {
     return feed.devices.filter((d) => d.kind === "robot").map((d) => d.local_name);
-  }
-
-  private async act(work: () => Promise<void>): Promise<void> {
-    this.busy = true;
-    this.error = "";
-    try {
-      await work();
-    } catch (err) {
-      this.error = errorText(err);
-    } finally {
-      this.busy = false;
-    }
   }
 
   private run(robot: string): Promise<void> {

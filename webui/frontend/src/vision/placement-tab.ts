@@ -1,4 +1,4 @@
-import { LitElement, html } from "lit";
+import { html } from "lit";
 import { api, errorText } from "../api";
 import { t } from "../i18n";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
@@ -8,6 +8,7 @@ import type { Pose } from "../types";
 import { lengthWithUnit } from "../units";
 import { lengthField, numberField } from "./fields";
 import { type OperationStatus, cancelOperation, follow, operationView, saveOperation } from "./operation";
+import { VisionStep } from "./step";
 import { visionStyles } from "./styles";
 
 // The camera's pose in the world, from the calibration board lying at a known pose: typed
@@ -27,7 +28,7 @@ interface Stored {
   type: string;
 }
 
-export class OpPlacementTab extends LitElement {
+export class OpPlacementTab extends VisionStep {
   static properties = {
     camera: { type: String },
     typed: { state: true },
@@ -36,8 +37,6 @@ export class OpPlacementTab extends LitElement {
     frames: { state: true },
     op: { state: true },
     saved: { state: true },
-    busy: { state: true },
-    error: { state: true },
   };
   declare camera: string;
   declare typed: { x: number; y: number; z: number; roll: number; pitch: number; yaw: number };
@@ -46,8 +45,6 @@ export class OpPlacementTab extends LitElement {
   declare frames: number;
   declare op: OperationStatus<Placement> | null;
   declare saved: string;
-  declare busy: boolean;
-  declare error: string;
 
   static styles = [shared, visionStyles];
 
@@ -60,8 +57,6 @@ export class OpPlacementTab extends LitElement {
     this.frames = 3;
     this.op = null;
     this.saved = "";
-    this.busy = false;
-    this.error = "";
   }
 
   connectedCallback(): void {
@@ -89,11 +84,9 @@ export class OpPlacementTab extends LitElement {
     }
   }
 
-  private async run(): Promise<void> {
-    this.busy = true;
-    this.error = "";
-    this.saved = "";
-    try {
+  private run(): Promise<void> {
+    return this.act(async () => {
+      this.saved = "";
       const p = this.typed;
       const body: Record<string, unknown> = { camera: this.camera, frames: this.frames };
       if (this.variable) body.board_variable = this.variable;
@@ -101,12 +94,7 @@ export class OpPlacementTab extends LitElement {
       const started = await api<OperationStatus<Placement>>("POST", "/api/vision/extrinsic", body);
       const camera = this.camera;
       await follow(started, (s) => (this.op = s), () => this.camera === camera && this.isConnected);
-
-    } catch (err) {
-      this.error = errorText(err);
-    } finally {
-      this.busy = false;
-    }
+    });
   }
 
   private async save(): Promise<void> {

@@ -93,3 +93,23 @@ export const visionStyles = css`
     margin: 6px 0;
   }
 `;
+
+// A file chooser that looks and works as a button (its input hidden inside its label).
+export const fileButton = css`
+  .file {
+    display: inline-flex;
+    align-items: center;
+    min-height: var(--touch);
+    padding: 0 18px;
+    border-radius: 10px;
+    border: 2px solid var(--line);
+    background: var(--raised);
+    color: var(--text);
+    font-weight: 600;
+    cursor: pointer;
+    text-decoration: none;
+  }
+  .file input {
+    display: none;
+  }
+`;

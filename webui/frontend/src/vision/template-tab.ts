@@ -1,11 +1,12 @@
-import { LitElement, html } from "lit";
-import { api, errorText } from "../api";
+import { html } from "lit";
+import { api } from "../api";
 import { t } from "../i18n";
 import { session } from "../session";
 import { shared } from "../styles";
 import { lengthFromField, lengthToField, lengthUnit } from "../units";
-import type { Box, Overlay } from "./camera-view";
+import type { Box } from "./camera-view";
 import { type Detections, detect, detectionList, overlayOf } from "./detections";
+import { VisionStep } from "./step";
 import { visionStyles } from "./styles";
 
 // Teaching a template detector: a box drawn around the part on the live picture with a
@@ -14,7 +15,7 @@ import { visionStyles } from "./styles";
 
 const NAME = /^[a-z][a-z0-9_]{0,31}$/;
 
-export class OpTemplateTab extends LitElement {
+export class OpTemplateTab extends VisionStep {
   static properties = {
     camera: { type: String },
     box: { attribute: false },
@@ -23,8 +24,6 @@ export class OpTemplateTab extends LitElement {
     height: { state: true },
     taught: { state: true },
     found: { state: true },
-    busy: { state: true },
-    error: { state: true },
   };
   declare camera: string;
   declare box: Box | null;
@@ -33,8 +32,6 @@ export class OpTemplateTab extends LitElement {
   declare height: number;
   declare taught: string;
   declare found: Detections | null;
-  declare busy: boolean;
-  declare error: string;
 
   static styles = [shared, visionStyles];
 
@@ -47,30 +44,12 @@ export class OpTemplateTab extends LitElement {
     this.height = 0;
     this.taught = "";
     this.found = null;
-    this.busy = false;
-    this.error = "";
   }
 
   protected willUpdate(changed: Map<string, unknown>): void {
     if (changed.has("camera") && changed.get("camera") !== undefined) {
       this.taught = "";
       this.found = null;
-    }
-  }
-
-  private emit(overlay: Overlay): void {
-    this.dispatchEvent(new CustomEvent("overlay", { detail: overlay, bubbles: true, composed: true }));
-  }
-
-  private async act(work: () => Promise<void>): Promise<void> {
-    this.busy = true;
-    this.error = "";
-    try {
-      await work();
-    } catch (err) {
-      this.error = errorText(err);
-    } finally {
-      this.busy = false;
     }
   }
 
@@ -91,7 +70,7 @@ export class OpTemplateTab extends LitElement {
   private test(): Promise<void> {
     return this.act(async () => {
       this.found = await detect(this.taught);
-      this.emit(overlayOf(this.found));
+      this.emitOverlay(overlayOf(this.found));
     });
   }
 
