@@ -10,8 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from device_drivers.sim_robot.reference import TrajectoryReference
-from device_drivers.sim_robot.scaling import TimeScaling
 from device_drivers.sim_robot.tracker import JointTracker, TrackerError
 from runtime.interfaces.limits import CheckedTrajectory, FloatArray
 from runtime.interfaces.robot import (
@@ -25,6 +23,8 @@ from runtime.interfaces.robot import (
 )
 from runtime.kit.errors import InvalidValue, NotFound, RobotError
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.reference import Limits, RunningTrajectory, TrajectoryReference
+from runtime.robotics.time_scaling import TimeScaling
 
 CYCLE = 0.002
 STREAM_MODES = (
@@ -34,6 +34,8 @@ STREAM_MODES = (
     CommandMode.freedrive,
 )
 LIMIT_SLACK = 1e-6
+# How fast the servo pulls a pushed arm back onto its setpoint once the hand lets go.
+SERVO_TIME_CONSTANT = 0.05  # s
 
 
 @dataclass
@@ -52,21 +54,6 @@ class StreamCommand:
         a = np.zeros_like(self.velocity) if self.acceleration is None else self.acceleration
         h = now - self.received + CYCLE
         return self.position + self.velocity * h + 0.5 * a * h * h, self.velocity + a * h, a
-
-
-@dataclass
-class RunningTrajectory:
-    id: str
-    reference: TrajectoryReference
-    t: float = 0.0  # where on the trajectory's own clock the reference is
-    state: TrajectoryState = TrajectoryState.running
-    message: str = ""
-
-    def status(self) -> TrajectoryStatus:
-        progress = 1.0 if self.reference.duration == 0 else min(self.t / self.reference.duration, 1)
-        return TrajectoryStatus(
-            id=self.id, state=self.state, progress=progress, message=self.message
-        )
 
 
 @dataclass(frozen=True)
@@ -97,6 +84,7 @@ class SimCore:
         self.command: StreamCommand | None = None
         self.trajectory: RunningTrajectory | None = None
         self.scaling = TimeScaling(self.tracker.max_acceleration, self.tracker.max_jerk)
+        self.limits = Limits.of(info.joints)
         self._finished: dict[str, TrajectoryStatus] = {}
         self._ids = itertools.count(1)
         self.command_timeouts = 0
@@ -105,6 +93,8 @@ class SimCore:
         self.digital_inputs = [False] * info.digital_inputs
         self.digital_outputs = [False] * info.digital_outputs
         self.hand = np.zeros(len(info.joints))  # a hand on the arm (simulation only)
+        # Where a hand pushing a servoed arm has put it, away from its setpoint.
+        self.displacement = np.zeros(len(info.joints))
 
     # Commands -------------------------------------------------------------------------------
 
@@ -160,7 +150,9 @@ class SimCore:
 
     def push(self, velocity: FloatArray) -> None:
         """Simulation only: a hand pushing the arm at these joint velocities (zero: let go).
-        It moves the arm only while it is held free (freedrive), within its limits."""
+        Held free (freedrive), the arm goes where the hand takes it, within its limits.
+        While the servos drive it (enabled, not halted), the hand pushes it off its
+        setpoint, and they pull it back once it lets go. Halted, the brakes hold it."""
         v = np.asarray(velocity, dtype=float)
         if v.shape != self.hand.shape or not np.all(np.isfinite(v)):
             raise InvalidValue(f"a push needs {len(self.hand)} finite joint velocities")
@@ -215,7 +207,9 @@ class SimCore:
         if self.trajectory is not None:
             raise RobotError("a trajectory is already running", code="busy")
         trajectory_id = f"traj-{next(self._ids)}"
-        self.trajectory = RunningTrajectory(trajectory_id, TrajectoryReference(trajectory))
+        # Followed as it is, or slowed along its path where it would pass a joint's limits.
+        reference = TrajectoryReference.of(trajectory).within(self.limits, CYCLE)
+        self.trajectory = RunningTrajectory(trajectory_id, reference)
         self.scaling.rate, self.scaling.rate_speed = self.speed_ratio, 0.0  # it starts at rest
         return trajectory_id
 
@@ -266,6 +260,7 @@ class SimCore:
             self.fault(str(exc))
             self.tracker.hold()
         self._check_limits()
+        self._push_off_setpoint()
         t = self.tracker
         self.setpoints.append(
             Setpoint(
@@ -296,19 +291,19 @@ class SimCore:
             return
         # The trajectory's clock runs at the speed override, or comes to a stop when paused:
         # the reference slows along its path, and the setpoints with it.
-        _, planned, planned_acceleration = running.reference.sample_with_acceleration(running.t)
-        paused = running.state is TrajectoryState.paused
-        target = 0.0 if paused else self.speed_ratio
-        before = self.scaling.rate
-        self.scaling.step(target, planned, planned_acceleration, CYCLE)
-        rate, rate_speed = self.scaling.rate, self.scaling.rate_speed
-        running.t += CYCLE * 0.5 * (before + rate)  # the clock's advance over the cycle
-        position, velocity, acceleration = running.reference.sample_with_acceleration(running.t)
-        self.tracker.step_position(
-            position, velocity * rate, acceleration * rate * rate + velocity * rate_speed
-        )
-        if running.t >= running.reference.duration and self.tracker.settled(running.reference.end):
+        self.tracker.follow(*running.advance(self.scaling, self.speed_ratio, CYCLE))
+        if running.at_end and self.tracker.settled(running.reference.end):
             self._end_trajectory(TrajectoryState.finished)
+
+    def _push_off_setpoint(self) -> None:
+        servoed = self.ready and self.mode not in (CommandMode.halt, CommandMode.freedrive)
+        if servoed and self.hand.any():
+            moved = self.tracker.position + self.displacement + self.hand * CYCLE
+            within = np.clip(moved, self.tracker.lower, self.tracker.upper)
+            self.displacement = within - self.tracker.position
+        elif self.displacement.any():
+            self.displacement *= np.exp(-CYCLE / SERVO_TIME_CONSTANT)
+            self.displacement[np.abs(self.displacement) < 1e-9] = 0.0
 
     def _check_limits(self) -> None:
         q = self.tracker.position
@@ -339,7 +334,8 @@ class SimCore:
             command_mode=self.mode,
             operational_mode=self.operational_mode,
             flags=self.flags(),
-            position=t.position.copy(),
+            position=t.position + self.displacement,
+            command=t.position.copy(),
             velocity=t.velocity.copy(),
             speed_ratio=self.speed_ratio,
             error_message=self.error_message,
@@ -360,7 +356,8 @@ class Snapshot:
     command_mode: CommandMode
     operational_mode: OperationalMode
     flags: RobotFlags
-    position: FloatArray
+    position: FloatArray  # where the arm is
+    command: FloatArray  # its setpoint
     velocity: FloatArray
     speed_ratio: float
     error_message: str
@@ -378,7 +375,7 @@ class Snapshot:
             flags=self.flags,
             joint_position=self.position.tolist(),
             joint_velocity=self.velocity.tolist(),
-            joint_position_command=self.position.tolist(),
+            joint_position_command=self.command.tolist(),
             tcp_pose=kinematics.tcp_pose(self.position),
             speed_ratio=self.speed_ratio,
             error_message=self.error_message,

@@ -93,8 +93,9 @@ def sim_router(robot: SimRobot) -> APIRouter:
 
     @router.put("/hand")
     async def hand(body: PushRequest) -> RobotState:
-        """A hand pushing the arm at these joint velocities (zero: let go): it moves the arm
-        only while the arm is held free (freedrive)."""
+        """A hand pushing the arm at these joint velocities (zero: let go): held free
+        (freedrive) the arm goes where it takes it; servoed (a move, a jog) it is pushed off
+        its setpoint and pulled back when let go; halted, the brakes hold it."""
         robot.push(body.velocity)
         return robot.state()
 

@@ -33,6 +33,7 @@ SETTLED_VELOCITY = 1e-6  # rad/s
 # this, rad) and its jerk within the limit (this much over it: the interpolation's own).
 FOLLOW_TOLERANCE = 1e-5
 FOLLOW_JERK_SLACK = 1.05
+FOLLOW_LIMIT_SLACK = 1.0 + 1e-6  # float noise on a reference at its limit
 # rad/s and rad/s²: a holding joint slower than this, and slowing no faster, is at rest.
 AT_REST = 1e-9
 
@@ -163,8 +164,22 @@ class JointTracker:
             return
         self._run([_POSITION] * len(position), target, capped, self.max_velocity, accel)
 
+    def follow(self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray) -> None:
+        """Follow a planned trajectory's reference (already within the limits, or slowed
+        along its path until it is): exactly, as a controller interpolating its own
+        trajectory does. Its jerk is the planner's and the time scaling's to keep: a jerk
+        a little over the limit for a cycle (a change of speed override) is no reason to
+        leave the path. Only a reference that jumps, passes a speed or acceleration limit,
+        or could not stop before a position limit is handed to ruckig."""
+        if not self._follows(position, velocity, acceleration, jerk_slack=math.inf):
+            self.step_position(position, velocity, acceleration)
+
     def _follows(
-        self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray
+        self,
+        position: FloatArray,
+        velocity: FloatArray,
+        acceleration: FloatArray,
+        jerk_slack: float = FOLLOW_JERK_SLACK,
     ) -> bool:
         """A smooth reference within the limits is followed exactly, as a controller
         interpolating its own trajectory would; asking ruckig to reach each new reference
@@ -175,9 +190,9 @@ class JointTracker:
         jerk = (acceleration - self.acceleration) / dt
         smooth = (
             np.all(np.abs(position - expected) <= FOLLOW_TOLERANCE)
-            and np.all(np.abs(velocity) <= self.max_velocity)
-            and np.all(np.abs(acceleration) <= self.max_acceleration)
-            and np.all(np.abs(jerk) <= self.max_jerk * FOLLOW_JERK_SLACK)
+            and np.all(np.abs(velocity) <= self.max_velocity * FOLLOW_LIMIT_SLACK)
+            and np.all(np.abs(acceleration) <= self.max_acceleration * FOLLOW_LIMIT_SLACK)
+            and np.all(np.abs(jerk) <= self.max_jerk * jerk_slack)
         )
         if not smooth or self._cannot_stop_from(position, velocity, acceleration).any():
             return False

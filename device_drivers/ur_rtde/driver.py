@@ -27,9 +27,6 @@ from collections.abc import Callable
 
 import numpy as np
 
-from device_drivers.sim_robot.core import RunningTrajectory
-from device_drivers.sim_robot.reference import TrajectoryReference
-from device_drivers.sim_robot.scaling import TimeScaling
 from device_drivers.ur_rtde.io_writer import OutputWriter
 from device_drivers.ur_rtde.link import RUNNING, Reading, URLink
 from device_drivers.ur_rtde.modes import ModeWatch
@@ -49,6 +46,8 @@ from runtime.interfaces.robot import (
 from runtime.interfaces.robot_driver import RobotDriver, RobotStatus
 from runtime.kit.errors import NotFound, RobotError
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.reference import Limits, RunningTrajectory, TrajectoryReference
+from runtime.robotics.time_scaling import TimeScaling
 
 log = logging.getLogger(__name__)
 CYCLE = 0.008  # s: servoJ's time per command, and the control thread's period
@@ -98,11 +97,8 @@ class URDriver(RobotDriver):
         self.trajectory: RunningTrajectory | None = None
         self._finished: dict[str, TrajectoryStatus] = {}
         self._ids = itertools.count(1)
-        joints = info.joints
-        self.scaling = TimeScaling(
-            np.array([j.max_acceleration for j in joints]),
-            np.array([j.max_jerk or np.inf for j in joints]),
-        )
+        self.motion_limits = Limits.of(info.joints)
+        self.scaling = TimeScaling(self.motion_limits.acceleration, self.motion_limits.jerk)
         self.seqno = 0
         self._ever_connected = False
         self._moving = False  # a motion command went out since the last stop
@@ -288,17 +284,12 @@ class URDriver(RobotDriver):
         if running is None:
             self._stop(link)
             return
-        _, planned, planned_acceleration = running.reference.sample_with_acceleration(running.t)
-        target = 0.0 if running.state is TrajectoryState.paused else self.speed_ratio
-        before = self.scaling.rate
-        self.scaling.step(target, planned, planned_acceleration, CYCLE)
-        running.t += CYCLE * 0.5 * (before + self.scaling.rate)
-        position, _, _ = running.reference.sample_with_acceleration(running.t)
+        position, _, _ = running.advance(self.scaling, self.speed_ratio, CYCLE)
         link.control.servoJ(position.tolist(), 0.0, 0.0, CYCLE, self.lookahead, self.gain)
         self._moving = True
         reading = self.reading
         if (
-            running.t >= running.reference.duration
+            running.at_end
             and reading is not None
             and np.abs(np.array(reading.q) - running.reference.end).max() < 1e-4
         ):
@@ -342,6 +333,17 @@ class URDriver(RobotDriver):
             trajectory_running=self.trajectory is not None,
         )
 
+    def _published_seqno(self) -> int:
+        """The number of the state published now (under the lock). Each control cycle is a
+        new state; without a controller there are no cycles, but what the driver then says
+        (an error: no controller) is news at every publication. A number that stood still
+        made the runtime's link stale, end and connect again every few tenths of a second
+        for as long as the controller was gone; and a controller that does not answer can
+        hold the control thread in a connection attempt for seconds."""
+        if self.link is None:
+            self.seqno += 1
+        return self.seqno
+
     def state(self) -> RobotState:
         with self.lock:
             reading = self.reading
@@ -349,7 +351,7 @@ class URDriver(RobotDriver):
             qd = reading.qd if reading else [0.0] * len(q)
             n_in, n_out = self.info.digital_inputs, self.info.digital_outputs
             return RobotState(
-                seqno=self.seqno,
+                seqno=self._published_seqno(),
                 ts=time.time(),
                 command_mode=self.mode,
                 operational_mode=self.operational_mode,
@@ -474,7 +476,9 @@ class URDriver(RobotDriver):
             if self.trajectory is not None:
                 raise RobotError("a trajectory is already running", code="busy")
             trajectory_id = f"traj-{next(self._ids)}"
-            self.trajectory = RunningTrajectory(trajectory_id, TrajectoryReference(trajectory))
+            # Slowed along its path where it would pass a joint's limits, never cut short.
+            reference = TrajectoryReference.of(trajectory).within(self.motion_limits, CYCLE)
+            self.trajectory = RunningTrajectory(trajectory_id, reference)
             self.scaling.rate, self.scaling.rate_speed = self.speed_ratio, 0.0
             return trajectory_id
 

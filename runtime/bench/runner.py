@@ -25,6 +25,7 @@ MODULES = (
     "jog",
     "jog_load",
     "motion",
+    "path_fidelity",
     "program",
     "scale",
     "modbus",

@@ -27,6 +27,7 @@ class CheckedTrajectory:
     times: FloatArray
     positions: FloatArray
     velocities: FloatArray | None
+    accelerations: FloatArray | None = None
 
     @property
     def duration(self) -> float:
@@ -39,6 +40,7 @@ class JointLimitChecker:
         self.lower = np.array([j.lower for j in info.joints])
         self.upper = np.array([j.upper for j in info.joints])
         self.max_velocity = np.array([j.max_velocity for j in info.joints])
+        self.max_acceleration = np.array([j.max_acceleration for j in info.joints])
 
     def vector(self, values: Sequence[float], what: str) -> FloatArray:
         if len(values) != len(self.names):
@@ -73,6 +75,18 @@ class JointLimitChecker:
         v = self.vector(values, what)
         self._check_speed(v, what)
         return v
+
+    def accelerations(self, values: Sequence[float], what: str) -> FloatArray:
+        a = self.vector(values, what)
+        over = np.flatnonzero(np.abs(a) > self.max_acceleration * (1 + 1e-6) + LIMIT_EPSILON)
+        if over.size:
+            i = int(over[0])
+            raise RobotError(
+                f"{what} {a[i]:.4f} rad/s² of joint {self._joint(i)} exceeds its limit "
+                f"{self.max_acceleration[i]:.4f} rad/s²",
+                code="acceleration_limit",
+            )
+        return a
 
     def _check_speed(self, v: FloatArray, what: str) -> None:
         over = np.flatnonzero(np.abs(v) > self.max_velocity * (1 + 1e-6) + LIMIT_EPSILON)
@@ -115,7 +129,19 @@ class JointLimitChecker:
                 for k, w in enumerate(points)
             ]
             velocities = np.vstack([np.zeros_like(start)] * (len(times) - len(given)) + given)
-        return CheckedTrajectory(times, positions, velocities)
+        accelerations = None
+        if any(w.acceleration is not None for w in points):
+            if velocities is None or not all(w.acceleration is not None for w in points):
+                raise RobotError(
+                    "give an acceleration for every waypoint or for none, and velocities with them",
+                    code="bad_trajectory",
+                )
+            given = [
+                self.accelerations(w.acceleration or [], f"waypoint {k} acceleration")
+                for k, w in enumerate(points)
+            ]
+            accelerations = np.vstack([np.zeros_like(start)] * (len(times) - len(given)) + given)
+        return CheckedTrajectory(times, positions, velocities, accelerations)
 
     def _joint(self, index: int) -> str:
         return f"{index + 1} ({self.names[index]})"

@@ -218,6 +218,9 @@ class TrajectoryWaypoint(Strict):
     time_from_start: float = Field(ge=0)
     position: JointVector
     velocity: JointVector | None = None
+    # With velocities: makes the interpolation follow the planned acceleration exactly
+    # (estimated from the neighbouring velocities otherwise).
+    acceleration: JointVector | None = None
 
 
 class JointTrajectory(Strict):

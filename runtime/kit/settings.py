@@ -55,6 +55,16 @@ class AuthSettings(BaseModel):
     session_hours: float = Field(default=12.0, ge=0.1, le=24 * 30)
 
 
+class MotionSettings(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    # A move whose TCP leaves its planned path by more than this (m), or whose joints leave
+    # their planned path by more than `joint_path_tolerance` (rad), is stopped as a
+    # protective stop (`path_deviation`).
+    path_tolerance: float = Field(default=0.005, gt=0, le=0.1)
+    joint_path_tolerance: float = Field(default=0.02, gt=0, le=0.5)
+
+
 class ProgramSettings(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
@@ -115,6 +125,7 @@ class RuntimeSettings(BaseSettings):
     discovery: DiscoverySettings = Field(default_factory=DiscoverySettings)
     link: LinkSettings = Field(default_factory=LinkSettings)
     programs: ProgramSettings = Field(default_factory=ProgramSettings)
+    motion: MotionSettings = Field(default_factory=MotionSettings)
     auth: AuthSettings = Field(default_factory=AuthSettings)
     state_rate_hz: float = Field(default=100.0, gt=0, le=500)
     variable_history: int = Field(default=20, ge=1, le=1000)

@@ -1,10 +1,12 @@
 """Running a timed joint path on a robot: uploaded as one trajectory, then watched until it
-ends; stopped (halted) on cancel, on a driver fault, or when the robot stops following."""
+ends; stopped (halted) on cancel, on a driver fault, when the robot stops following its
+setpoint, or when it leaves its planned path (the path monitor)."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -19,6 +21,9 @@ from runtime.interfaces.robot import (
 )
 from runtime.kit.errors import OpenPendantError, RobotError
 from runtime.robotics.timing import TimedPath
+
+if TYPE_CHECKING:
+    from runtime.motion.monitor import PathMonitor
 
 WATCH_PERIOD = 0.02  # s
 # The robot's position and its setpoint this far apart means it is not following.
@@ -36,9 +41,14 @@ def trajectory(timed: TimedPath) -> JointTrajectory:
     return JointTrajectory.model_construct(
         waypoints=[
             TrajectoryWaypoint.model_construct(
-                time_from_start=float(t), position=p.tolist(), velocity=v.tolist()
+                time_from_start=float(t),
+                position=p.tolist(),
+                velocity=v.tolist(),
+                acceleration=a.tolist(),
             )
-            for t, p, v in zip(timed.times, timed.positions, timed.velocities, strict=True)
+            for t, p, v, a in zip(
+                timed.times, timed.positions, timed.velocities, timed.accelerations, strict=True
+            )
         ]
     )
 
@@ -52,9 +62,17 @@ def check_faults(state: RobotState) -> None:
 
 
 class Execution:
-    def __init__(self, link: RobotClient, timed: TimedPath, *, mode_ready: bool = False) -> None:
+    def __init__(
+        self,
+        link: RobotClient,
+        timed: TimedPath,
+        *,
+        mode_ready: bool = False,
+        monitor: PathMonitor | None = None,
+    ) -> None:
         self.link = link
         self.timed = timed
+        self.monitor = monitor
         self.mode_ready = mode_ready  # the driver was put in trajectory mode for this move
         self.progress = 0.0
         self.generation = -1
@@ -117,6 +135,8 @@ class Execution:
                     await self._cancel.wait()
             state = self.link.current(self.generation)
             self._check(state)
+            if self.monitor is not None:
+                self.monitor.check(np.array(state.joint_position))
             running = state.trajectory
             if running is not None and running.id == trajectory_id:
                 # The driver's progress: a pause or the speed override slow the clock.

@@ -220,11 +220,12 @@ class MovePlanner:
                 continue
             count = max(2, int(np.ceil(move.duration / SAMPLE_PERIOD)) + 1)
             times = np.linspace(0.0, move.duration, count)
-            states = [move.sample(float(t)) for t in times]
+            states = [move.state(float(t)) for t in times]
             positions = np.array([s[0] for s in states])
             velocities = np.array([s[1] for s in states])
-            positions[-1], velocities[-1] = b, 0.0
-            timed = timed.then(TimedPath(times, positions, velocities))
+            accelerations = np.array([s[2] for s in states])
+            positions[-1], velocities[-1], accelerations[-1] = b, 0.0, 0.0
+            timed = timed.then(TimedPath(times, positions, velocities, accelerations))
         return timed
 
     # Reports ----------------------------------------------------------------------------------

@@ -20,7 +20,7 @@ from runtime.interfaces.robot import CommandMode, CommandModeRequest, Operationa
 from runtime.interfaces.variables import JointWaypoint, PoseWaypoint
 from runtime.kit.app import create_app
 from runtime.kit.errors import Conflict, NotFound, OpenPendantError
-from runtime.kit.settings import RuntimeSettings
+from runtime.kit.settings import MotionSettings, RuntimeSettings
 from runtime.motion.executor import Execution
 from runtime.motion.models import (
     MoveKind,
@@ -30,10 +30,12 @@ from runtime.motion.models import (
     PlanReport,
     Target,
 )
+from runtime.motion.monitor import PathMonitor
 from runtime.motion.moves import MovePlanner, Plan, Refused, resolve
 from runtime.motion.reactive import PERIOD as REACTIVE_PERIOD
 from runtime.motion.reactive import ReactiveExecution
 from runtime.motion.robots import Robots, world_pose
+from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.velocity import MANUAL_TCP_SPEED, VelocityController
 from runtime.variable_storage.client import StorageClient
 
@@ -46,8 +48,15 @@ KEEP_STOPPED_CALLERS = 1000
 
 
 class Moves:
-    def __init__(self, robots: Robots, storage: StorageClient, mirror: WorldMirror) -> None:
+    def __init__(
+        self,
+        robots: Robots,
+        storage: StorageClient,
+        mirror: WorldMirror,
+        settings: MotionSettings | None = None,
+    ) -> None:
         self.robots = robots
+        self.settings = settings or MotionSettings()
         self.storage = storage
         self.status: dict[str, MoveStatus] = {}
         self.mirror = mirror
@@ -133,7 +142,16 @@ class Moves:
                 plan.report.message, code=plan.report.code, details=plan.report.model_dump()
             )
         link = self.robots.known_link(robot)
-        return self._launch(status, Execution(link, plan.timed, mode_ready=mode_ready))
+        # The planned TCP path for the monitor: a few ms of forward kinematics, off the loop.
+        monitor = await asyncio.to_thread(
+            PathMonitor,
+            Kinematics(link.info),
+            plan.timed.positions,
+            self.settings.path_tolerance,
+            self.settings.joint_path_tolerance,
+        )
+        execution = Execution(link, plan.timed, mode_ready=mode_ready, monitor=monitor)
+        return self._launch(status, execution)
 
     async def _switch_to_trajectory(self, robot: str, lease: asyncio.Future[object]) -> bool:
         """The driver put in trajectory mode while the move is planned, once the lease is
@@ -385,7 +403,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     devices = Devices(urls["device_manager"], "motion", settings.link.stale_after)
     robots = Robots(devices, storage)
     mirror = WorldMirror(devices, storage)
-    moves = Moves(robots, storage, mirror)
+    moves = Moves(robots, storage, mirror, settings.motion)
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:

@@ -29,8 +29,13 @@ class PlannedMove:
         return float(self.trajectory.duration)
 
     def sample(self, t: float) -> tuple[FloatArray, FloatArray]:
-        position, velocity, _ = self.trajectory.at_time(min(max(t, 0.0), self.duration))
-        return np.array(position), np.array(velocity)
+        position, velocity, _ = self.state(t)
+        return position, velocity
+
+    def state(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Position, velocity and acceleration at time t."""
+        position, velocity, acceleration = self.trajectory.at_time(min(max(t, 0.0), self.duration))
+        return np.array(position), np.array(velocity), np.array(acceleration)
 
 
 def peak_tcp_speed(kinematics: Kinematics, trajectory: Trajectory) -> float:

@@ -1,7 +1,8 @@
 """Time-scaling of a sampled joint path: ruckig plans the path parameter u (arc length)
 from rest to rest under bounds on u̇, ü and the jerk of u, chosen from the path's
 derivatives (a C² spline through the samples) so that no joint can exceed its velocity,
-acceleration or jerk limit; the result is checked, and slowed as a whole when needed."""
+acceleration or jerk limit; the result is checked as the drivers will interpolate it
+(`runtime.robotics.reference`, at their cycle), and slowed as a whole when needed."""
 
 from __future__ import annotations
 
@@ -15,8 +16,10 @@ from scipy.interpolate import CubicSpline
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import RobotInfo
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.reference import Limits, TrajectoryReference
 
 SAMPLE_PERIOD = 0.008  # s between the trajectory points sent to the driver
+CHECK_PERIOD = 0.002  # s: the interpolated trajectory is checked at the fastest driver cycle
 MAX_SLOWDOWNS = 12
 
 
@@ -25,10 +28,15 @@ class TimedPath:
     times: FloatArray
     positions: FloatArray
     velocities: FloatArray
+    accelerations: FloatArray
 
     @property
     def duration(self) -> float:
         return float(self.times[-1])
+
+    def reference(self) -> TrajectoryReference:
+        """The trajectory as a driver interpolates it."""
+        return TrajectoryReference(self.times, self.positions, self.velocities, self.accelerations)
 
     def then(self, other: TimedPath) -> TimedPath:
         """This path followed by `other` (which starts where this one ends, at rest)."""
@@ -37,11 +45,13 @@ class TimedPath:
             np.concatenate([self.times, other.times[1:] + offset]),
             np.vstack([self.positions, other.positions[1:]]),
             np.vstack([self.velocities, other.velocities[1:]]),
+            np.vstack([self.accelerations, other.accelerations[1:]]),
         )
 
 
 def at_rest(position: FloatArray) -> TimedPath:
-    return TimedPath(np.zeros(1), position[None, :].copy(), np.zeros((1, position.size)))
+    zeros = np.zeros((1, position.size))
+    return TimedPath(np.zeros(1), position[None, :].copy(), zeros, zeros.copy())
 
 
 def time_scale(
@@ -77,10 +87,11 @@ def time_scale(
     # The jerk bound is kept from vanishing on tight curves (the floor); velocity and
     # acceleration, the limits that matter to the drives, are verified on the result.
     u_j = float(np.min(np.maximum(jerk - 3 * m2 * u_v * u_a - m3 * u_v**3, jerk / 4) / m1))
+    limits = Limits(v, a, jerk)
     scale = 1.0
     for _ in range(MAX_SLOWDOWNS):
         timed = _scaled(spline, u[-1], u_v * scale, u_a * scale**2, u_j * scale**3)
-        excess = _excess(timed, v, a, kinematics, tcp_cap)
+        excess = _excess(timed, limits, kinematics, tcp_cap)
         if excess <= 1.0:
             return timed
         scale *= 0.97 / excess
@@ -105,28 +116,27 @@ def _scaled(spline: CubicSpline, end: float, vmax: float, amax: float, jmax: flo
     states = [trajectory.at_time(float(t)) for t in times]
     s = np.clip(np.array([p[0][0] for p in states]), 0.0, end)
     s_dot = np.array([p[1][0] for p in states])
-    s[-1], s_dot[-1], s_dot[0] = end, 0.0, 0.0
+    s_ddot = np.array([p[2][0] for p in states])
+    s[-1], s_dot[-1], s_dot[0], s_ddot[-1], s_ddot[0] = end, 0.0, 0.0, 0.0, 0.0
     positions = spline(s)
     velocities = spline(s, 1) * s_dot[:, None]
-    return TimedPath(times, positions, velocities)
+    accelerations = spline(s, 2) * (s_dot**2)[:, None] + spline(s, 1) * s_ddot[:, None]
+    return TimedPath(times, positions, velocities, accelerations)
 
 
 def _excess(
     timed: TimedPath,
-    v: FloatArray,
-    a: FloatArray,
+    limits: Limits,
     kinematics: Kinematics | None,
     tcp_cap: float | None,
 ) -> float:
-    """The largest ratio of a joint's speed or acceleration (or the TCP speed) to its limit,
-    measured on the trajectory's points as the driver will receive them."""
+    """The factor by which the trajectory must be slowed so that no joint's speed,
+    acceleration or jerk (nor the TCP's speed) passes its limit, measured on the trajectory
+    as the drivers interpolate it, at their cycle."""
     dt = np.diff(timed.times)[:, None]
     speed = np.abs(np.diff(timed.positions, axis=0)) / dt
-    ratio = float(np.max(speed / v))
-    ratio = max(ratio, float(np.max(np.abs(timed.velocities) / v)))
-    if len(timed.times) > 2:
-        accel = np.abs(np.diff(timed.velocities, axis=0)) / dt
-        ratio = max(ratio, float(np.sqrt(np.max(accel / a))))
+    ratio = float(np.max(speed / limits.velocity))
+    ratio = max(ratio, timed.reference().peak_ratio(limits, CHECK_PERIOD))
     if kinematics is not None and tcp_cap is not None:
         step = max(1, len(timed.times) // 200)
         peak = max(

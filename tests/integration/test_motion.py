@@ -15,8 +15,9 @@ import pinocchio as pin
 import pytest
 
 from runtime.bench.harness.jog import Cell
-from runtime.bench.harness.processes import Runtime
+from runtime.bench.harness.processes import Runtime, wait_for
 from runtime.interfaces.scene import SceneObject
+from runtime.robotics.deviation import distances_to_polyline
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
 from runtime.robotics.world import World
@@ -309,3 +310,80 @@ def test_cancel_halts_the_robot(ready: Cell) -> None:
     ready.robot.wait_stopped()
     assert not np.allclose(ready.robot.q(), LEFT, atol=1e-3)
     assert ready.robot.state()["command_mode"] == "halt"
+
+
+def set_operational_mode(cell: Cell, mode: str) -> None:
+    response = cell.robot.http.put("/sim/operational_mode", json={"mode": mode})
+    assert response.status_code == 200, response.text
+    wait_for(
+        lambda: cell.runtime.api("GET", "/devices/robot/state").json()["operational_mode"] == mode,
+        5,
+        what=f"the runtime seeing {mode} mode",
+    )
+
+
+def test_a_fast_linear_move_in_automatic_mode_stays_on_its_line(ready: Cell) -> None:
+    """600 mm at full speed and acceleration with no TCP cap: it left its line by 69.6 mm
+    when the driver handed the joints to ruckig one by one."""
+    set_operational_mode(ready, "auto")
+    try:
+        ready.ready()  # a change of mode halts the robot
+        start = KINEMATICS.tcp(ready.robot.q()).copy()
+        goal = pin.SE3(start.rotation, start.translation + np.array([0.0, 0.6, 0.0]))
+        request = {
+            "kind": "linear",
+            "target": {"pose": pose_se3(goal)},
+            "speed": 1,
+            "acceleration": 1,
+        }
+        positions = setpoints_during(ready, request)
+    finally:
+        set_operational_mode(ready, "manual_reduced_speed")
+    tcp = np.array([KINEMATICS.tcp(q).translation for q in positions])
+    line = np.array([start.translation, goal.translation])
+    worst = float(np.max(distances_to_polyline(line, tcp)))
+    assert worst < 1e-3, f"{worst * 1e3:.3f} mm off the line"
+    speeds = np.linalg.norm(np.diff(tcp, axis=0), axis=1) / ready.robot.setpoints(0)["cycle"]
+    assert speeds.max() > 0.5  # fast: far above manual mode's 250 mm/s
+
+
+def test_a_hand_pushing_the_arm_off_its_path_stops_the_move(ready: Cell) -> None:
+    """The path monitor: the arm pushed sideways during a linear move is halted as a
+    protective stop with `path_deviation`, soon after it passes the 5 mm tolerance."""
+    start = KINEMATICS.tcp(ready.robot.q()).copy()
+    goal = pin.SE3(start.rotation, start.translation + np.array([0.0, 0.5, 0.0]))
+    started = start_request(ready, goal)
+    status = started
+    try:
+        wait_for(
+            lambda: (
+                ready.runtime.api("GET", f"/motion/moves/{started['id']}").json()["progress"] > 0.1
+            ),
+            10,
+            what="the move under way",
+        )
+        pushed = ready.robot.http.put("/sim/hand", json={"velocity": [0, 0.3, 0, 0, 0, 0]})
+        assert pushed.status_code == 200, pushed.text
+        for _ in range(20):
+            status = ready.runtime.api(
+                "GET", f"/motion/moves/{started['id']}", params={"wait": 1}
+            ).json()
+            if status["state"] not in ("planning", "running"):
+                break
+    finally:
+        ready.robot.http.put("/sim/hand", json={"velocity": [0.0] * 6})
+    assert status["state"] == "failed" and status["code"] == "path_deviation", status
+    assert "left its planned path" in status["message"]
+    ready.robot.wait_stopped()
+    assert ready.robot.state()["command_mode"] == "halt"
+
+
+def pose_se3(pose: pin.SE3) -> dict[str, list[float]]:
+    return {
+        "position": pose.translation.tolist(),
+        "orientation": pin.Quaternion(pose.rotation).coeffs().tolist(),
+    }
+
+
+def start_request(cell: Cell, goal: pin.SE3) -> dict[str, Any]:
+    return start(cell, {"kind": "linear", "target": {"pose": pose_se3(goal)}, "speed": 0.5})

@@ -377,7 +377,8 @@ def straight_trajectory(
     core: SimCore, ur5: RobotInfo, offset: list[float]
 ) -> tuple[str, FloatArray, FloatArray]:
     """A time-optimal move along a straight line in joint space, sent as 8 ms waypoints with
-    velocities, as the motion service sends it; (trajectory id, start, goal)."""
+    velocities and accelerations, as the motion service sends it; (trajectory id, start,
+    goal)."""
     from runtime.robotics.joint_move import plan_joint_move
 
     start = core.tracker.position.copy()
@@ -386,9 +387,16 @@ def straight_trajectory(
     times = np.arange(0.008, move.duration, 0.008).tolist() + [move.duration]
     waypoints = []
     for t in times:
-        position, velocity = move.sample(t)
+        position, velocity, acceleration = move.state(t)
+        if t == times[-1]:
+            velocity, acceleration = 0 * velocity, 0 * acceleration
         waypoints.append(
-            TrajectoryWaypoint(time_from_start=t, position=list(position), velocity=list(velocity))
+            TrajectoryWaypoint(
+                time_from_start=t,
+                position=list(position),
+                velocity=list(velocity),
+                acceleration=list(acceleration),
+            )
         )
     checked = JointLimitChecker(ur5).trajectory(JointTrajectory(waypoints=waypoints), start)
     core.set_mode(CommandMode.trajectory)

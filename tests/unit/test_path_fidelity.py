@@ -1,0 +1,123 @@
+"""What was checked is what is executed: fast moves planned by the motion planner and run on
+the simulated controller (the trajectory as the driver receives it) stay on the planned path,
+on every simulated model and in both operational modes; a trajectory the controller cannot
+follow as given is slowed along its path, never cut short joint by joint."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from runtime.bench.bench_path_fidelity import follow, linear, moves
+from runtime.interfaces.robot import JointTrajectory, TrajectoryWaypoint
+from runtime.motion.executor import trajectory as as_trajectory
+from runtime.motion.moves import MovePlanner, Point
+from runtime.robotics.deviation import distances_to_polyline
+from runtime.robotics.reference import Limits, TrajectoryReference
+from runtime.robotics.robot_info import load_robot_info
+from runtime.robotics.velocity import MANUAL_TCP_SPEED
+from runtime.robotics.world import World
+
+
+def off_line(model: str, offset: list[float], tcp_cap: float | None) -> tuple[float, float]:
+    """(worst distance of the executed TCP from the straight line, m; the plan's duration)."""
+    info = load_robot_info(model)
+    world = World()
+    world.add_robot("r", info)
+    planner = MovePlanner(world, "r", tcp_cap)
+    home = np.array(info.home)
+    here = planner.kinematics.tcp(home).copy()
+    goal = pin.SE3(here.rotation, here.translation + np.array(offset))
+    plan = planner.plan(linear(goal), home, [Point(None, goal)])
+    assert plan.report.ok and plan.timed is not None, plan.report.message
+    done = follow(info, home, as_trajectory(plan.timed))
+    tcp = np.array([planner.kinematics.tcp(q).translation for q in done])
+    assert np.linalg.norm(tcp[-1] - goal.translation) < 1e-6  # it got there
+    line = np.array([here.translation, goal.translation])
+    return float(np.max(distances_to_polyline(line, tcp))), plan.timed.duration
+
+
+def test_the_600_mm_linear_move_in_automatic_mode_stays_on_its_line() -> None:
+    """The move that left its line by 69.6 mm (the reference's jerk passed the limit, the
+    joints were handed to ruckig one by one)."""
+    worst, _ = off_line("ur5", [0.0, 0.6, 0.0], None)
+    assert worst < 1e-3, f"{worst * 1000:.2f} mm off the line"
+
+
+@pytest.mark.parametrize(
+    ("model", "offset"),
+    [
+        ("ur3", [0.0, 0.3, 0.0]),
+        ("ur10", [0.5, 0.0, -0.3]),
+        ("ur5e", [0.3, -0.3, 0.2]),
+        ("panda", [0.0, 0.4, -0.2]),
+    ],
+)
+def test_fast_linear_moves_of_every_model_stay_on_their_line(
+    model: str, offset: list[float]
+) -> None:
+    worst, _ = off_line(model, offset, None)
+    assert worst < 1e-3, f"{model}: {worst * 1000:.2f} mm off the line"
+
+
+def test_a_linear_move_in_manual_mode_stays_on_its_line_and_is_slower() -> None:
+    worst, manual = off_line("ur5", [0.0, 0.6, 0.0], MANUAL_TCP_SPEED)
+    assert worst < 1e-3
+    _, auto = off_line("ur5", [0.0, 0.6, 0.0], None)
+    assert manual > 2.0 * auto  # 250 mm/s against up to about 900
+
+
+def test_a_trajectory_past_the_jerk_limit_is_slowed_along_its_path() -> None:
+    """Waypoints without accelerations: the controller estimates them, and the interpolated
+    reference passes the jerk limit. It runs slower, on the same path, to its end."""
+    info = load_robot_info("ur5")
+    world = World()
+    world.add_robot("r", info)
+    planner = MovePlanner(world, "r", None)
+    home = np.array(info.home)
+    here = planner.kinematics.tcp(home).copy()
+    goal = pin.SE3(here.rotation, here.translation + np.array([0.0, 0.6, 0.0]))
+    plan = planner.plan(linear(goal), home, [Point(None, goal)])
+    assert plan.timed is not None
+    timed = plan.timed
+    bare = JointTrajectory(
+        waypoints=[
+            TrajectoryWaypoint(time_from_start=float(t), position=list(p), velocity=list(v))
+            for t, p, v in zip(
+                timed.times[1:], timed.positions[1:], timed.velocities[1:], strict=True
+            )
+        ]
+    )
+    estimated = TrajectoryReference(timed.times, timed.positions, timed.velocities)
+    assert estimated.peak_ratio(Limits.of(info.joints), 0.002) > 1.0  # not followable as is
+    done = follow(info, home, bare)
+    tcp = np.array([planner.kinematics.tcp(q).translation for q in done])
+    line = np.array([here.translation, goal.translation])
+    assert float(np.max(distances_to_polyline(line, tcp))) < 1e-3
+    assert len(done) * 0.002 > timed.duration * 1.05  # slower than planned
+
+
+def test_the_planner_checks_its_trajectory_as_the_drivers_interpolate_it() -> None:
+    info = load_robot_info("ur5")
+    world = World()
+    world.add_robot("r", info)
+    planner = MovePlanner(world, "r", None)
+    home = np.array(info.home)
+    here = planner.kinematics.tcp(home).copy()
+    goal = pin.SE3(here.rotation, here.translation + np.array([0.0, 0.6, 0.0]))
+    plan = planner.plan(linear(goal), home, [Point(None, goal)])
+    assert plan.timed is not None
+    assert plan.timed.reference().peak_ratio(Limits.of(info.joints), 0.002) <= 1.0
+
+
+def test_the_benchmarks_moves_stay_on_their_paths_and_the_monitor_never_fires() -> None:
+    """A share of the `path_fidelity` benchmark's moves on the Panda (7 joints): linear,
+    blended and joint moves within their bounds, the path monitor quiet on all of them."""
+    outcomes = moves("panda", limit=2)
+    kinds = {o.kind for o in outcomes}
+    assert kinds == {"linear", "blend", "joint"}
+    for o in outcomes:
+        bound = 0.002 if o.kind == "joint" else 1e-3
+        assert o.deviation < bound, o
+        assert not o.monitor_fired, o
