@@ -6,7 +6,9 @@ hosts, are added to one runtime: 1, then 5, 10 and 20. At each count, 10 UI clie
 device feed as the browser does (runtime/bench/ui_clients.py, their own process) for a while:
 the slowest robot's state rate at a client, and the age of every state on arrival (driver
 timestamp to client; one machine, one clock). CPU and RSS of every runtime process go in the
-details."""
+details. The curve ends where this host cannot keep every link fresh, or where a UI client
+fails: what was measured until then (at that count, by the clients that did not fail) is
+reported, and why it stopped (which client, the exit status and stderr of their process)."""
 
 from __future__ import annotations
 
@@ -34,6 +36,8 @@ FIGURES = (
 CLIENTS = 10
 COUNTS = (1, 5, 10, 20)
 TICK = os.sysconf("SC_CLK_TCK")
+STDERR_TAIL = 2000  # characters of a failed UI-client process's stderr kept
+CLIENTS_GRACE = 60.0  # s the UI-client process may take beyond its measuring time
 
 
 def cpu_seconds(pid: int) -> float:
@@ -65,43 +69,99 @@ def add_robots(runtime: Runtime, sims: list[SimRobotProc], first: int) -> None:
     )
 
 
-def measure(runtime: Runtime, robots: int, seconds: float, home: Path) -> dict[str, Any]:
-    pids = runtime_pids(runtime)
-    before = {name: cpu_seconds(pid) for name, pid in pids.items()}
-    started = time.monotonic()
-    url = runtime.url.replace("http://", "ws://") + "/api/devices/ws?batch=1"
-    clients = subprocess.run(
-        [sys.executable, "-m", "runtime.bench.ui_clients", url, str(CLIENTS), str(seconds)],
-        capture_output=True,
-        text=True,
-        env=child_env(home, OPENPENDANT_TOKEN=runtime.token("viewer")),
-        check=True,
-    )
-    elapsed = time.monotonic() - started
-    results = json.loads(clients.stdout)
-    rates = [
-        results[c]["counts"].get(f"r{k}", 0) / seconds
-        for c in range(CLIENTS)
-        for k in range(robots)
-    ]
-    ages = [age for result in results for age in result["ages"]]
-    return {
+def run_clients(
+    url: str, robots: int, seconds: float, env: dict[str, str], clients: int = CLIENTS
+) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
+    """The UI clients' figures at this robot count, from the clients that did not fail (None
+    when none did), and the failure (None when there was none)."""
+    argv = [sys.executable, "-m", "runtime.bench.ui_clients", url, str(clients), str(seconds)]
+    try:
+        done = subprocess.run(
+            argv, capture_output=True, text=True, env=env, timeout=seconds + CLIENTS_GRACE
+        )
+        status: int | str = done.returncode
+        stdout, stderr = done.stdout, done.stderr
+    except subprocess.TimeoutExpired as exc:  # killed by run()
+        status = f"killed after {seconds + CLIENTS_GRACE:.0f} s"
+        stdout, stderr = text_of(exc.stdout), text_of(exc.stderr)
+    try:
+        report: list[dict[str, Any]] = json.loads(stdout.strip().splitlines()[-1])
+    except (ValueError, IndexError):  # it died before reporting
+        report = []
+    finished = [r for r in report if "error" not in r]
+    failed = [{"client": r["client"], "error": r["error"]} for r in report if "error" in r]
+    failure = None
+    if status != 0 or failed or len(finished) < clients:
+        failure = {
+            "robots": robots,
+            "clients": clients,
+            "clients_measured": len(finished),
+            "failed_clients": failed,
+            "exit_status": status,
+            "stderr_tail": stderr[-STDERR_TAIL:],
+        }
+    if not finished:
+        return None, failure
+    rates = [r["counts"].get(f"r{k}", 0) / seconds for r in finished for k in range(robots)]
+    ages = [age for r in finished for age in r["ages"]]
+    point = {
         "robots": robots,
+        "clients_measured": len(finished),
         "min_rate_hz": round(min(rates), 1),
         "mean_rate_hz": round(sum(rates) / len(rates), 1),
         "age_p50_ms": round(percentile(ages, 50), 2),
         "age_p99_ms": round(percentile(ages, 99), 2),
         "age_max_ms": round(max(ages), 1) if ages else None,
-        "cpu_percent": {
+    }
+    if failure is not None:
+        point["failed_clients"] = [f["client"] for f in failed]
+    return point, failure
+
+
+def text_of(output: str | bytes | None) -> str:
+    if isinstance(output, bytes):
+        return output.decode(errors="replace")
+    return output or ""
+
+
+def why(failure: dict[str, Any]) -> str:
+    """A failure of the UI clients, in a line."""
+    clients, measured = failure["clients"], failure["clients_measured"]
+    failed = failure["failed_clients"]
+    if failed:
+        which = "; ".join(
+            f"UI client {f['client']} of {clients} failed: {f['error']}" for f in failed
+        )
+    elif measured < clients:
+        which = f"the UI-client process reported figures for {measured} of its {clients} clients"
+    else:
+        which = "the UI-client process failed after reporting its figures"
+    return f"at {failure['robots']} robots: {which} (exit status {failure['exit_status']})"
+
+
+def measure(
+    runtime: Runtime, robots: int, seconds: float, home: Path
+) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
+    pids = runtime_pids(runtime)
+    before = {name: cpu_seconds(pid) for name, pid in pids.items()}
+    started = time.monotonic()
+    url = runtime.url.replace("http://", "ws://") + "/api/devices/ws?batch=1"
+    env = child_env(home, OPENPENDANT_TOKEN=runtime.token("viewer"))
+    point, failure = run_clients(url, robots, seconds, env)
+    elapsed = time.monotonic() - started
+    if point is not None:
+        point["cpu_percent"] = {
             name: round(100 * (cpu_seconds(pid) - before[name]) / elapsed, 1)
             for name, pid in pids.items()
-        },
-        "rss_mb": {name: round(rss_mb(pid), 1) for name, pid in pids.items()},
-    }
+        }
+        point["rss_mb"] = {name: round(rss_mb(pid), 1) for name, pid in pids.items()}
+    return point, failure
 
 
 def meets(point: dict[str, Any]) -> bool:
-    return bool(point["min_rate_hz"] >= 50 and point["age_p99_ms"] <= 50)
+    return bool(
+        point["min_rate_hz"] >= 50 and point["age_p99_ms"] <= 50 and not point.get("failed_clients")
+    )
 
 
 def run() -> list[Figure]:
@@ -112,6 +172,7 @@ def run() -> list[Figure]:
     sims: list[SimRobotProc] = []
     curve: list[dict[str, Any]] = []
     stopped = ""
+    failure: dict[str, Any] | None = None
     try:
         runtime.wait_ready()
         for count in counts:
@@ -127,19 +188,39 @@ def run() -> list[Figure]:
                 print(f"  {count} robots: {stopped}", file=sys.stderr, flush=True)
                 break
             time.sleep(1.0)
-            curve.append(measure(runtime, count, seconds, home))
-            print(f"  {count} robots: {curve[-1]}", file=sys.stderr, flush=True)
+            point, failure = measure(runtime, count, seconds, home)
+            if point is not None:
+                curve.append(point)
+                print(f"  {count} robots: {point}", file=sys.stderr, flush=True)
+            if failure is not None:
+                stopped = why(failure)
+                print(f"  {stopped}\n{failure['stderr_tail']}", file=sys.stderr, flush=True)
+                break
     finally:
         for sim in sims:
             sim.stop()
         runtime.stop()
-    if not curve:  # not even the first count could be kept fresh
+    return figures(curve, counts[-1], seconds, stopped, failure)
+
+
+def figures(
+    curve: list[dict[str, Any]],
+    wanted: int,
+    seconds: float,
+    stopped: str = "",
+    failure: dict[str, Any] | None = None,
+) -> list[Figure]:
+    """The figures of the curve measured, up to `wanted` robots; `stopped`: why it ended
+    short, with the UI clients' `failure` when that was why."""
+    if not curve:  # not even the first count could be measured
         nothing = {"robots": 0, "min_rate_hz": 0.0, "age_p50_ms": math.nan, "age_p99_ms": math.nan}
-        curve.append(nothing)
+        curve = [nothing]
     top = curve[-1]
     details = {**top, "clients": CLIENTS, "seconds": seconds, "simulators": "nice 10"}
     if stopped:
         details["stopped"] = stopped
+    if failure is not None:
+        details["client_failure"] = failure
     met = [p["robots"] for p in curve if meets(p)]
     return [
         Figure(
@@ -163,7 +244,7 @@ def run() -> list[Figure]:
             float(max(met, default=0)),
             "robots",
             "20 robots within both targets",
-            bool(met) and max(met) == counts[-1],
+            bool(met) and max(met) == wanted,
             {"curve": curve},
         ),
     ]

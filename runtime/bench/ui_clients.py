@@ -2,8 +2,10 @@
 webui, each frame acknowledged at the next 60 Hz display frame), from a process of their
 own: python -m runtime.bench.ui_clients URL CLIENTS SECONDS
 
-Prints one JSON line: per client, the states received per device, and every state's age at
-arrival (ms: arrival time minus the driver's own timestamp; same machine, same clock)."""
+Prints one JSON line: per client (numbered from 0), the states received per device, and
+every state's age at arrival (ms: arrival time minus the driver's own timestamp; same
+machine, same clock), or, for a client that failed, why. A failure does not end the other
+clients; its traceback goes to stderr and the exit status is 1."""
 
 from __future__ import annotations
 
@@ -13,7 +15,9 @@ import os
 import re
 import sys
 import time
+import traceback
 from collections import defaultdict
+from typing import Any
 
 import websockets
 
@@ -61,10 +65,22 @@ async def client(url: str, seconds: float) -> tuple[dict[str, int], list[float]]
     return counts, ages
 
 
-async def main(url: str, clients: int, seconds: float) -> None:
-    results = await asyncio.gather(*(client(url, seconds) for _ in range(clients)))
-    print(json.dumps([{"counts": c, "ages": a} for c, a in results]), flush=True)
+async def main(url: str, clients: int, seconds: float) -> int:
+    results = await asyncio.gather(
+        *(client(url, seconds) for _ in range(clients)), return_exceptions=True
+    )
+    report: list[dict[str, Any]] = []
+    for number, result in enumerate(results):
+        if isinstance(result, BaseException):
+            print(f"client {number} failed:", file=sys.stderr)
+            traceback.print_exception(result, file=sys.stderr)
+            report.append({"client": number, "error": f"{type(result).__name__}: {result}"})
+        else:
+            counts, ages = result
+            report.append({"client": number, "counts": counts, "ages": ages})
+    print(json.dumps(report), flush=True)
+    return 1 if any("error" in r for r in report) else 0
 
 
 if __name__ == "__main__":
-    asyncio.run(main(sys.argv[1], int(sys.argv[2]), float(sys.argv[3])))
+    sys.exit(asyncio.run(main(sys.argv[1], int(sys.argv[2]), float(sys.argv[3]))))
