@@ -3,12 +3,15 @@ device's description, follows its state stream and, for a robot, holds the comma
 every service's commands go through (bound as the runtime's session: the driver halts the
 robot when it closes or goes silent). A session whose states stop or arrive late is stale:
 it is ended at once, and the next one is a new generation, on which nothing of the old one
-continues. Sessions restart with a short back-off, and move when the address does."""
+continues. Sessions restart with a short back-off, and move when the address does. A halt
+goes to the live session and, signed, to every other address the link used in the last
+minute (runtime/device_manager/addresses.py)."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 import json
 import logging
 import time
@@ -22,6 +25,7 @@ from websockets.asyncio.client import ClientConnection
 from websockets.exceptions import InvalidStatus
 
 from plugins.registry import registry
+from runtime.device_manager.addresses import RecentAddresses, halt_at, halt_route, unsettled
 from runtime.device_manager.models import ConnectionStatus
 from runtime.device_manager.tools import send_tool_setup
 from runtime.interfaces.variables import DeviceRecord
@@ -103,10 +107,22 @@ class DeviceConnection:
         self._http: httpx.AsyncClient | None = None
         self._routes: OrderedDict[int, Refusal] = OrderedDict()
         self._next_id = 0
+        self.addresses = RecentAddresses()
+        self._session_url: str | None = None  # where the live session is
+        self._halts: dict[str, asyncio.Task[None]] = {}  # per address, a halt on its way
+        # Why the link must stay where it is until the user moves it: its robot was moving
+        # or in a fault when its last session ended ("" when it was at rest).
+        self.held = ""
 
     @property
     def name(self) -> str:
         return self.record.local_name
+
+    @property
+    def pinned(self) -> str:
+        """Why the link must not follow its device to another address by itself ("" if it
+        may, once the device proves it serves from there)."""
+        return "it is live" if self.status == "connected" else self.held
 
     @property
     def live(self) -> bool:
@@ -131,6 +147,8 @@ class DeviceConnection:
         await asyncio.wait({task}, timeout=2.0)
         if not task.done():
             log.error("the session of %s did not end when stopped", self.name)
+        if self._halts:  # a STOP on its way is not cut short
+            await asyncio.wait(set(self._halts.values()), timeout=2.0)
 
     def move_to(self, url: str) -> None:
         """Reconnect at a new address now (the registry decides when that is right)."""
@@ -160,13 +178,30 @@ class DeviceConnection:
             raise Unavailable(f"{self.name} is not taking commands", code="link_stale") from None
 
     def halt(self, tag: str | None = None) -> bool:
-        """Stop always wins: on whatever session is live. False when there is none (then the
+        """Stop always wins: on whatever session is live, and to every other address the link
+        used in the last minute or points at now. False when no session is live (then the
         driver has halted by itself, its session closed)."""
-        if self._outbox is None:
-            return False
-        with contextlib.suppress(asyncio.QueueFull):
-            self._outbox.put_nowait(json.dumps({"type": "halt", "tag": tag}))
-        return True
+        queued = False
+        if self._outbox is not None:
+            with contextlib.suppress(asyncio.QueueFull):
+                self._outbox.put_nowait(json.dumps({"type": "halt", "tag": tag}))
+                queued = True
+        self._halt_elsewhere(self._session_url if queued else None)
+        return queued
+
+    def _halt_elsewhere(self, reached: str | None) -> None:
+        route = halt_route(self.record.kind)
+        if route is None:
+            return
+        for url in {self.record.url, *self.addresses.recent()} - {reached}:
+            if url in self._halts:
+                continue  # one on its way already: a second would say nothing new
+            task = asyncio.create_task(halt_at(url, route, self._secret(), self.name))
+            self._halts[url] = task
+            task.add_done_callback(functools.partial(self._halted, url))
+
+    def _halted(self, url: str, _: asyncio.Task[None]) -> None:
+        self._halts.pop(url, None)
 
     async def call(self, method: str, path: str, body: Any, generation: int) -> tuple[int, Any]:
         """A request to the driver on this generation's session: (status, JSON body)."""
@@ -228,6 +263,7 @@ class DeviceConnection:
                 log.exception("%s: session failed", self.name)
                 ended = SessionEnded(f"internal error: {describe(exc)}")
             if ended is not None:  # it had connected: start again at once
+                self.held = unsettled(self.last_state) if has_session(self.record.kind) else ""
                 self._set_status("stale" if ended.stale else "disconnected", str(ended))
                 attempt = 0
             if self._wake.is_set():  # moved, or stopping
@@ -327,6 +363,9 @@ class DeviceConnection:
         self.generation += 1
         self._http = http
         self._routes.clear()
+        self._session_url = url
+        self.addresses.used(url)
+        self.held = ""
         if command_ws is not None:
             self._outbox = asyncio.Queue(MAX_QUEUED)
         log.info("%s connected at %s (link %d)", self.name, url, self.generation)
@@ -347,6 +386,8 @@ class DeviceConnection:
             await asyncio.wait(tasks)
             self._outbox = None
             self._http = None
+            self._session_url = None
+            self.addresses.used(url)
         ended = next(iter(done)).exception()
         if not isinstance(ended, SessionEnded):  # a bug: _run logs it and starts again
             raise ended or AssertionError("a session task returned")

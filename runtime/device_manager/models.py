@@ -38,6 +38,10 @@ class AddressClaim(BaseModel):
     name: str
     seen: float
     followed: bool = False
+    # Not followed, though what answers there proved it is the device serving from that
+    # address: a move that waits for the user (PUT /devices/{name}/address), since the link
+    # was live or its robot was moving or in a fault.
+    proven: bool = False
 
 
 class AddedDevice(BaseModel):

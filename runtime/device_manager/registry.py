@@ -7,7 +7,6 @@ import contextlib
 import json
 import logging
 import math
-import secrets
 import time
 from collections.abc import Coroutine
 from pathlib import Path
@@ -36,8 +35,7 @@ from runtime.device_manager.models import (
 from runtime.device_manager.tools import stored_tool, tool_variable
 from runtime.interfaces.robot import RobotInfo, ToolSetup
 from runtime.interfaces.variables import DeviceRecord
-from runtime.kit.constant_time import same_secret
-from runtime.kit.device_auth import keep_secret, known_secret, proof
+from runtime.kit.device_auth import disproof, keep_secret, known_secret
 from runtime.kit.discovery import Detected, checked_uuid, clean_text
 from runtime.kit.errors import (
     Conflict,
@@ -104,19 +102,12 @@ class DeviceRegistry:
         """An added device announced at another address. While its link is live the device
         answers where it is: the announcement is a second device with its identity (or a
         stale one), shown to the user and not followed. A device whose link is down may have
-        moved (a restart on a new port): the link follows if it proves who it is."""
+        moved (a restart on a new port): the link follows if it proves who it is there."""
         claim = AddressClaim(url=device.url, name=device.name, seen=time.time())
-        if conn.status != "connected":
-            self._background(self._follow_if_proven(conn, device.url, claim))
-            return
-        log.warning(
-            "%s is live at %s; another device announces its uuid at %s: not followed",
-            conn.name,
-            conn.record.url,
-            device.url,
-        )
-        self.claims[conn.name] = claim
-        self._publish_devices()
+        if conn.status == "connected":  # shown at once; whether it is proven, shortly
+            self.claims[conn.name] = claim
+            self._publish_devices()
+        self._background(self._follow_if_proven(conn, device.url, claim))
 
     def secret_of(self, uuid: str) -> str | None:
         return known_secret(self.data_dir, uuid) if self.data_dir is not None else None
@@ -124,34 +115,38 @@ class DeviceRegistry:
     async def _follow_if_proven(
         self, conn: DeviceConnection, url: str, claim: AddressClaim
     ) -> None:
-        """A device whose link is down, announced at another address, is followed there only
-        if what answers there proves it holds the device's secret; else it is a claim for an
-        administrator to accept (PUT /devices/{name}/address) or ignore."""
+        """A device whose link is down and whose robot was at rest, announced at another
+        address, is followed there only if what answers there proves it holds the device's
+        secret and serves from that very address (a proof passed on from the real device
+        covers the real device's address). Otherwise it is a claim for an administrator to
+        accept (PUT /devices/{name}/address) or ignore: marked proven when it is the device,
+        but its link is live or its robot was moving or in a fault."""
         secret = self.secret_of(conn.record.uuid)
-        nonce = secrets.token_hex(16)
-        proven = False
-        if secret is not None:
-            try:
-                async with httpx.AsyncClient(base_url=url, timeout=2.0) as http:
-                    answer = await http.get("/pair/proof", params={"nonce": nonce})
-                proven = answer.status_code == 200 and same_secret(
-                    str(answer.json().get("proof", "")), proof(secret, nonce)
-                )
-            except (httpx.HTTPError, ValueError, AttributeError):
-                proven = False
+        refused = await disproof(url, secret) if secret else "no pairing secret is kept for it"
         async with self._lock:
             if self.connections.get(conn.name) is not conn or conn.record.url == url:
                 return
-            if proven and conn.status != "connected":
+            pinned = conn.pinned
+            if refused is None and not pinned:
                 self._move(conn, url)
                 return
-            log.warning(
-                "%s: a device announces its uuid at %s without proving it is %s: not followed",
-                conn.name,
-                url,
-                conn.name,
-            )
-            self.claims[conn.name] = claim
+            if refused is not None:
+                log.warning(
+                    "%s: a device announces its uuid at %s without proving it is %s there "
+                    "(%s): not followed",
+                    conn.name,
+                    url,
+                    conn.name,
+                    refused,
+                )
+            else:
+                log.warning(
+                    "%s proves it serves from %s, but %s: the move waits for the user",
+                    conn.name,
+                    url,
+                    pinned,
+                )
+            self.claims[conn.name] = claim.model_copy(update={"proven": refused is None})
         self._publish_devices()
 
     def _move(self, conn: DeviceConnection, url: str) -> None:
@@ -178,6 +173,17 @@ class DeviceRegistry:
             conn.halt("address changed by the user")
             self._move(conn, url)
         return self._added(conn)
+
+    def vouches_for(self, device: Detected) -> bool:
+        """Whether an added device's link is live at the address this announcement gives:
+        then the device is there, whatever became of its announcement's records (they may
+        have lapsed while the link was down, their confirmations lost with it)."""
+        return any(
+            conn.status == "connected"
+            and conn.record.uuid == device.uuid
+            and conn.record.url == device.url
+            for conn in self.connections.values()
+        )
 
     def on_gone(self, service_name: str) -> None:
         if self.announced.gone(service_name):

@@ -149,7 +149,9 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
         lease_file=settings.data_dir / "leases.json",
         data_dir=settings.data_dir,
     )
-    browser = Browser(settings.zeroconf_interfaces(), registry.on_found, registry.on_gone)
+    browser = Browser(
+        settings.zeroconf_interfaces(), registry.on_found, registry.on_gone, registry.vouches_for
+    )
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:

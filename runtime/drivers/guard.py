@@ -1,6 +1,8 @@
 """A driver obeys only the runtime it is paired with (runtime/kit/device_auth.py): every
 request that changes something and every socket but the state stream must be signed with
-the device's secret. What it is and how it is (info, state, the command log) stays readable."""
+the device's secret. What it is and how it is (info, state, the command log) stays readable.
+Its proof of pairing covers the address the challenge reached it at: passed on by another
+host, it proves nothing for that host's address."""
 
 from __future__ import annotations
 
@@ -9,7 +11,7 @@ from urllib.parse import parse_qs
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from runtime.kit.device_auth import HEADER, Verifier, proof
+from runtime.kit.device_auth import HEADER, PROOF_PATH, Verifier, address_text, proof
 from runtime.kit.service_guard import refuse
 
 OPEN_SOCKETS = frozenset({"/state/ws"})
@@ -18,7 +20,6 @@ OPEN_SOCKETS = frozenset({"/state/ws"})
 # does, not what the runtime commands. A real driver has none.
 WORLD_PREFIXES = ("/sim/", "/replay/")
 READS = frozenset({"GET", "HEAD"})
-PROOF_PATH = "/pair/proof"
 
 
 def _header(scope: Scope) -> str | None:
@@ -44,7 +45,15 @@ class CommandGuard:
                 message = "give a nonce of 16-128 characters"
                 await refuse(scope, receive, send, 422, "bad_nonce", message)
                 return
-            await JSONResponse({"proof": proof(self.secret, nonce)})(scope, receive, send)
+            # The local end of this connection: the address the challenger reached.
+            server = scope.get("server")
+            if not server:
+                message = "this device cannot tell the address it was reached at"
+                await refuse(scope, receive, send, 409, "no_address", message)
+                return
+            address = address_text(str(server[0]), int(server[1]))
+            answer = {"proof": proof(self.secret, nonce, address), "address": address}
+            await JSONResponse(answer)(scope, receive, send)
             return
         world = str(scope.get("path", "")).startswith(WORLD_PREFIXES)
         guarded = not world and (

@@ -6,12 +6,18 @@ The secret itself never travels. Each command request and command socket carries
 `X-Device-Auth: <time>.<nonce>.<mac>`, the MAC an HMAC-SHA256 of time, nonce, method and path:
 good for a minute, once. A device that announces itself at a new address proves it has the
 secret by answering a fresh challenge (`GET /pair/proof?nonce=…`) before the runtime follows
-it; an impostor cannot."""
+it; an impostor cannot. The proof covers the address the device serves the challenge from (the
+local end of the connection it came in on, so a device bound to every interface names the
+one it was reached at), and the runtime checks it against the address it reached: an
+impostor that passes the challenge on to the real device gets back a proof of the device's
+own address, not of the impostor's."""
 
 from __future__ import annotations
 
 import hashlib
 import hmac
+import ipaddress
+import json
 import math
 import re
 import secrets
@@ -25,6 +31,8 @@ import httpx
 from runtime.kit.constant_time import same_secret
 
 HEADER = "X-Device-Auth"
+PROOF_PATH = "/pair/proof"
+MAX_PROOF = 4096  # bytes of a proof's answer
 WINDOW = 60.0  # s either side of the device's clock
 FOLDER = "device-secrets"
 SAFE_UUID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:-]{0,63}\Z")
@@ -71,8 +79,55 @@ def sign(secret: str, method: str, path: str, now: float | None = None) -> str:
     return f"{stamp}.{nonce}.{_mac(secret, f'{stamp}.{nonce}.{method.upper()}.{path}')}"
 
 
-def proof(secret: str, nonce: str) -> str:
-    return _mac(secret, f"proof.{nonce}")
+def address_text(host: str, port: int) -> str:
+    """`host:port` as both ends spell it (an IPv4 address mapped into IPv6 as itself)."""
+    try:
+        ip = ipaddress.ip_address(host.split("%", 1)[0])
+    except ValueError:
+        return f"{host.lower()}:{port}"
+    if isinstance(ip, ipaddress.IPv6Address) and ip.ipv4_mapped is not None:
+        ip = ip.ipv4_mapped
+    return f"[{ip.compressed}]:{port}" if ip.version == 6 else f"{ip}:{port}"
+
+
+def proof(secret: str, nonce: str, address: str) -> str:
+    """The answer to a challenge, from the device serving it at `address` (`host:port`)."""
+    return _mac(secret, f"proof.{nonce}.{address}")
+
+
+async def disproof(url: str, secret: str, timeout: float = 2.0) -> str | None:
+    """None when what answers at `url` proves it holds the secret and serves from the address
+    this runtime reached; else why it does not."""
+    nonce = secrets.token_hex(16)
+    try:
+        # No proxy from the environment: the address reached must be the device's own.
+        async with (
+            httpx.AsyncClient(base_url=url, timeout=timeout, trust_env=False) as http,
+            http.stream("GET", PROOF_PATH, params={"nonce": nonce}) as answer,
+        ):
+            if answer.status_code != 200:
+                return f"no proof (HTTP {answer.status_code})"
+            stream = answer.extensions.get("network_stream")
+            peer = stream.get_extra_info("server_addr") if stream is not None else None
+            raw = bytearray()
+            async for chunk in answer.aiter_bytes():
+                raw += chunk
+                if len(raw) > MAX_PROOF:
+                    return "its answer to the challenge is too long"
+        body = json.loads(raw)
+    except (httpx.HTTPError, ValueError) as exc:
+        return f"no proof: {type(exc).__name__}"
+    if not isinstance(body, dict):
+        return "no proof: its answer is not an object"
+    if not isinstance(peer, tuple) or len(peer) < 2:
+        return "the address it was reached at is not known"
+    reached = address_text(str(peer[0]), int(peer[1]))
+    if same_secret(str(body.get("proof", "")), proof(secret, nonce, reached)):
+        return None
+    covered = str(body.get("address", ""))[:80]
+    if covered != reached:
+        return f"its proof is for {covered!r}, not for {reached}: passed on from elsewhere"
+    return "a wrong proof"
 
 
 class Verifier:

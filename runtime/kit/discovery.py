@@ -14,9 +14,10 @@ import secrets
 import socket
 import time
 import unicodedata
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Coroutine
 from dataclasses import dataclass, field
-from typing import Literal
+from functools import partial
+from typing import Any, Literal
 
 from zeroconf import (
     InterfaceChoice,
@@ -27,11 +28,13 @@ from zeroconf import (
 )
 
 # Exported by zeroconf, outside its __all__:
+from zeroconf._cache import DNSCache
 from zeroconf._dns import DNSQuestion
 from zeroconf._protocol.outgoing import DNSOutgoing
 from zeroconf.asyncio import AsyncServiceBrowser, AsyncServiceInfo, AsyncZeroconf
 
 from runtime.kit.api_version import API_VERSION
+from runtime.kit.confirmations import Confirmations
 
 log = logging.getLogger(__name__)
 
@@ -43,8 +46,8 @@ DEFAULT_TTL = 15
 FOLLOW_INTERFACES = 5.0  # s between re-scans of the network interfaces
 RECEIVE_BUFFER = 4 << 20  # bytes: a burst of announcements must not overflow the socket
 RESOLVE_ATTEMPTS = 3
-SWEEP = 1.0  # s between checks that detected devices still answer
-DNS_SRV, DNS_IN, DNS_QUERY = 33, 1, 0x0000  # RFC 1035 / 2782 numbers
+SWEEP = 0.25  # s between checks that detected devices still answer
+DNS_TXT, DNS_SRV, DNS_IN, DNS_QUERY = 16, 33, 1, 0x0000  # RFC 1035 / 2782 numbers
 UUID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:-]{0,63}\Z")
 # Control, format (bidi overrides, zero-width), surrogate, private-use and separator
 # characters: none belongs in a name shown on a pendant.
@@ -230,25 +233,41 @@ def parse_info(info: AsyncServiceInfo) -> Detected | None:
     )
 
 
+def newest_record(cache: DNSCache, now: float, name: str) -> tuple[float, float] | None:
+    """The newest live service record of `name` in zeroconf's cache: (created, TTL) in ms."""
+    records = cache.get_all_by_details(name, DNS_SRV, DNS_IN)
+    live = [r for r in records if not r.is_expired(now)]
+    if not live:
+        return None
+    record = max(live, key=lambda r: r.created)
+    return record.created, record.ttl * 1000.0
+
+
 class Browser:
-    """Continuously browses for devices and reports each appearance, change and goodbye."""
+    """Continuously browses for devices and reports each appearance, change and goodbye.
+
+    `vouched(device)`: whether the device has a live link at the address it announced; such
+    a device is not reported gone when its records lapse (runtime/kit/confirmations.py)."""
 
     def __init__(
         self,
         interfaces: Interfaces,
         on_found: Callable[[Detected], None],
         on_gone: Callable[[str], None],
+        vouched: Callable[[Detected], bool] = lambda device: False,
     ) -> None:
         self._interfaces = interfaces
         self._on_found = on_found
         self._on_gone = on_gone
+        self._vouched = vouched
         self._zc: AsyncZeroconf | None = None
         self._browser: AsyncServiceBrowser | None = None
         self._tasks: set[asyncio.Task[None]] = set()
         self._follower: asyncio.Task[None] | None = None
         self._sweeper: asyncio.Task[None] | None = None
-        # Instance names found, and when each was last asked to confirm itself (ms).
-        self._names: dict[str, float] = {}
+        self._confirmations = Confirmations()
+        self._found: dict[str, Detected] = {}  # per instance name, as last resolved
+        self._rechecking: set[str] = set()
 
     async def start(self) -> None:
         self._zc = make_zeroconf(self._interfaces)
@@ -264,10 +283,14 @@ class Browser:
         self, zeroconf: Zeroconf, service_type: str, name: str, state_change: ServiceStateChange
     ) -> None:
         if state_change is ServiceStateChange.Removed:
-            self._names.pop(name, None)
-            self._on_gone(name)
+            if self._confirmations.ended(name):
+                self._found.pop(name, None)
+                self._on_gone(name)
             return
-        task = asyncio.ensure_future(self._resolve(zeroconf, service_type, name))
+        self._start(self._resolve(zeroconf, service_type, name))
+
+    def _start(self, job: Coroutine[Any, Any, None]) -> None:
+        task = asyncio.ensure_future(job)
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
 
@@ -279,39 +302,60 @@ class Browser:
             await asyncio.sleep(0.2 * (attempt + 1))
         else:
             log.warning("could not resolve %s", clean_text(name, 120))
+            self._confirmations.unresolved(name, current_time_millis())
             return
         detected = parse_info(info)
         if detected is None:
             log.warning("ignoring malformed advertisement %s", clean_text(name, 120))
             return
-        self._names.setdefault(name, current_time_millis())
+        if self._confirmations.is_lost(name):
+            log.info("%s answers again", clean_text(name, 120))
+        self._confirmations.confirmed(name, current_time_millis())
+        self._found[name] = detected
         self._on_found(detected)
+
+    async def _recheck(self, zeroconf: Zeroconf, name: str) -> None:
+        try:
+            await self._resolve(zeroconf, SERVICE_TYPE, name)
+        finally:
+            self._rechecking.discard(name)
 
     async def _sweep(self) -> None:
         """A device that vanished without a goodbye (power lost) leaves the list when its
         service record's TTL (the device's `discovery.ttl`) runs out. zeroconf keeps the
         pointer records for at least 19 minutes, so the service records decide: each is
-        asked to confirm itself past half its TTL; one that lapses is gone."""
+        asked to confirm itself past half its TTL, and again every tenth of it; one that
+        lapses is gone unless its device's link is live, and is asked for again until it
+        answers (runtime/kit/confirmations.py)."""
         while True:
             await asyncio.sleep(SWEEP)
-            if self._zc is None:
-                continue
-            zc = self._zc.zeroconf
-            now = current_time_millis()
-            for name, asked in list(self._names.items()):
-                records = zc.cache.get_all_by_details(name, DNS_SRV, DNS_IN)
-                live = [r for r in records if not r.is_expired(now)]
-                if not live:
-                    del self._names[name]
-                    log.info("%s stopped answering: gone", clean_text(name, 120))
-                    self._on_gone(name)
-                    continue
-                newest = max(live, key=lambda r: r.created)
-                if now >= newest.get_expiration_time(50) and now - asked >= newest.ttl * 250:
-                    query = DNSOutgoing(DNS_QUERY)
-                    query.add_question(DNSQuestion(name, DNS_SRV, DNS_IN))
-                    zc.async_send(query)
-                    self._names[name] = now
+            if self._zc is not None:
+                self._sweep_once(self._zc.zeroconf, current_time_millis())
+
+    def _sweep_once(self, zc: Zeroconf, now: float) -> None:
+        newest = partial(newest_record, zc.cache, now)
+        step = self._confirmations.step(now, newest, self._is_vouched)
+        for name in step.gone:
+            log.info("%s stopped answering: gone", clean_text(name, 120))
+            self._on_gone(name)
+        # A lapsed name's device is kept: its link coming back is the network coming back.
+        for name in [n for n in self._found if not self._confirmations.follows(n)]:
+            del self._found[name]
+        for name in step.recheck:
+            if name not in self._rechecking:
+                self._rechecking.add(name)
+                self._start(self._recheck(zc, name))
+        if step.ask:
+            query = DNSOutgoing(DNS_QUERY)
+            for name in step.ask:
+                query.add_question(DNSQuestion(name, DNS_SRV, DNS_IN))
+                if self._confirmations.is_lost(name):  # its text lapsed with it
+                    query.add_question(DNSQuestion(name, DNS_TXT, DNS_IN))
+            zc.async_send(query)
+
+    def _is_vouched(self, name: str) -> bool:
+        device = self._found.get(name)
+        return device is not None and self._vouched(device)
 
     async def stop(self) -> None:
         for job in (self._follower, self._sweeper):

@@ -6,11 +6,16 @@ A link drop during a held jog halts it and tells the client within 0.5 s, and th
 does not move when the link returns, though the operator still holds the button; a drop
 during a planned move ends it failed; the runtime reconnects within 1 s of the link's
 return. An impostor announcing the robot's uuid from another host is shown, not followed,
-and STOP still stops the real robot."""
+and STOP still stops the real robot; so is one that passes the pairing challenge on to the
+real robot while the robot's cable is out (issue 31), and a STOP after the link was moved to
+it reaches the real robot too. Robots whose announcements lapsed during a 9 s outage are
+listed again within 2 s of the link's return."""
 
 from __future__ import annotations
 
+import contextlib
 import json
+import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -21,7 +26,15 @@ import numpy as np
 import pytest
 
 from runtime.bench.harness.jog import JogClient
-from runtime.bench.harness.processes import STILL, Runtime, SimRobotProc, child_env, wait_for
+from runtime.bench.harness.processes import (
+    STILL,
+    Proc,
+    Runtime,
+    SimRobotProc,
+    child_env,
+    wait_for,
+)
+from runtime.kit.device_auth import proof
 from tests.support import netns
 from tests.support.netns import Link, Network, inside
 
@@ -83,6 +96,21 @@ class BoardRobot:
         return int(log[-1]["seq"]) if log else 0
 
 
+class RelayProc(Proc):
+    """tests/support/relay_impostor.py: announces the robot from another host and passes
+    what it is asked to read, the pairing challenge included, on to the real robot."""
+
+    def __init__(self, home: Path, host: str, upstream: str) -> None:
+        argv = [sys.executable, "-m", "tests.support.relay_impostor", host, upstream]
+        env = child_env(home, **discovery_on(host))
+        super().__init__(argv, env, home / "logs" / f"relay-{host}.log")
+        self.url = ""
+
+    def wait_ready(self, timeout: float = 30.0) -> None:
+        line = self.wait_line(lambda s: s.startswith('{"event": "ready"'), timeout)
+        self.url = json.loads(line)["url"]
+
+
 class Hosts:
     def __init__(self, home: Path) -> None:
         self.net = Network()
@@ -101,11 +129,19 @@ class Hosts:
         self.robot = BoardRobot(self.board_host, self.sim.url)
         self.token = ""
 
-    def start_robot(self, host: str, wire: Link, uuid: str | None = None) -> SimRobotProc:
+    def start_robot(
+        self,
+        host: str,
+        wire: Link,
+        uuid: str | None = None,
+        name: str = "board-ur5",
+        env: dict[str, str] | None = None,
+    ) -> SimRobotProc:
         extra = ["--host", wire.right_ip, *(["--uuid", uuid] if uuid else [])]
+        home = self.home / (host if name == "board-ur5" else f"{host}-{name}")
         with inside(host):
             sim = SimRobotProc(
-                self.home / host, "board-ur5", extra=extra, env=discovery_on(wire.right_ip)
+                home, name, extra=extra, env={**discovery_on(wire.right_ip), **(env or {})}
             )
         sim.wait_ready()
         return sim
@@ -119,8 +155,19 @@ class Hosts:
         self.wait_connected(10)
         self.token = api("POST", "/devices/robot/lease", json={"holder": "tests"}).json()["token"]
 
-    def link_status(self) -> str:
-        return str(self.runtime.api("GET", "/devices/robot").json()["status"])
+    def link_status(self, local_name: str = "robot") -> str:
+        return str(self.runtime.api("GET", f"/devices/{local_name}").json()["status"])
+
+    def listed(self) -> set[str]:
+        return {d["uuid"] for d in self.runtime.api("GET", "/devices/detected").json()}
+
+    def add_by_uuid(self, sim: SimRobotProc, local_name: str) -> None:
+        pairing = {"uuid": sim.uuid, "local_name": local_name, "pairing": sim.secret}
+        added = self.runtime.api("POST", "/devices", json=pairing)
+        assert added.status_code == 201, added.text
+        wait_for(
+            lambda: self.link_status(local_name) == "connected", 10, what=f"{local_name}'s link"
+        )
 
     def wait_connected(self, timeout: float) -> None:
         wait_for(lambda: self.link_status() == "connected", timeout, what="the robot's link")
@@ -136,6 +183,38 @@ class Hosts:
             done = self.runtime.api("POST", f"/jog/robots/robot/{command}", headers=headers)
             assert done.status_code == 200, done.text
         wait_for(self.robot.stopped, 5, what="robot at rest")
+
+    def device(self) -> dict[str, Any]:
+        found: dict[str, Any] = self.runtime.api("GET", "/devices/robot").json()
+        return found
+
+    def halt_through_jog(self) -> None:
+        """The pendant's STOP for the robot (any client may send it)."""
+        stopped = self.runtime.api("POST", "/jog/robots/robot/halt")
+        assert stopped.status_code == 200, stopped.text
+
+    @contextlib.contextmanager
+    def relaying_impostor(self) -> Iterator[RelayProc]:
+        """The impostor of issue 31 on the other segment, with a way of its own to the
+        robot's board (a third wire, and a route over it to the board's address)."""
+        side = self.net.link(self.other_host, self.board_host)
+        board_ip = f"{self.wire.right_ip}/32"
+        netns.ip("-n", self.other_host, "route", "add", board_ip, "via", side.right_ip)
+        real_url = self.device()["url"]
+        with inside(self.other_host):
+            relay = RelayProc(self.home / "relay", self.other_wire.right_ip, real_url)
+        try:
+            relay.wait_ready()
+            yield relay
+        finally:
+            relay.stop()
+            netns.ip("-n", self.other_host, "link", "del", side.left_if)
+
+    def told(self, relay: RelayProc) -> list[dict[str, Any]]:
+        """What the impostor was told to do."""
+        with inside(self.other_host):
+            found: list[dict[str, Any]] = httpx.get(f"{relay.url}/impostor/commands").json()
+        return found
 
     def jog_client(self) -> JogClient:
         with inside(self.runtime_host):
@@ -286,6 +365,139 @@ def test_an_impostor_is_shown_not_followed_and_stop_still_stops_the_real_robot(
         assert impostor_robot.commands() == []  # the impostor heard nothing
     finally:
         impostor.stop()
+
+
+def test_a_relayed_pairing_proof_is_not_followed_and_stop_halts_the_real_robot(
+    hosts: Hosts,
+) -> None:
+    """Issue 31: the robot's cable out for a few seconds, an impostor on the other segment
+    announced its uuid and passed the device manager's challenge on to the real board; the
+    link moved to the impostor for good, and STOP went there. The board's proof covers its
+    own address: the link stays, and STOP halts the real robot."""
+    hosts.ready()
+    real_url = hosts.device()["url"]
+    before = hosts.device()["address_claim"]
+    hosts.wire.down()  # the robot's cable out
+    try:
+        wait_for(lambda: hosts.link_status() != "connected", 2, what="the link lost")
+        with hosts.relaying_impostor() as impostor:
+            # The impostor really passes the challenge on: what it answers is the board's
+            # own proof, of the board's own address.
+            nonce = "issue-31-challenge"
+            with inside(hosts.runtime_host):
+                answer = httpx.get(f"{impostor.url}/pair/proof", params={"nonce": nonce}).json()
+            assert answer["address"] == real_url.removeprefix("http://")
+            assert answer["proof"] == proof(hosts.sim.secret, nonce, answer["address"])
+            claim = wait_for(
+                lambda: (c := hosts.device()["address_claim"]) != before and c,
+                10,
+                what="the impostor's announcement dealt with",
+            )
+            assert claim["url"] == impostor.url, claim
+            assert not claim["followed"] and not claim["proven"], claim
+            assert hosts.device()["url"] == real_url
+            hosts.wire.up()
+            hosts.wait_connected(5)
+            device = hosts.device()
+            assert device["url"] == real_url and device["address_claim"] == claim
+            # STOP, with the impostor still there: the real robot halts, the impostor hears
+            # nothing.
+            hosts.ready()
+            request = {"kind": "joint", "target": {"joints": FAR}, "speed": 0.1}
+            headers = {"X-Lease-Token": hosts.token}
+            started = hosts.runtime.api(
+                "POST", "/motion/robots/robot/moves", json=request, headers=headers
+            )
+            assert started.status_code == 202, started.text
+            wait_for(hosts.robot.moving, 10, what="the move running")
+            seq = hosts.robot.last_seq()
+            hosts.halt_through_jog()
+            wait_for(hosts.robot.stopped, 2, what="the real robot halted")
+            assert any(c["type"] == "halt" for c in hosts.robot.commands(seq))
+            assert np.abs(hosts.robot.q() - np.array(FAR)).max() > 0.1
+            assert hosts.told(impostor) == []
+    finally:
+        hosts.wire.up()
+    hosts.wait_connected(5)
+
+
+def test_a_stop_reaches_the_address_the_link_left_within_the_last_minute(hosts: Hosts) -> None:
+    """Moved to the impostor by the user (its relayed answers made it look like the robot),
+    the link's STOP still reaches the real robot: a STOP goes to every address the link used
+    in the last minute."""
+    hosts.ready()
+    real_url = hosts.device()["url"]
+    with hosts.relaying_impostor() as impostor:
+        try:
+            moved = hosts.runtime.api("PUT", "/devices/robot/address", json={"url": impostor.url})
+            assert moved.status_code == 200, moved.text
+            wait_for(
+                lambda: (d := hosts.device())["status"] == "connected" and d["url"] == impostor.url,
+                5,
+                what="the link at the impostor",
+            )
+            seq = hosts.robot.last_seq()
+            hosts.halt_through_jog()
+            wait_for(
+                lambda: any(c["type"] == "halt" for c in hosts.robot.commands(seq)),
+                5,
+                what="the halt at the real robot",
+            )
+            assert any(c["type"] == "halt" for c in hosts.told(impostor))
+        finally:
+            back = hosts.runtime.api("PUT", "/devices/robot/address", json={"url": real_url})
+            assert back.status_code == 200, back.text
+            hosts.wait_connected(5)
+    assert hosts.device()["url"] == real_url
+
+
+def test_robots_whose_records_lapsed_in_a_9_s_outage_are_listed_within_2_s_of_its_end(
+    hosts: Hosts,
+) -> None:
+    """Issue 31: a record whose confirmations were lost in an outage was deleted and never
+    asked for again (zeroconf keeps the pointer and reports nothing new): the live robot
+    stayed off the list, and one removed meanwhile could not be added again by its uuid.
+    Their 3 s TTL makes sure the records lapse while the cable is out."""
+    short_ttl = {"OPENPENDANT_DISCOVERY__TTL": "3"}
+    board, wire = hosts.board_host, hosts.wire
+    live = hosts.start_robot(board, wire, name="outage-ur5", env=short_ttl)
+    removed = hosts.start_robot(board, wire, name="removed-ur5", env=short_ttl)
+    both = {live.uuid, removed.uuid}
+    try:
+        wait_for(lambda: both <= hosts.listed(), 10, what="both robots detected")
+        hosts.add_by_uuid(live, "outage")
+        hosts.add_by_uuid(removed, "removed")
+        cut = time.monotonic()
+        wire.down()
+        try:
+            wait_for(lambda: not both & hosts.listed(), 8, what="their records lapsed")
+            assert hosts.runtime.api("DELETE", "/devices/removed").status_code == 200
+            time.sleep(max(0.0, 9.0 - (time.monotonic() - cut)))  # the outage itself
+        finally:
+            # Taken before the link is set up: the deadline can only be stricter than
+            # 2 s from the moment the link is back.
+            returned = time.monotonic()
+            wire.up()
+        while True:
+            listed = both <= hosts.listed()
+            seen = time.monotonic() - returned
+            if listed or seen >= 2.0:
+                break
+            time.sleep(0.02)
+        assert listed, f"not listed again 2 s after the link returned: {both - hosts.listed()}"
+        assert seen < 2.0, f"listed again only {seen:.2f} s after the link returned"
+        print(f"listed again {seen * 1000:.0f} ms after the link returned")
+        wait_for(lambda: hosts.link_status("outage") == "connected", 5, what="outage's link")
+        # Confirmed as before: listed past a few of its TTLs while its link is up.
+        for _ in range(20):
+            time.sleep(0.3)
+            assert live.uuid in hosts.listed()
+        hosts.add_by_uuid(removed, "removed")  # added again by its uuid after the outage
+    finally:
+        for local_name in ("outage", "removed"):
+            hosts.runtime.api("DELETE", f"/devices/{local_name}")
+        live.stop()
+        removed.stop()
 
 
 def test_a_network_that_appears_after_start_is_listened_on(tmp_path: Path) -> None:

@@ -346,11 +346,14 @@ def test_the_driver_obeys_only_the_runtime_it_is_paired_with(
     header = {DEVICE_AUTH: sign(sim.secret, "POST", "/enable")}
     assert httpx.post(f"{sim.url}/enable", headers=header).status_code == 200
     assert httpx.post(f"{sim.url}/enable", headers=header).status_code == 401
-    # What it is and how it is stay readable; the proof answers a challenge, not the secret.
+    # What it is and how it is stay readable; the proof answers a challenge, not the secret,
+    # and covers the address the challenge reached it at.
     assert httpx.get(f"{sim.url}/state").status_code == 200
     with connect(f"{robot.ws_url}/state/ws") as ws:
         assert json.loads(ws.recv(timeout=5))["joint_position"]
     nonce = "n" * 32
     answer = httpx.get(f"{sim.url}/pair/proof", params={"nonce": nonce}).json()
-    assert answer == {"proof": proof(sim.secret, nonce)} and sim.secret not in str(answer)
+    address = sim.url.removeprefix("http://")
+    assert answer == {"proof": proof(sim.secret, nonce, address), "address": address}
+    assert sim.secret not in str(answer)
     assert np.abs(np.array(robot.state()["joint_position"]) - before).max() < STILL

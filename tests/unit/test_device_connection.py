@@ -1,5 +1,6 @@
 """The device manager's one link per device (DeviceConnection) against small devices served
-in this process over real HTTP and WebSockets: sessions, staleness, moves and cancellation."""
+in this process over real HTTP and WebSockets: sessions, staleness, moves, cancellation and
+where a halt goes."""
 
 from __future__ import annotations
 
@@ -13,11 +14,13 @@ from typing import Any
 
 import pytest
 import uvicorn
-from fastapi import FastAPI, WebSocket
+from fastapi import FastAPI, Request, Response, WebSocket
 from starlette.websockets import WebSocketDisconnect
 
+from runtime.device_manager.addresses import RecentAddresses
 from runtime.device_manager.connection import DeviceConnection
 from runtime.interfaces.variables import DeviceRecord
+from runtime.kit.device_auth import HEADER, Verifier
 from runtime.kit.errors import OpenPendantError
 from runtime.kit.serve import listening_socket
 from runtime.kit.settings import LinkSettings
@@ -35,6 +38,7 @@ class FakeDevice:
         self.open = {"state": 0, "command": 0}
         self.closed = {"state": 0, "command": 0}
         self.commands: list[dict[str, Any]] = []
+        self.halts: list[str | None] = []  # halts by HTTP, outside a session: their signature
         self.paused = False
         self.delay = 0.0  # s added to every state's age
         self.seqno = 0
@@ -42,6 +46,7 @@ class FakeDevice:
         self.app.get("/info")(self.info)
         self.app.websocket("/state/ws")(self.states)
         self.app.websocket("/command/ws")(self.command_stream)
+        self.app.post("/halt")(self.halt)
         self.sock = listening_socket("127.0.0.1", 0)
         self.url = f"http://127.0.0.1:{self.sock.getsockname()[1]}"
         self.server = uvicorn.Server(uvicorn.Config(self.app, log_config=None, lifespan="off"))
@@ -67,6 +72,10 @@ class FakeDevice:
             gone.cancel()
             self.open["state"] -= 1
             self.closed["state"] += 1
+
+    async def halt(self, request: Request) -> Response:
+        self.halts.append(request.headers.get(HEADER))
+        return Response(status_code=204)
 
     async def command_stream(self, ws: WebSocket) -> None:
         await ws.accept()
@@ -103,10 +112,16 @@ async def until(check: Callable[[], bool], timeout: float = 3.0) -> None:
 
 
 @contextlib.asynccontextmanager
-async def connection(url: str) -> AsyncIterator[tuple[DeviceConnection, list[str]]]:
+async def connection(
+    url: str, secret: str | None = None
+) -> AsyncIterator[tuple[DeviceConnection, list[str]]]:
     statuses: list[str] = []
     conn = DeviceConnection(
-        record(url), lambda *_: None, lambda c: statuses.append(c.status), TIMING
+        record(url),
+        lambda *_: None,
+        lambda c: statuses.append(c.status),
+        TIMING,
+        secret=lambda: secret,
     )
     conn.start()
     try:
@@ -215,3 +230,49 @@ def test_a_stopped_connection_sends_nothing_more() -> None:
             assert len(device.commands) == count
 
     run(scenario)
+
+
+def test_a_halt_goes_to_every_address_the_link_used_in_the_last_minute() -> None:
+    """Issue 31: a link moved to an impostor took STOP with it. The address the link left
+    still hears the halt, signed as this runtime's; the live session carries it where the
+    link is now."""
+
+    async def scenario() -> None:
+        async with (
+            FakeDevice() as a,
+            FakeDevice() as b,
+            connection(a.url, secret="pairing-secret") as (conn, _),
+        ):
+            await until(lambda: conn.live and a.open["command"] == 1)
+            conn.move_to(b.url)
+            await until(lambda: conn.live and b.open["command"] == 1)
+            assert conn.halt("stop")
+            await until(lambda: any(c.get("tag") == "stop" for c in b.commands))
+            await until(lambda: len(a.halts) == 1)
+            assert Verifier("pairing-secret").check(a.halts[0], "POST", "/halt")
+            assert b.halts == []  # its session carried it
+            assert not any(c["type"] == "halt" for c in a.commands)
+
+    run(scenario)
+
+
+def test_a_halt_without_a_live_session_still_reaches_the_address() -> None:
+    async def scenario() -> None:
+        async with FakeDevice() as device, connection(device.url) as (conn, statuses):
+            await until(lambda: conn.status == "connected")
+            device.paused = True
+            await until(lambda: "stale" in statuses, timeout=1.0)
+            assert not conn.halt("stop")  # no session to carry it...
+            await until(lambda: len(device.halts) == 1)  # ... but the device hears it
+
+    run(scenario)
+
+
+def test_an_address_stays_recent_for_a_minute_after_the_link_last_used_it() -> None:
+    addresses = RecentAddresses()
+    addresses.used("http://10.0.0.1:80", now=100.0)
+    addresses.used("http://10.0.0.2:80", now=130.0)
+    addresses.used("http://10.0.0.1:80", now=140.0)  # used again: a minute from now on
+    assert sorted(addresses.recent(now=189.0)) == ["http://10.0.0.1:80", "http://10.0.0.2:80"]
+    assert addresses.recent(now=195.0) == ["http://10.0.0.1:80"]  # .2: 65 s ago
+    assert addresses.recent(now=201.0) == []

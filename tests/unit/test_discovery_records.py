@@ -1,17 +1,28 @@
-"""Advertisements as seen by the browser: hostile or malformed TXT records."""
+"""Advertisements as seen by the browser: hostile or malformed TXT records; which names are
+asked to confirm themselves, and when one is gone (issue 31)."""
 
 from __future__ import annotations
 
+import itertools
 import socket
+from collections.abc import Callable
 
 import pytest
+from zeroconf import current_time_millis
+from zeroconf._cache import DNSCache
+from zeroconf._dns import DNSPointer, DNSService
 from zeroconf.asyncio import AsyncServiceInfo
 
+from runtime.kit import confirmations
+from runtime.kit.confirmations import Confirmations, NewestRecord, Step
 from runtime.kit.discovery import (
+    DNS_IN,
+    DNS_SRV,
     SERVICE_TYPE,
     Advertisement,
     checked_uuid,
     clean_text,
+    newest_record,
     parse_info,
 )
 
@@ -98,3 +109,136 @@ def test_instance_names_are_safe_and_unique_per_device() -> None:
     assert clone.instance_name() != a.instance_name()
     assert clone.service_info().server != a.service_info().server  # its addresses its own
     assert a.instance_name() == a.instance_name()
+
+
+NAME = "cell ur5 [3f2b8c1e 0a1b]._openpendant._tcp.local."
+TTL = 3000.0  # ms
+TICK = 250.0  # ms, as the browser steps
+DNS_PTR = 12
+
+
+class Cache:
+    """When each name's service record was last received, as zeroconf's cache keeps it."""
+
+    def __init__(self) -> None:
+        self.made: dict[str, float] = {}
+
+    def newest(self, now: float) -> NewestRecord:
+        def live(name: str) -> tuple[float, float] | None:
+            made = self.made.get(name)
+            return (made, TTL) if made is not None and now < made + TTL else None
+
+        return live
+
+
+def steps(
+    book: Confirmations,
+    cache: Cache,
+    start: float,
+    end: float,
+    vouched: Callable[[str], bool] = lambda name: False,
+) -> list[tuple[float, Step]]:
+    """The browser's steps from `start` until `end`, nothing answering."""
+    done = []
+    now = start
+    while now < end:
+        done.append((now, book.step(now, cache.newest(now), vouched)))
+        now += TICK
+    return done
+
+
+def times(done: list[tuple[float, Step]], what: str) -> list[float]:
+    return [now for now, step in done if NAME in getattr(step, what)]
+
+
+def test_a_lapsed_name_is_gone_once_then_asked_for_again_less_and_less_often() -> None:
+    """Its confirmations lost in an outage, the name was forgotten: zeroconf, which keeps
+    the pointer for 19 minutes, never reported it again though the device was back."""
+    book, cache = Confirmations(), Cache()
+    cache.made[NAME] = 0.0
+    book.confirmed(NAME, 0.0)
+    done = steps(book, cache, 0.0, 10 * 60_000.0)
+    asked = times(done, "ask")
+    assert times(done, "gone") == [3000.0]  # when its record lapsed, and once
+    assert asked[:3] == [1500.0, 2000.0, 2500.0]  # past half its TTL, every tenth of it
+    lost = [t for t in asked if t >= 3000.0]
+    assert lost[:3] == [3000.0, 3500.0, 4000.0]
+    gaps = [b - a for a, b in itertools.pairwise(lost)]
+    for at, gap in zip(lost, gaps, strict=False):
+        wanted = min(confirmations.LOST_LONGEST, max(500.0, 0.1 * (at - 3000.0)))
+        assert wanted <= gap < wanted + TICK, (at, gap)
+    assert gaps == sorted(gaps) and max(gaps) < confirmations.LOST_LONGEST + TICK
+    assert len(lost) < 80 and lost[-1] > 9 * 60_000.0  # seldom, but still asked
+    assert book.follows(NAME) and book.is_lost(NAME)
+
+    # It answers: handed over to be resolved once per answer, then confirmed as before.
+    back = done[-1][0] + TICK
+    cache.made[NAME] = back
+    done = steps(book, cache, back, back + 1000.0)
+    assert times(done, "recheck") == [back] and times(done, "ask") == []
+    book.confirmed(NAME, back + 1000.0)
+    done = steps(book, cache, back + 1000.0, back + 2000.0)
+    assert times(done, "ask") == [back + 1500.0]
+    assert not book.is_lost(NAME) and times(done, "gone") == []
+
+
+def test_a_name_whose_device_has_a_live_link_is_never_gone_and_is_asked_when_it_returns() -> None:
+    book, cache = Confirmations(), Cache()
+    other = "conveyor [9c0d 77aa]._openpendant._tcp.local."  # no link: nobody added it
+    for name in (NAME, other):
+        cache.made[name] = 0.0
+        book.confirmed(name, 0.0)
+    link = {"live": True}
+
+    def vouched(name: str) -> bool:
+        return name == NAME and link["live"]
+
+    done = steps(book, cache, 0.0, 8000.0, vouched)  # lapsed at 3 s while the link lives
+    assert times(done, "gone") == [] and 3000.0 in times(done, "ask")
+    assert [now for now, step in done if other in step.gone] == [3000.0]
+    link["live"] = False
+    done = steps(book, cache, 8000.0, 60_000.0, vouched)
+    assert times(done, "gone") == [8000.0]  # the link is down too: gone
+    assert 59_750.0 not in times(done, "ask")  # asked every ~5 s by now
+    link["live"] = True  # the link is back, so is the network: all asked at once
+    done = steps(book, cache, 60_000.0, 61_000.0, vouched)
+    assert times(done, "ask")[0] == 60_000.0 and times(done, "gone") == []
+    assert other in done[0][1].ask
+
+
+def test_goodbyes_unresolved_names_and_how_long_a_lapsed_name_is_asked_for() -> None:
+    book, cache = Confirmations(), Cache()
+    cache.made[NAME] = 0.0
+    book.confirmed(NAME, 0.0)
+    assert book.ended(NAME) and not book.follows(NAME)  # a goodbye: gone now, not asked
+    del cache.made[NAME]  # goodbyes take the records out of the cache
+
+    book.unresolved(NAME, 0.0)  # announced, never resolved: asked later, nothing to report
+    done = steps(book, cache, 0.0, 2000.0)
+    assert times(done, "ask")[0] == 500.0 and times(done, "gone") == []
+    assert not book.ended(NAME) and book.follows(NAME)  # its pointer's end: still asked
+    done = steps(book, cache, 2000.0, confirmations.LOST_KEEP + 1000.0)
+    assert not book.follows(NAME) and times(done, "gone") == []
+
+    # A lapsed name whose device's link stays live is kept past that.
+    cache.made[NAME] = 0.0
+    book.confirmed(NAME, 0.0)
+    steps(book, cache, 0.0, confirmations.LOST_KEEP + 10_000.0, lambda name: True)
+    assert book.is_lost(NAME)
+
+
+def test_a_record_answering_again_is_seen_though_zeroconf_kept_its_pointer() -> None:
+    """zeroconf's own cache, as the browser reads it: the pointer it keeps for 19 minutes
+    would report nothing new when the device answers again; the service record does."""
+    cache, now = DNSCache(), current_time_millis()
+    ago = now - 10_000
+
+    def service(created: float) -> DNSService:
+        unique = DNS_IN | 0x8000  # the cache-flush bit, as devices send it
+        return DNSService(NAME, DNS_SRV, unique, 3, 0, 0, 8000, "b.local.", created=created)
+
+    pointer = DNSPointer(SERVICE_TYPE, DNS_PTR, DNS_IN, 1125, NAME, created=ago)
+    cache.async_add_records([pointer, service(ago)])
+    assert newest_record(cache, now, NAME) is None  # lapsed, though its pointer is kept
+    cache.async_add_records([service(now)])  # the same record, brought back by an answer
+    assert newest_record(cache, now, NAME) == (now, 3000.0)

@@ -16,12 +16,15 @@ export interface DetectedDevice {
 export type ConnectionStatus = "connecting" | "connected" | "stale" | "disconnected";
 
 // Another address an added device was seen at: announced there while its link was live (not
-// followed), or where it was before it moved (followed).
+// followed), or where it was before it moved (followed). `proven`: not followed, though the
+// device proved it serves from that address; the move waits for the user (its link was live,
+// or its robot was moving or in a fault).
 export interface AddressClaim {
   url: string;
   name: string;
   seen: number;
   followed: boolean;
+  proven: boolean;
 }
 
 export interface AddedDevice {
