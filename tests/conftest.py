@@ -30,6 +30,7 @@ TIMED_UNITS = frozenset(
         "test_motion_search.py",
         "test_service_kit.py",
         "test_sim_core.py",
+        "test_ur_silent_controller.py",
         "test_worker_pool.py",
     }
 )

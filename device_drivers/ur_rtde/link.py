@@ -181,6 +181,11 @@ class URLink:
             thread.start()
         for thread in closing:
             thread.join()
+        # Never freed: their destructors disconnect again, 500 ms each with the interpreter
+        # lock held, which stopped every thread of the driver for a second at each lost
+        # controller (its state stream too: the runtime's link went stale). A closed pair
+        # holds tens of kB and no thread; there is one per connection lost.
+        _UNFREEABLE.extend((self.control, self.receive))
         try:
             self.dashboard.disconnect()
         except Exception as exc:

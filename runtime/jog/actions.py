@@ -42,6 +42,7 @@ class Action(ABC):
         self.outcome = ("done", "arrived")  # what to report when done
         self.ticks = 0
         self.generation = -1  # the robot link it runs on (set when it starts)
+        self.streamed = False  # a command of its went out: the robot may move on it
 
     def release(self, now: float) -> bool:
         """The button was let go. True when the action winds down by itself (it then ends

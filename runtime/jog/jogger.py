@@ -61,6 +61,7 @@ class Jogger:
         self.on_held: HeldListener | None = None
         self._held = ""  # why the current press is held back, if it is
         self._wake = asyncio.Event()
+        self._halts: set[asyncio.Task[None]] = set()  # halts of refused presses, on their way
         self._task = asyncio.create_task(self._run(), name=f"jog:{link.name}")
         link.on_error = self._refused
 
@@ -68,6 +69,8 @@ class Jogger:
         self._task.cancel()
         with contextlib.suppress(asyncio.CancelledError):
             await self._task
+        if self._halts:
+            await asyncio.gather(*self._halts, return_exceptions=True)
         if self.link.on_error == self._refused:
             self.link.on_error = None
 
@@ -101,11 +104,20 @@ class Jogger:
         self._held = ""
         if previous is not None and previous.press != action.press:
             self._end(previous, "stopped", "replaced by a new press")
-        await self.link.ensure_mode(action.mode, action.generation)
-        self.listener = listener
-        self.on_held = on_held
-        self.action = action
-        await self._tick(action)  # the first command goes out now, not at the next cycle
+        try:
+            await self.link.ensure_mode(action.mode, action.generation)
+            self.listener = listener
+            self.on_held = on_held
+            self.action = action
+            await self._tick(action)  # the first command goes out now, not at the next cycle
+        except Exception:
+            # Refused as it began: the cycle must not go on with it, and neither the press
+            # it replaced nor its own first command may keep the robot moving.
+            if self.action is action:
+                self.action = None
+            if previous is not None or action.streamed:
+                await self._halt_ended(action, "refused")
+            raise
         self._wake.set()
 
     async def stop(self, press: str, reason: str, *, halt: bool) -> None:
@@ -140,6 +152,12 @@ class Jogger:
         else:
             await self.link.halt(tag=f"{action.press}:release")
 
+    async def _halt_ended(self, action: Action, why: str) -> None:
+        """A press that ended on a fault or a refusal: what it set moving is halted, and
+        nothing moves again until the operator presses again."""
+        with contextlib.suppress(OpenPendantError):
+            await self.link.halt(tag=f"{action.press}:{why}")
+
     def _end(self, action: Action, state: str, reason: str, message: str = "") -> None:
         if self.listener is not None:
             self.listener(Ended(action.press, state, reason, message or reason))
@@ -173,18 +191,30 @@ class Jogger:
         return "held back by a joint limit or a singularity"
 
     def _refused(self, error: dict[str, Any]) -> None:
+        """A command was refused (by the driver or the link): the press is over. Its earlier
+        commands may have set the robot moving (a velocity the driver keeps until its
+        timeout, or longer on a controller that missed a stop), so it is halted."""
         action = self.action
         if action is not None:
             self.action = None
             message = str(error.get("message", "the robot refused"))
             code = str(error.get("code", "refused"))
-            self._end(action, "halted" if code in LINK_FAULTS else "refused", code, message)
+            fault = code in LINK_FAULTS
+            if action.streamed:
+                halt = asyncio.get_running_loop().create_task(
+                    self._halt_ended(action, "link" if fault else "refused"),
+                    name=f"jog-halt:{action.press}",
+                )
+                self._halts.add(halt)
+                halt.add_done_callback(self._halts.discard)
+            self._end(action, "halted" if fault else "refused", code, message)
 
     async def _tick(self, action: Action) -> None:
         state = self.link.current(action.generation)
         now = time.monotonic()
         command = action.tick(state, now)
         if command is not None:
+            action.streamed = True  # before the send: one that fails may have gone out
             await self.link.stream(command, action.generation)
         self._report_held(action, now)
         if action.done and self.action is action:
@@ -212,10 +242,11 @@ class Jogger:
                         # A lost or stale link: the robot is halted and the press is over;
                         # it never resumes when the link returns.
                         log.warning("jog on %s ended: %s", self.link.name, exc.message)
-                        with contextlib.suppress(OpenPendantError):
-                            await self.link.halt(tag=f"{action.press}:link")
+                        await self._halt_ended(action, "link")
                         self._end(action, "halted", exc.code, exc.message)
                     else:
+                        if action.streamed:
+                            await self._halt_ended(action, "refused")
                         self._end(action, "refused", exc.code, exc.message)
             except Exception:
                 log.exception("jog cycle failed; halting %s", self.link.name)

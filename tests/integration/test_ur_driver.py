@@ -1,8 +1,8 @@
 """The UR driver (ur-rtde underneath) against the controller emulator (issue 16, must-show
 2): the state mapped, a jog that stops when its commands stop, a trajectory executed on its
 planned path, a halt, a protective stop becoming a fault until reset, a hung dashboard, a
-lost connection coming back with nothing moving, and the watchdog stopping the arm when the
-driver's process dies."""
+lost connection coming back with nothing moving (and, in a runtime, a steady fault meanwhile,
+not a flapping link), and the watchdog stopping the arm when the driver's process dies."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from functools import partial
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -21,6 +22,7 @@ import pytest
 from device_drivers.ur_rtde.driver import URDriver
 from device_drivers.ur_rtde.emulator import control as emulator_control
 from device_drivers.ur_rtde.link import PLAYING
+from runtime.bench.harness.processes import DriverProc, Runtime, stop_all
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.robot import (
     CommandMode,
@@ -394,6 +396,56 @@ def test_a_lost_connection_comes_back_by_itself_and_nothing_moves(
     except BaseException:
         driven.loop.close()
         raise
+
+
+OUTAGE = 5.0  # s of the driver's states, while the controller is away
+
+
+def test_a_controller_gone_is_a_steady_fault_in_the_runtime_not_a_flapping_link(
+    emulator: subprocess.Popen[str], tmp_path: Path
+) -> None:
+    """Issue 31: while the controller is away, `GET /api/devices/robot` stays connected on
+    one link (it alternated between connected and stale every 0.2-0.4 s: the driver's states
+    stopped counting), and the robot's state says error with `communication_failure`. Back,
+    it is still an error until reset."""
+    runtime = Runtime(tmp_path, extra=["--no-sim"])
+    driver = DriverProc(tmp_path, "ur-rtde", "ur", "--address", HOST, "--model", "ur5e")
+    again: subprocess.Popen[str] | None = None
+    try:
+        runtime.wait_ready()
+        added = runtime.api(
+            "POST", "/devices", json={"url": driver.wait_ready(), "local_name": "robot"}
+        )
+        assert added.status_code in (200, 201), added.text
+
+        def state() -> dict[str, Any]:
+            answer = runtime.api("GET", "/devices/robot/state")
+            return answer.json() if answer.status_code == 200 else {}
+
+        until(lambda: state().get("flags", {}).get("error") is False, 20, "the UR connected")
+        link = runtime.api("GET", "/devices/robot").json()["link"]
+        stop_emulator(emulator)
+        seen: set[tuple[str, int]] = set()
+        outage: list[dict[str, Any]] = []
+        while not outage or outage[-1]["ts"] < outage[0]["ts"] + OUTAGE:
+            details = runtime.api("GET", "/devices/robot").json()
+            seen.add((details["status"], details["link"]))
+            now = state()
+            if now.get("flags", {}).get("communication_failure"):
+                outage.append(now)
+            assert len(outage) < 10_000 and len(seen) == 1, seen
+        assert seen == {("connected", link)}
+        assert all(s["flags"]["error"] and not s["flags"]["ready"] for s in outage)
+        assert "cannot reach the robot" in outage[-1]["error_message"]
+        again = start_emulator()
+        until(lambda: not state()["flags"]["communication_failure"], 15, "the controller back")
+        back = state()
+        assert back["flags"]["error"] and "reset errors" in back["error_message"]
+        assert runtime.api("GET", "/devices/robot").json()["link"] == link
+    finally:
+        stop_all([driver, runtime])
+        if again is not None:
+            stop_emulator(again)
 
 
 DRIVER_THAT_DIES = f"""
