@@ -101,6 +101,7 @@ class DeviceClient(Generic[S]):
         method: Callable[..., Awaitable[R]],
         *args: Any,
         generation: int | None = None,
+        claim: str | None = None,
     ) -> R:
         """Call an interface method on the driver over the link: its path filled with the
         leading arguments, its body the last one, its answer parsed as declared."""
@@ -109,7 +110,9 @@ class DeviceClient(Generic[S]):
         body = args[len(ep.params)] if ep.body is not None and len(args) > len(ep.params) else None
         payload = body.model_dump(mode="json") if isinstance(body, BaseModel) else None
         gen = self.generation if generation is None else generation
-        status, content = await self.hub.call(self.name, gen, ep.method, ep.url(*params), payload)
+        status, content = await self.hub.call(
+            self.name, gen, ep.method, ep.url(*params), payload, claim
+        )
         if status >= 400:
             raise _refusal(status, content, f"{ep.method} {ep.path}")
         if ep.returns is None:

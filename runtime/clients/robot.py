@@ -131,10 +131,10 @@ class RobotClient(DeviceClient[RobotState], Robot):
         return await self._call(Robot.reset_errors)
 
     async def set_command_mode(
-        self, request: CommandModeRequest, generation: int | None = None
+        self, request: CommandModeRequest, generation: int | None = None, claim: str | None = None
     ) -> RobotState:
         self._mode = None
-        return await self._call(Robot.set_command_mode, request, generation=generation)
+        return await self._call(Robot.set_command_mode, request, generation=generation, claim=claim)
 
     async def set_speed_ratio(self, request: SpeedRatioRequest) -> RobotState:
         return await self._call(Robot.set_speed_ratio, request)
@@ -149,9 +149,11 @@ class RobotClient(DeviceClient[RobotState], Robot):
         return await self._call(Robot.set_digital_output, index, command)
 
     async def execute_trajectory(
-        self, trajectory: JointTrajectory, generation: int | None = None
+        self, trajectory: JointTrajectory, generation: int | None = None, claim: str | None = None
     ) -> TrajectoryAccepted:
-        return await self._call(Robot.execute_trajectory, trajectory, generation=generation)
+        return await self._call(
+            Robot.execute_trajectory, trajectory, generation=generation, claim=claim
+        )
 
     async def pause_trajectory(self, generation: int | None = None) -> TrajectoryStatus:
         return await self._call(Robot.pause_trajectory, generation=generation)
@@ -166,9 +168,10 @@ class RobotClient(DeviceClient[RobotState], Robot):
 
     # The run's claim -------------------------------------------------------------------------
 
-    async def claim(self) -> None:
-        """Halt this robot if this service goes away (a program run's robots)."""
-        await self.hub.claim(self.name, self.generation)
+    async def claim(self, claim: str | None = None) -> None:
+        """Halt this robot if this service goes away (a program run's robots); `claim`
+        names the run: commands for it are refused once it has ended or its service is gone."""
+        await self.hub.claim(self.name, self.generation, claim)
 
-    async def unclaim(self) -> None:
-        await self.hub.unclaim(self.name)
+    async def unclaim(self, claim: str | None = None) -> None:
+        await self.hub.unclaim(self.name, claim)

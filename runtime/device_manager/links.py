@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from runtime.device_manager.claims import MAX_CLAIM, Claims
 from runtime.device_manager.connection import DeviceConnection
 from runtime.kit.errors import NotFound, OpenPendantError
 
@@ -85,6 +86,7 @@ class LinkServer:
         self.clients: set[LinkClient] = set()
         # device -> (client, generation): the last to command it, halted if it goes away.
         self.commanders: dict[str, tuple[LinkClient, int]] = {}
+        self.claims = Claims()
 
     # From the registry -------------------------------------------------------------------
 
@@ -139,7 +141,9 @@ class LinkServer:
                 await ws.close()
 
     def _left(self, client: LinkClient) -> None:
-        """A service went away: nothing it set moving keeps moving."""
+        """A service went away: nothing it set moving keeps moving. Its claims end first,
+        in the same step, so no command for its runs reaches a device after the halt."""
+        self.claims.end_all(client)
         held = dict(client.claimed)
         for device, (commander, generation) in list(self.commanders.items()):
             if commander is client:
@@ -193,8 +197,14 @@ class LinkServer:
             conn = self.registry.connections.get(str(device))
             if conn is not None:
                 client.claimed[conn.name] = int(message.get("gen", conn.generation))
+            claim = _claim_of(message)
+            if claim is not None:
+                self.claims.take(claim, client)
         elif op == "unclaim":
             client.claimed.pop(str(device), None)
+            claim = _claim_of(message)
+            if claim is not None:
+                self.claims.end(claim)
         else:
             client.push_event(_error(message.get("ref"), "bad_message", f"unknown op {op!r}"))
 
@@ -245,9 +255,23 @@ class LinkServer:
             if not isinstance(generation, int):
                 raise OpenPendantError("a call needs the link generation", code="bad_message")
             conn = self._connection(name)
+            try:
+                claim = _claim_of(message)
+            except ValueError as exc:
+                raise OpenPendantError(str(exc), code="bad_message") from None
+            if claim is not None and not await self.claims.wait_live(claim):
+                raise OpenPendantError(
+                    f"{method} {path} was for {claim}, which has ended (its caller is gone)",
+                    code="claim_ended",
+                    status=409,
+                )
             if method != "GET":
                 self.commanders[name] = (client, generation)
             status, body = await conn.call(method, path, message.get("body"), generation)
+            if claim is not None and method != "GET" and not self.claims.live(claim):
+                # Its caller went away while the command was on its way to the device (the
+                # halt may have got there first): halted again, after it.
+                conn.halt(f"{claim} ended")
             reply.update(status=status, body=body)
         except OpenPendantError as exc:
             reply.update(status=exc.status, body=exc.body())
@@ -263,6 +287,15 @@ class LinkServer:
         commander = self.commanders.get(device)
         if commander is not None and commander[0] is client:
             del self.commanders[device]
+
+
+def _claim_of(message: dict[str, Any]) -> str | None:
+    claim = message.get("claim")
+    if claim is None:
+        return None
+    if not isinstance(claim, str) or not 0 < len(claim) <= MAX_CLAIM:
+        raise ValueError(f"a claim is a string of 1 to {MAX_CLAIM} characters")
+    return claim
 
 
 def link_message(conn: DeviceConnection) -> dict[str, Any]:

@@ -240,7 +240,7 @@ def run(settings: RuntimeSettings) -> int:
     main = forking()
     if main is not None:
         preload(settings)
-    supervisor = Supervisor()
+    supervisor = Supervisor(settings.restart_healthy_after)
 
     def on_signal(signum: int, _: FrameType | None) -> None:
         supervisor.stopping = True

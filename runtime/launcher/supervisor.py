@@ -176,9 +176,10 @@ class Child:
 
 
 class Supervisor:
-    def __init__(self) -> None:
+    def __init__(self, healthy_after: float = HEALTHY_AFTER) -> None:
         self.children: list[Child] = []
         self.stopping = False
+        self.healthy_after = healthy_after
 
     def add(self, child: Child) -> Child:
         self.children.append(child)
@@ -193,7 +194,7 @@ class Supervisor:
                 continue
             code = child.proc.poll()
             if code is None:
-                if now - child.started > HEALTHY_AFTER:
+                if now - child.started > self.healthy_after:
                     child.backoff = BACKOFF_START
                 continue
             if child.restart_at is None:

@@ -135,15 +135,22 @@ class LinkHub:
     async def halt(self, name: str, tag: str | None) -> None:
         await self._op({"op": "halt", "device": name, "tag": tag})
 
-    async def claim(self, name: str, generation: int) -> None:
-        await self._op({"op": "claim", "device": name, "gen": generation})
+    async def claim(self, name: str, generation: int, claim: str | None = None) -> None:
+        await self._op({"op": "claim", "device": name, "gen": generation, "claim": claim})
 
-    async def unclaim(self, name: str) -> None:
-        await self._op({"op": "unclaim", "device": name}, quiet=True)
+    async def unclaim(self, name: str, claim: str | None = None) -> None:
+        await self._op({"op": "unclaim", "device": name, "claim": claim}, quiet=True)
 
     async def call(
-        self, name: str, generation: int, method: str, path: str, body: Any = None
+        self,
+        name: str,
+        generation: int,
+        method: str,
+        path: str,
+        body: Any = None,
+        claim: str | None = None,
     ) -> tuple[int, Any]:
+        """A request to the driver; under `claim`, refused once that claim has ended."""
         ref = next(self._refs)
         future: asyncio.Future[tuple[int, Any]] = asyncio.get_running_loop().create_future()
         self._calls[ref] = future
@@ -157,6 +164,7 @@ class LinkHub:
                     "method": method,
                     "path": path,
                     "body": body,
+                    "claim": claim,
                 }
             )
             async with asyncio.timeout(CALL_TIMEOUT):

@@ -17,6 +17,7 @@ __all__ = [
 ]
 
 CALLER_HEADER = "X-Caller"
+CLAIM_HEADER = "X-Claim"
 
 
 class MotionClient:
@@ -36,15 +37,24 @@ class MotionClient:
         )
 
     async def start(
-        self, robot: str, request: MoveRequest, token: str, caller: str | None = None
+        self,
+        robot: str,
+        request: MoveRequest,
+        token: str,
+        caller: str | None = None,
+        claim: str | None = None,
     ) -> MoveStatus:
         """Start a move under the robot's lease; `caller` names who asks (a program run),
-        so that a stop naming it refuses its later moves too."""
+        so that a stop naming it refuses its later moves too; `claim` the claim the caller
+        made on its own link to the device manager, without which the move reaches nothing."""
+        headers = _headers(token, caller)
+        if claim is not None:
+            headers[CLAIM_HEADER] = claim
         return await self.http.request(
             "POST",
             f"/motion/robots/{robot}/moves",
             json=request.model_dump(mode="json", exclude_none=True),
-            headers=_headers(token, caller),
+            headers=headers,
             model=MoveStatus,
         )
 

@@ -69,10 +69,12 @@ class Execution:
         *,
         mode_ready: bool = False,
         monitor: PathMonitor | None = None,
+        claim: str | None = None,
     ) -> None:
         self.link = link
         self.timed = timed
         self.monitor = monitor
+        self.claim = claim  # the caller's (a run's): its commands live only as long
         self.mode_ready = mode_ready  # the driver was put in trajectory mode for this move
         self.progress = 0.0
         self.generation = -1
@@ -108,9 +110,11 @@ class Execution:
         gen = self.generation
         if not self.mode_ready or state.command_mode is not CommandMode.trajectory:
             mode = CommandModeRequest(mode=CommandMode.trajectory)
-            await self.link.set_command_mode(mode, generation=gen)
+            await self.link.set_command_mode(mode, generation=gen, claim=self.claim)
         try:
-            accepted = await self.link.execute_trajectory(trajectory(self.timed), generation=gen)
+            accepted = await self.link.execute_trajectory(
+                trajectory(self.timed), generation=gen, claim=self.claim
+            )
         except RobotError as exc:
             if exc.code == "wrong_mode":  # something else took the robot since it was set
                 raise MoveFailed(f"{exc.message}; plan again", code="wrong_mode") from exc

@@ -43,6 +43,9 @@ LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 # Who asks for a move (a program run): a stop naming it refuses its later moves too, so a
 # move request still on its way when the stop arrives never runs.
 Caller = Annotated[str | None, Header(alias="X-Caller", max_length=64)]
+# The claim a move is made under (a program run's, made on its own link to the device
+# manager): the move's commands reach the robot only while that claim lives.
+Claim = Annotated[str | None, Header(alias="X-Claim", max_length=64)]
 KEEP_FINISHED = 100
 KEEP_STOPPED_CALLERS = 1000
 
@@ -106,6 +109,7 @@ class Moves:
         request: MoveRequest,
         authorised: Awaitable[object],
         caller: str | None = None,
+        claim: str | None = None,
     ) -> MoveStatus:
         """Plans while `authorised` (the lease check) is answered; launches only once it is."""
         lease = asyncio.ensure_future(authorised)
@@ -123,7 +127,7 @@ class Moves:
                 execution: Execution | ReactiveExecution = await self._reactive(robot, request)
                 await lease
                 return self._launch(status, execution)
-            switched = asyncio.ensure_future(self._switch_to_trajectory(robot, lease))
+            switched = asyncio.ensure_future(self._switch_to_trajectory(robot, lease, claim))
             try:
                 plan = await self.plan(robot, request)
                 await lease
@@ -150,10 +154,12 @@ class Moves:
             self.settings.path_tolerance,
             self.settings.joint_path_tolerance,
         )
-        execution = Execution(link, plan.timed, mode_ready=mode_ready, monitor=monitor)
+        execution = Execution(link, plan.timed, mode_ready=mode_ready, monitor=monitor, claim=claim)
         return self._launch(status, execution)
 
-    async def _switch_to_trajectory(self, robot: str, lease: asyncio.Future[object]) -> bool:
+    async def _switch_to_trajectory(
+        self, robot: str, lease: asyncio.Future[object], claim: str | None
+    ) -> bool:
         """The driver put in trajectory mode while the move is planned, once the lease is
         confirmed, so the upload is the only round trip after planning. False when it was
         not: the execution switches then, or fails with the driver's reason."""
@@ -167,7 +173,9 @@ class Moves:
         try:
             if link.current().command_mode is CommandMode.trajectory:
                 return True
-            await link.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory))
+            await link.set_command_mode(
+                CommandModeRequest(mode=CommandMode.trajectory), claim=claim
+            )
         except OpenPendantError:
             return False
         return True
@@ -347,9 +355,10 @@ def motion_router(moves: Moves, robots: Robots) -> APIRouter:
         body: MoveRequest,
         token: LeaseToken = None,
         caller: Caller = None,
+        claim: Claim = None,
         wait: float = 0.0,
     ) -> MoveStatus:
-        status = await moves.start(robot, body, robots.check_lease(robot, token), caller)
+        status = await moves.start(robot, body, robots.check_lease(robot, token), caller, claim)
         if wait > 0:
             return await moves.wait(status.id, min(wait, 600.0))
         return status

@@ -165,7 +165,7 @@ class RunHost:
             self._renewer.cancel()
         for link in self._claimed.values():
             with contextlib.suppress(OpenPendantError):
-                await link.unclaim()
+                await link.unclaim(self.caller)
         for device, token in self.acquired.items():
             with contextlib.suppress(OpenPendantError):
                 await self.devices.manager.release_lease(device, token)
@@ -227,7 +227,7 @@ class RunHost:
         update = {k: self.speed for k in ("speed", "acceleration") if k not in fields}
         request = request.model_copy(update=update)
         self.refuse_if_stopped()  # stopped while the robot and its lease were looked up
-        start = self.motion.start(robot, request, token, self.caller)
+        start = self.motion.start(robot, request, token, self.caller, claim=self.caller)
         if robot in self._claimed:
             status = await start
         else:  # the link is made while the move is planned, not before
@@ -259,7 +259,7 @@ class RunHost:
         link = self._claimed.get(robot)
         if link is None:
             link = await self.devices.robot(robot)
-            await link.claim()
+            await link.claim(self.caller)
             self._claimed[robot] = link
         return link
 

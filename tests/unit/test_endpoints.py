@@ -143,7 +143,13 @@ class FakeHub(LinkHub):
         self.sent: list[tuple[str, int, dict[str, Any]]] = []
 
     async def call(
-        self, name: str, generation: int, method: str, path: str, body: Any = None
+        self,
+        name: str,
+        generation: int,
+        method: str,
+        path: str,
+        body: Any = None,
+        claim: str | None = None,
     ) -> tuple[int, Any]:
         self.calls.append((name, generation, method, path, body))
         return self.answers[(method, path)]
