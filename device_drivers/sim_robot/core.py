@@ -77,6 +77,7 @@ class SimCore:
         self.estop = False
         self.error = False
         self.error_message = ""
+        self.protective = False  # the error is a protective stop
         self.speed_ratio = 1.0
         self.seqno = 0
         self.sim_time = 0.0
@@ -118,6 +119,7 @@ class SimCore:
             raise RobotError("release the E-stop before resetting errors", code="estop")
         self.error = False
         self.error_message = ""
+        self.protective = False
 
     def halt(self, reason: str = "halted") -> None:
         self.command = None
@@ -170,6 +172,11 @@ class SimCore:
             raise RobotError("the robot is moving; stop it first", code="moving")
         self.halt("placed")
         self.tracker.place(q)
+
+    def protective_stop(self, reason: str) -> None:
+        """A safety stop, held until errors are reset (the runtime's path monitor)."""
+        self.fault(f"protective stop: {reason}")
+        self.protective = True
 
     def fault(self, message: str) -> None:
         self.error = True
@@ -311,7 +318,7 @@ class SimCore:
         outside = np.flatnonzero((q < t.lower - LIMIT_SLACK) | (q > t.upper + LIMIT_SLACK))
         if outside.size and not self.error:
             name = self.info.joints[int(outside[0])].name
-            self.fault(f"protective stop: joint {name} passed its position limit")
+            self.protective_stop(f"joint {name} passed its position limit")
 
     # State ----------------------------------------------------------------------------------
 
@@ -321,6 +328,7 @@ class SimCore:
             ready=self.ready,
             error=self.error,
             estop=self.estop,
+            protective_stop=self.protective,
             homed=True,
             trajectory_running=self.trajectory is not None,
         )

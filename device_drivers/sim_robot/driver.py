@@ -159,6 +159,10 @@ class SimRobot(RobotDriver):
         with self.lock:
             self.core.halt()
 
+    async def _protective_stop(self, reason: str) -> None:
+        with self.lock:
+            self.core.protective_stop(reason)
+
     async def _set_command_mode(self, mode: CommandMode) -> None:
         with self.lock:
             self.core.set_mode(mode)

@@ -21,6 +21,7 @@ from runtime.interfaces.robot import (
     JogJointCommand,
     JointTrajectory,
     PositionCommand,
+    ProtectiveStopRequest,
     Robot,
     RobotDescription,
     RobotInfo,
@@ -147,6 +148,9 @@ class RobotClient(DeviceClient[RobotState], Robot):
 
     async def set_digital_output(self, index: int, command: DigitalOutputCommand) -> RobotState:
         return await self._call(Robot.set_digital_output, index, command)
+
+    async def protective_stop(self, request: ProtectiveStopRequest) -> RobotState:
+        return await self._call(Robot.protective_stop, request)
 
     async def execute_trajectory(
         self, trajectory: JointTrajectory, generation: int | None = None, claim: str | None = None

@@ -229,6 +229,11 @@ class JointTrajectory(Strict):
     waypoints: list[TrajectoryWaypoint] = Field(min_length=1, max_length=200_000)
 
 
+class ProtectiveStopRequest(Strict):
+    # Why, as the robot's error message shows it until errors are reset.
+    reason: str = Field(min_length=1, max_length=200)
+
+
 class ToolCommand(Strict):
     open: bool
 
@@ -270,6 +275,18 @@ class Robot(ABC):
     @abstractmethod
     async def halt(self) -> None:
         """Stop now, whatever runs; always allowed."""
+
+    @endpoint(
+        "POST",
+        "/protective_stop",
+        body=ProtectiveStopRequest,
+        returns=RobotState,
+        label=lambda _: "protective_stop",
+    )
+    @abstractmethod
+    async def protective_stop(self, request: ProtectiveStopRequest) -> RobotState:
+        """Stop now and hold, as the robot's own safety stop would, until errors are reset
+        (the runtime's path monitor: the TCP left its checked path); always allowed."""
 
     @endpoint(
         "PUT",

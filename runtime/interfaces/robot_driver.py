@@ -16,6 +16,7 @@ from runtime.interfaces.robot import (
     JogJointCommand,
     JointTrajectory,
     PositionCommand,
+    ProtectiveStopRequest,
     Robot,
     RobotDescription,
     RobotFlags,
@@ -73,6 +74,10 @@ class RobotDriver(DeviceDriver, Robot):
 
     async def stop(self) -> None:
         await self.halt()
+
+    async def protective_stop(self, request: ProtectiveStopRequest) -> RobotState:
+        await self._protective_stop(request.reason)
+        return self.state()
 
     async def disable(self) -> RobotState:
         await self._disable()
@@ -231,6 +236,11 @@ class RobotDriver(DeviceDriver, Robot):
 
     @abstractmethod
     async def _halt(self) -> None: ...
+
+    async def _protective_stop(self, reason: str) -> None:
+        """Stop and hold until errors are reset. A driver whose robot cannot latch a stop
+        of the runtime's only halts it."""
+        await self._halt()
 
     @abstractmethod
     async def _set_command_mode(self, mode: CommandMode) -> None:

@@ -15,6 +15,7 @@ from runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
     JointTrajectory,
+    ProtectiveStopRequest,
     RobotState,
     TrajectoryState,
     TrajectoryWaypoint,
@@ -125,8 +126,13 @@ class Execution:
             if self.paused:  # paused while it was planned: it waits at its start
                 await self.link.pause_trajectory(generation=gen)
             await self._watch(trajectory_id)
-        except BaseException:
+        except BaseException as exc:
             await self.link.halt("motion: stop")
+            if isinstance(exc, MoveFailed) and exc.code == "path_deviation":
+                # As a controller's path monitor would: held until errors are reset, and
+                # shown as the robot's fault with the distance.
+                with contextlib.suppress(OpenPendantError):
+                    await self.link.protective_stop(ProtectiveStopRequest(reason=exc.message))
             raise
 
     async def _watch(self, trajectory_id: str) -> None:

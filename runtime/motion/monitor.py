@@ -38,14 +38,14 @@ class PathMonitor:
         self.worst = max(self.worst, distance)
         if distance > self.tolerance:
             raise PathDeviation(
-                f"protective stop: the TCP left its planned path by {distance * 1000:.1f} mm "
+                f"the TCP left its planned path by {distance * 1000:.1f} mm "
                 f"(tolerance {self.tolerance * 1000:.1f} mm)",
                 details={"distance": distance, "tolerance": self.tolerance},
             )
         joints = float(distances_to_polyline(self.joints, joint_position[None, :])[0])
         if joints > self.joint_tolerance:
             raise PathDeviation(
-                f"protective stop: the joints left their planned path by {joints:.4f} rad "
+                f"the joints left their planned path by {joints:.4f} rad "
                 f"(tolerance {self.joint_tolerance:.4f} rad)",
                 details={"joint_distance": joints, "joint_tolerance": self.joint_tolerance},
             )

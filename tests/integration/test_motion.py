@@ -350,8 +350,8 @@ def test_a_fast_linear_move_in_automatic_mode_stays_on_its_line(ready: Cell) -> 
 def test_a_hand_pushing_the_arm_off_its_path_stops_the_move(ready: Cell) -> None:
     """The path monitor: the arm pushed sideways during a linear move is halted as a
     protective stop with `path_deviation`, soon after it passes the 5 mm tolerance."""
-    start = KINEMATICS.tcp(ready.robot.q()).copy()
-    goal = pin.SE3(start.rotation, start.translation + np.array([0.0, 0.5, 0.0]))
+    here = KINEMATICS.tcp(ready.robot.q()).copy()
+    goal = pin.SE3(here.rotation, here.translation + np.array([0.0, 0.5, 0.0]))
     started = start_request(ready, goal)
     status = started
     try:
@@ -375,7 +375,20 @@ def test_a_hand_pushing_the_arm_off_its_path_stops_the_move(ready: Cell) -> None
     assert status["state"] == "failed" and status["code"] == "path_deviation", status
     assert "left its planned path" in status["message"]
     ready.robot.wait_stopped()
-    assert ready.robot.state()["command_mode"] == "halt"
+    state = ready.robot.state()
+    assert state["command_mode"] == "halt"
+    # A protective stop, held until errors are reset, as the Jog panel's fault card shows it.
+    assert state["flags"]["protective_stop"] and state["flags"]["error"]
+    assert "left its planned path" in state["error_message"]
+    after = start(ready, {"kind": "joint", "target": {"joints": INFO.home}})
+    ended = wait_for(
+        lambda: (lambda body: body if body["state"] not in ("planning", "running") else None)(
+            ready.runtime.api("GET", f"/motion/moves/{after['id']}").json()
+        ),
+        10,
+        what="the next move to end",
+    )
+    assert ended["state"] == "failed", ended  # nothing moves until errors are reset
 
 
 def pose_se3(pose: pin.SE3) -> dict[str, list[float]]:
