@@ -85,27 +85,32 @@ class RobotClient(DeviceClient[RobotState], Robot):
 
     # Streamed on the robot's session ---------------------------------------------------------
 
-    async def stream(self, command: Streamed, generation: int | None = None) -> None:
-        """One command on the robot's ordered session; refusals come back through on_error."""
+    async def stream(
+        self, command: Streamed, generation: int | None = None, claim: str | None = None
+    ) -> None:
+        """One command on the robot's ordered session; refusals come back through on_error.
+        Under `claim`, refused once that claim has ended (its caller gone)."""
         if isinstance(command, Halt):
             await self.halt(command.tag)
             return
         message = {"type": STREAM_TYPES[type(command)], **command.model_dump(exclude_none=True)}
         gen = self.generation if generation is None else generation
-        await self.hub.send(self.name, gen, message)
+        await self.hub.send(self.name, gen, message, claim)
 
     async def halt(self, tag: str | None = None) -> None:
         """Stop always wins: on whatever link to the robot is live."""
         self._mode = None
         await self.hub.halt(self.name, tag)
 
-    async def ensure_mode(self, mode: CommandMode, generation: int | None = None) -> None:
+    async def ensure_mode(
+        self, mode: CommandMode, generation: int | None = None, claim: str | None = None
+    ) -> None:
         """Switch the driver's mode ahead of the commands that need it, on the same ordered
         session, without waiting for a round trip; a refusal comes back through on_error."""
         gen = self.generation if generation is None else generation
         if self._mode == (mode, gen) and self.current(gen).command_mode is mode:
             return
-        await self.stream(CommandModeRequest(mode=mode), gen)
+        await self.stream(CommandModeRequest(mode=mode), gen, claim)
         self._mode = (mode, gen)
 
     async def jog_joint(self, command: JogJointCommand) -> None:

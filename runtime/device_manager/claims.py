@@ -42,6 +42,9 @@ class Claims:
     def live(self, claim: str) -> bool:
         return claim in self._owners
 
+    def ended(self, claim: str) -> bool:
+        return claim in self._ended
+
     async def wait_live(self, claim: str, timeout: float = CLAIM_WAIT) -> bool:
         """True once the claim is live; False when it has ended or never came."""
         deadline = asyncio.get_running_loop().time() + timeout

@@ -232,8 +232,20 @@ class LinkServer:
             )
 
         try:
+            claim = _claim_of(message)
+            if claim is not None and self.claims.ended(claim):
+                # A stream's commands come too often to wait for a claim on its way; one
+                # that has ended (its caller gone) is refused.
+                raise OpenPendantError(
+                    f"a command for {claim}, which has ended (its caller is gone)",
+                    code="claim_ended",
+                    status=409,
+                )
             conn = self._connection(name)
             conn.send(command, generation, refused)
+        except ValueError as exc:
+            refused({"code": "bad_message", "message": str(exc)})
+            return
         except OpenPendantError as exc:
             refused(exc.body()["error"])
             return

@@ -129,8 +129,13 @@ class LinkHub:
 
     # Commands --------------------------------------------------------------------------------
 
-    async def send(self, name: str, generation: int, command: dict[str, Any]) -> None:
-        await self._op({"op": "send", "device": name, "gen": generation, "command": command})
+    async def send(
+        self, name: str, generation: int, command: dict[str, Any], claim: str | None = None
+    ) -> None:
+        message = {"op": "send", "device": name, "gen": generation, "command": command}
+        if claim is not None:
+            message["claim"] = claim
+        await self._op(message)
 
     async def halt(self, name: str, tag: str | None) -> None:
         await self._op({"op": "halt", "device": name, "tag": tag})

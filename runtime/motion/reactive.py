@@ -39,8 +39,10 @@ class ReactiveExecution:
         goal: pin.SE3,
         speed: float,
         tcp_cap: float | None,
+        claim: str | None = None,
     ) -> None:
         self.link = link
+        self.claim = claim  # the caller's (a run's): its commands live only as long
         self.controller = controller
         self.avoidance = avoidance
         self.goal = goal
@@ -60,7 +62,7 @@ class ReactiveExecution:
 
     async def run(self) -> None:
         self.generation = self.link.generation  # the move ends with the link it began on
-        await self.link.ensure_mode(CommandMode.velocity_command, self.generation)
+        await self.link.ensure_mode(CommandMode.velocity_command, self.generation, self.claim)
         try:
             await self._steer()
         except BaseException:
@@ -134,4 +136,4 @@ class ReactiveExecution:
         command = VelocityCommand(
             velocity=velocity.tolist(), timeout=COMMAND_TIMEOUT, tag="motion:reactive"
         )
-        await self.link.stream(command, self.generation)
+        await self.link.stream(command, self.generation, self.claim)

@@ -124,7 +124,9 @@ class Moves:
         self.status[move_id] = status
         try:
             if request.kind is MoveKind.reactive:
-                execution: Execution | ReactiveExecution = await self._reactive(robot, request)
+                execution: Execution | ReactiveExecution = await self._reactive(
+                    robot, request, claim
+                )
                 await lease
                 return self._launch(status, execution)
             switched = asyncio.ensure_future(self._switch_to_trajectory(robot, lease, claim))
@@ -202,7 +204,9 @@ class Moves:
         self._forget_old()
         return status
 
-    async def _reactive(self, robot: str, request: MoveRequest) -> ReactiveExecution:
+    async def _reactive(
+        self, robot: str, request: MoveRequest, claim: str | None
+    ) -> ReactiveExecution:
         assert request.target is not None  # the request's validation made sure
         target = await self._lookup(request.target, robot)
         link = await self.robots.link(robot)
@@ -227,7 +231,7 @@ class Moves:
         controller.constraints.append(avoidance)
         manual = link.current().operational_mode is OperationalMode.manual_reduced_speed
         cap = MANUAL_TCP_SPEED if manual else None
-        return ReactiveExecution(link, controller, avoidance, goal, request.speed, cap)
+        return ReactiveExecution(link, controller, avoidance, goal, request.speed, cap, claim)
 
     async def _run(self, status: MoveStatus, execution: Execution | ReactiveExecution) -> None:
         try:

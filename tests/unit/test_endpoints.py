@@ -154,7 +154,9 @@ class FakeHub(LinkHub):
         self.calls.append((name, generation, method, path, body))
         return self.answers[(method, path)]
 
-    async def send(self, name: str, generation: int, command: dict[str, Any]) -> None:
+    async def send(
+        self, name: str, generation: int, command: dict[str, Any], claim: str | None = None
+    ) -> None:
         self.sent.append((name, generation, command))
 
 
