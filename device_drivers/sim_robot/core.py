@@ -172,6 +172,7 @@ class SimCore:
             raise RobotError("the robot is moving; stop it first", code="moving")
         self.halt("placed")
         self.tracker.place(q)
+        self.displacement = np.zeros_like(self.displacement)
 
     def protective_stop(self, reason: str) -> None:
         """A safety stop, held until errors are reset (the runtime's path monitor)."""
@@ -209,13 +210,21 @@ class SimCore:
             velocity = np.zeros_like(position)
         self.command = StreamCommand(mode, velocity, position, now, now + timeout, acceleration)
 
-    def start_trajectory(self, trajectory: CheckedTrajectory) -> str:
+    def prepare(self, trajectory: CheckedTrajectory) -> TrajectoryReference:
+        """The reference the trajectory is followed by: as it is, or slowed along its path
+        where it would pass a joint's limits. CPU work on a long one: off the control loop."""
+        return TrajectoryReference.of(trajectory).within(self.limits)
+
+    def start_trajectory(
+        self, trajectory: CheckedTrajectory, reference: TrajectoryReference | None = None
+    ) -> str:
+        """Run `trajectory` (its reference already prepared, or prepared here)."""
         self._require(CommandMode.trajectory)
         if self.trajectory is not None:
             raise RobotError("a trajectory is already running", code="busy")
         trajectory_id = f"traj-{next(self._ids)}"
-        # Followed as it is, or slowed along its path where it would pass a joint's limits.
-        reference = TrajectoryReference.of(trajectory).within(self.limits, CYCLE)
+        if reference is None:
+            reference = self.prepare(trajectory)
         self.trajectory = RunningTrajectory(trajectory_id, reference)
         self.scaling.rate, self.scaling.rate_speed = self.speed_ratio, 0.0  # it starts at rest
         return trajectory_id
@@ -303,14 +312,21 @@ class SimCore:
             self._end_trajectory(TrajectoryState.finished)
 
     def _push_off_setpoint(self) -> None:
+        if not self.displacement.any() and not self.hand.any():
+            return
         servoed = self.ready and self.mode not in (CommandMode.halt, CommandMode.freedrive)
         if servoed and self.hand.any():
             moved = self.tracker.position + self.displacement + self.hand * CYCLE
             within = np.clip(moved, self.tracker.lower, self.tracker.upper)
             self.displacement = within - self.tracker.position
-        elif self.displacement.any():
+        elif servoed:  # let go: the servos pull the arm back onto its setpoint
             self.displacement *= np.exp(-CYCLE / SERVO_TIME_CONSTANT)
             self.displacement[np.abs(self.displacement) < 1e-9] = 0.0
+        elif self.displacement.any() and not self.tracker.moving:
+            # Halted: the brakes hold the arm where it was pushed, and that is where the
+            # controller holds it from now on.
+            self.tracker.place(self.tracker.position + self.displacement)
+            self.displacement = np.zeros_like(self.displacement)
 
     def _check_limits(self) -> None:
         q = self.tracker.position

@@ -199,8 +199,9 @@ class SimRobot(RobotDriver):
             return self.core.pause_trajectory(paused)
 
     async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str:
+        reference = await asyncio.to_thread(self.core.prepare, trajectory)  # not under the lock
         with self.lock:
-            return self.core.start_trajectory(trajectory)
+            return self.core.start_trajectory(trajectory, reference)
 
     async def _set_tool_setup(self, info: RobotInfo) -> None:
         kinematics = await asyncio.to_thread(Kinematics, info)  # loads the URDF: not under the lock

@@ -34,6 +34,9 @@ SETTLED_VELOCITY = 1e-6  # rad/s
 FOLLOW_TOLERANCE = 1e-5
 FOLLOW_JERK_SLACK = 1.05
 FOLLOW_LIMIT_SLACK = 1.0 + 1e-6  # float noise on a reference at its limit
+# A planned trajectory's reference was checked at 8 points of each 8 ms segment; between
+# them it can pass a limit by a fraction of a percent, which is no reason to leave its path.
+REFERENCE_SLACK = 1.01
 # rad/s and rad/s²: a holding joint slower than this, and slowing no faster, is at rest.
 AT_REST = 1e-9
 
@@ -171,7 +174,9 @@ class JointTracker:
         a little over the limit for a cycle (a change of speed override) is no reason to
         leave the path. Only a reference that jumps, passes a speed or acceleration limit,
         or could not stop before a position limit is handed to ruckig."""
-        if not self._follows(position, velocity, acceleration, jerk_slack=math.inf):
+        if not self._follows(
+            position, velocity, acceleration, jerk_slack=math.inf, limit_slack=REFERENCE_SLACK
+        ):
             self.step_position(position, velocity, acceleration)
 
     def _follows(
@@ -180,6 +185,7 @@ class JointTracker:
         velocity: FloatArray,
         acceleration: FloatArray,
         jerk_slack: float = FOLLOW_JERK_SLACK,
+        limit_slack: float = FOLLOW_LIMIT_SLACK,
     ) -> bool:
         """A smooth reference within the limits is followed exactly, as a controller
         interpolating its own trajectory would; asking ruckig to reach each new reference
@@ -190,8 +196,8 @@ class JointTracker:
         jerk = (acceleration - self.acceleration) / dt
         smooth = (
             np.all(np.abs(position - expected) <= FOLLOW_TOLERANCE)
-            and np.all(np.abs(velocity) <= self.max_velocity * FOLLOW_LIMIT_SLACK)
-            and np.all(np.abs(acceleration) <= self.max_acceleration * FOLLOW_LIMIT_SLACK)
+            and np.all(np.abs(velocity) <= self.max_velocity * limit_slack)
+            and np.all(np.abs(acceleration) <= self.max_acceleration * limit_slack)
             and np.all(np.abs(jerk) <= self.max_jerk * jerk_slack)
         )
         if not smooth or self._cannot_stop_from(position, velocity, acceleration).any():

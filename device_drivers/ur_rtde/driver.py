@@ -95,6 +95,7 @@ class URDriver(RobotDriver):
         self.speed_ratio = 1.0
         self.stream: tuple[CommandMode, FloatArray | None, FloatArray | None, float] | None = None
         self.trajectory: RunningTrajectory | None = None
+        self._streaming: RunningTrajectory | None = None  # the trajectory servoJ has begun
         self._finished: dict[str, TrajectoryStatus] = {}
         self._ids = itertools.count(1)
         self.motion_limits = Limits.of(info.joints)
@@ -284,7 +285,13 @@ class URDriver(RobotDriver):
         if running is None:
             self._stop(link)
             return
-        position, _, _ = running.advance(self.scaling, self.speed_ratio, CYCLE)
+        if running is self._streaming:
+            position, _, _ = running.advance(self.scaling, self.speed_ratio, CYCLE)
+        else:
+            # The first target is where the trajectory begins, at rest: the controller's
+            # interpolation through the targets then begins with it, as the plan does.
+            self._streaming = running
+            position = running.reference.sample(0.0)[0]
         link.control.servoJ(position.tolist(), 0.0, 0.0, CYCLE, self.lookahead, self.gain)
         self._moving = True
         reading = self.reading
@@ -437,6 +444,13 @@ class URDriver(RobotDriver):
         with self.lock:
             self._halt_now("halted")
 
+    async def _protective_stop(self, reason: str) -> None:
+        """The runtime's stop (its path monitor): held as an error until errors are reset;
+        the control thread stops the arm (stopJ) on its next cycle."""
+        with self.lock:
+            self._halt_now(reason)
+            self._fault(f"protective stop: {reason}")
+
     async def _set_command_mode(self, mode: CommandMode) -> None:
         with self.lock:
             if mode is not self.mode:
@@ -472,12 +486,15 @@ class URDriver(RobotDriver):
             self.stream = (CommandMode.position_command, None, position, time.monotonic() + timeout)
 
     async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str:
+        # Slowed along its path where it would pass a joint's limits, never cut short. CPU
+        # work on a long trajectory: not under the lock the servo thread takes every 8 ms.
+        reference = await asyncio.to_thread(
+            TrajectoryReference.of(trajectory).within, self.motion_limits
+        )
         with self.lock:
             if self.trajectory is not None:
                 raise RobotError("a trajectory is already running", code="busy")
             trajectory_id = f"traj-{next(self._ids)}"
-            # Slowed along its path where it would pass a joint's limits, never cut short.
-            reference = TrajectoryReference.of(trajectory).within(self.motion_limits, CYCLE)
             self.trajectory = RunningTrajectory(trajectory_id, reference)
             self.scaling.rate, self.scaling.rate_speed = self.speed_ratio, 0.0
             return trajectory_id

@@ -25,6 +25,7 @@ from runtime.motion.moves import MovePlanner, Point
 from runtime.robotics.deviation import distances_to_polyline
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
+from runtime.robotics.timing import TimedPath
 from runtime.robotics.world import World
 
 FIGURES = (
@@ -134,13 +135,10 @@ def moves(model: str, limit: int | None = None) -> list[Outcome]:
         outcomes.append(Outcome(kind, deviation, plan.timed.duration, what, fired))
         return True
 
-    for d in DIRECTIONS[:limit]:
-        d = d / np.linalg.norm(d)
-        for length in LENGTHS:
-            goal = pin.SE3(here.rotation, here.translation + length * d)
-            if run("linear", linear(goal), [Point(None, goal)], f"{length} m along {d.round(2)}"):
+    for candidates in linear_goals(here, limit):
+        for goal, what in candidates:
+            if run("linear", linear(goal), [Point(None, goal)], what):
                 break
-    _edge(run, here)
     for k, size in enumerate((0.15, 0.25, 0.2, 0.3)[:limit]):
         corners = _square(here, size, k)
         request = MoveRequest.model_validate(
@@ -162,17 +160,50 @@ def moves(model: str, limit: int | None = None) -> list[Outcome]:
     return outcomes
 
 
-def _edge(run: object, here: pin.SE3) -> None:
-    """A linear move outwards from the base, as far as the arm reaches (the longest that
-    plans of a few lengths)."""
+def linear_goals(here: pin.SE3, limit: int | None) -> list[list[tuple[pin.SE3, str]]]:
+    """The linear moves from `here`, each as its candidate goals, longest first (the first
+    that plans is the move): along each direction, then outwards from the base as far as
+    the arm reaches."""
+    moves = []
+    for d in DIRECTIONS[:limit]:
+        d = d / np.linalg.norm(d)
+        moves.append(
+            [
+                (
+                    pin.SE3(here.rotation, here.translation + length * d),
+                    f"{length} m along {d.round(2)}",
+                )
+                for length in LENGTHS
+            ]
+        )
     radial = np.array([here.translation[0], here.translation[1], 0.0])
     radial /= np.linalg.norm(radial)
-    for length in np.linspace(0.8, 0.1, 15):
-        goal = pin.SE3(here.rotation, here.translation + length * radial)
-        if run(  # type: ignore[operator]
-            "linear", linear(goal), [Point(None, goal)], f"{length:.2f} m out to the edge"
-        ):
-            return
+    moves.append(
+        [
+            (
+                pin.SE3(here.rotation, here.translation + length * radial),
+                f"{length:.2f} m out to the edge",
+            )
+            for length in np.linspace(0.8, 0.1, 15)
+        ]
+    )
+    return moves
+
+
+def linear_plans(
+    planner: MovePlanner, start: FloatArray, limit: int | None = None
+) -> list[tuple[str, pin.SE3, TimedPath]]:
+    """The linear set from `start` as `moves` plans it: each move's description, goal and
+    timed path."""
+    here = planner.kinematics.tcp(start)
+    plans = []
+    for candidates in linear_goals(here, limit):
+        for goal, what in candidates:
+            plan = planner.plan(linear(goal), start, [Point(None, goal)])
+            if plan.report.ok and plan.timed is not None:
+                plans.append((what, goal, plan.timed))
+                break
+    return plans
 
 
 def _square(here: pin.SE3, size: float, turn: int) -> list[pin.SE3]:

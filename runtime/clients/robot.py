@@ -102,15 +102,13 @@ class RobotClient(DeviceClient[RobotState], Robot):
         self._mode = None
         await self.hub.halt(self.name, tag)
 
-    async def ensure_mode(
-        self, mode: CommandMode, generation: int | None = None, claim: str | None = None
-    ) -> None:
+    async def ensure_mode(self, mode: CommandMode, generation: int | None = None) -> None:
         """Switch the driver's mode ahead of the commands that need it, on the same ordered
         session, without waiting for a round trip; a refusal comes back through on_error."""
         gen = self.generation if generation is None else generation
         if self._mode == (mode, gen) and self.current(gen).command_mode is mode:
             return
-        await self.stream(CommandModeRequest(mode=mode), gen, claim)
+        await self.stream(CommandModeRequest(mode=mode), gen)
         self._mode = (mode, gen)
 
     async def jog_joint(self, command: JogJointCommand) -> None:

@@ -42,8 +42,8 @@ class Claims:
     def live(self, claim: str) -> bool:
         return claim in self._owners
 
-    def ended(self, claim: str) -> bool:
-        return claim in self._ended
+    def owner(self, claim: str) -> object | None:
+        return self._owners.get(claim)
 
     async def wait_live(self, claim: str, timeout: float = CLAIM_WAIT) -> bool:
         """True once the claim is live; False when it has ended or never came."""

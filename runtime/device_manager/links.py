@@ -233,16 +233,14 @@ class LinkServer:
 
         try:
             claim = _claim_of(message)
-            if claim is not None and self.claims.ended(claim):
-                # A stream's commands come too often to wait for a claim on its way; one
-                # that has ended (its caller gone) is refused.
-                raise OpenPendantError(
-                    f"a command for {claim}, which has ended (its caller is gone)",
-                    code="claim_ended",
-                    status=409,
-                )
+            if claim is not None and not self.claims.live(claim):
+                # A stream's commands come too often to wait: its sender makes sure of the
+                # claim first (a call under it, which waits for it, switches the mode).
+                raise _not_live(claim, str(command.get("type")))
             conn = self._connection(name)
             conn.send(command, generation, refused)
+            if claim is not None:
+                self._held_for(claim, name, generation)
         except ValueError as exc:
             refused({"code": "bad_message", "message": str(exc)})
             return
@@ -272,13 +270,11 @@ class LinkServer:
             except ValueError as exc:
                 raise OpenPendantError(str(exc), code="bad_message") from None
             if claim is not None and not await self.claims.wait_live(claim):
-                raise OpenPendantError(
-                    f"{method} {path} was for {claim}, which has ended (its caller is gone)",
-                    code="claim_ended",
-                    status=409,
-                )
+                raise _not_live(claim, f"{method} {path}")
             if method != "GET":
                 self.commanders[name] = (client, generation)
+                if claim is not None:
+                    self._held_for(claim, name, generation)
             status, body = await conn.call(method, path, message.get("body"), generation)
             if claim is not None and method != "GET" and not self.claims.live(claim):
                 # Its caller went away while the command was on its way to the device (the
@@ -288,6 +284,14 @@ class LinkServer:
         except OpenPendantError as exc:
             reply.update(status=exc.status, body=exc.body())
         client.push_event(reply)
+
+    def _held_for(self, claim: str, device: str, generation: int) -> None:
+        """What a command under a claim started is the claimant's to answer for: halted
+        when its link closes, on whatever generation the command went (a link made again
+        since the claim was taken included)."""
+        owner = self.claims.owner(claim)
+        if isinstance(owner, LinkClient):
+            owner.claimed[device] = generation
 
     def _connection(self, name: str) -> DeviceConnection:
         conn = self.registry.connections.get(name)
@@ -299,6 +303,15 @@ class LinkServer:
         commander = self.commanders.get(device)
         if commander is not None and commander[0] is client:
             del self.commanders[device]
+
+
+def _not_live(claim: str, what: str) -> OpenPendantError:
+    return OpenPendantError(
+        f"{what} was for {claim}, which is not live: its caller is gone, its run has ended, "
+        "or it never claimed the robot",
+        code="claim_ended",
+        status=409,
+    )
 
 
 def _claim_of(message: dict[str, Any]) -> str | None:

@@ -64,9 +64,9 @@ class Confirmations:
 
     def ended(self, name: str) -> bool:
         """zeroconf's browser saw the name's pointer end (a goodbye, or the end of its
-        19 minutes): whether to report it gone now. A lapsed name stays asked for."""
-        lost = self._lost.get(name)
-        if lost is not None and not lost.vouched:
+        19 minutes): whether to report it gone now. A lapsed name stays asked for, and is
+        reported gone by the sweep once no live link vouches for it."""
+        if name in self._lost:
             return False
         self._asked.pop(name, None)
         self._lost.pop(name, None)

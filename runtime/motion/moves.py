@@ -17,6 +17,7 @@ from runtime.robotics.joint_move import plan_joint_move
 from runtime.robotics.kinematics import pose_to_se3
 from runtime.robotics.paths import sample_joint_polyline, sample_tcp_path
 from runtime.robotics.planner import plan_around
+from runtime.robotics.reference import Limits
 from runtime.robotics.timing import SAMPLE_PERIOD, TimedPath, at_rest, time_scale
 from runtime.robotics.world import World
 
@@ -93,6 +94,10 @@ class MovePlanner:
             if collision is not None:
                 return self._refused(collision, samples)
             timed = self._time(samples, request, self._stops_at_corners(request, points))
+        # Slowed where the drivers' interpolation of the samples would pass a joint's limits
+        # (ruckig's own profiles between joint-move samples can, by a few percent): the
+        # duration planned is the one that runs.
+        timed = timed.within(Limits.of(self.info.joints))
         if not around:  # a path around was checked as it runs, where it was planned
             # The trajectory interpolates between its points: check what will actually run.
             collision = checker.path(timed.positions)

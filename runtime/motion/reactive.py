@@ -13,7 +13,7 @@ import pinocchio as pin
 
 from runtime.cell.mirror import MAX_AGE, MirrorConstraint
 from runtime.clients.robot import RobotClient
-from runtime.interfaces.robot import CommandMode, VelocityCommand
+from runtime.interfaces.robot import CommandMode, CommandModeRequest, VelocityCommand
 from runtime.motion.executor import MoveFailed, check_faults
 from runtime.robotics.velocity import VelocityController
 
@@ -62,7 +62,11 @@ class ReactiveExecution:
 
     async def run(self) -> None:
         self.generation = self.link.generation  # the move ends with the link it began on
-        await self.link.ensure_mode(CommandMode.velocity_command, self.generation, self.claim)
+        if self.claim is None:
+            await self.link.ensure_mode(CommandMode.velocity_command, self.generation)
+        else:  # a call: it waits for the run's claim on its way, which the stream will need
+            mode = CommandModeRequest(mode=CommandMode.velocity_command)
+            await self.link.set_command_mode(mode, self.generation, claim=self.claim)
         try:
             await self._steer()
         except BaseException:

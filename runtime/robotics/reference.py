@@ -18,6 +18,11 @@ from runtime.interfaces.limits import CheckedTrajectory, FloatArray
 from runtime.interfaces.robot import JointLimits, TrajectoryState, TrajectoryStatus
 from runtime.robotics.time_scaling import TimeScaling
 
+# Points checked per segment between waypoints (8 ms apart from the planner: every 1 ms).
+SAMPLES_PER_SEGMENT = 8
+CHUNK = 20_000  # samples evaluated at once
+STRETCH_MARGIN = 1.001
+
 # The quintic Hermite basis on s in [0, 1] (rows: p0, v0·h, a0·h², a1·h², v1·h, p1;
 # columns: the coefficients of s⁰ … s⁵).
 _BASIS = np.array(
@@ -132,24 +137,32 @@ class TrajectoryReference:
             results.append(np.einsum("bn,bnj->nj", weights, terms) / h**order)
         return results[0], results[1], results[2], results[3]
 
-    def peak_ratio(self, limits: Limits, period: float) -> float:
-        """How far the reference, sampled every `period` s, goes past the limits, as the
-        factor its time must be stretched by to stay within them (≤ 1: within)."""
+    def peak_ratio(self, limits: Limits) -> float:
+        """How far the reference goes past the limits, as the factor its time must be
+        stretched by to stay within them (≤ 1: within). Sampled at the same fractions of
+        every segment, so a stretched reference is checked at the same points of its path."""
         if self.duration <= 0 or self.velocities is None:
             return 0.0
-        ts = np.concatenate([np.arange(0.0, self.duration, period), self.times])
-        _, v, a, j = self.sample_many(ts)
-        # Stretching time by k divides velocity by k, acceleration by k², jerk by k³.
-        return max(
-            float(np.max(np.abs(v) / limits.velocity)),
-            float(np.sqrt(np.max(np.abs(a) / limits.acceleration))),
-            float(np.cbrt(np.max(np.abs(j) / limits.jerk))),
-        )
+        fractions = np.arange(SAMPLES_PER_SEGMENT) / SAMPLES_PER_SEGMENT
+        steps = np.diff(self.times)
+        ts = (self.times[:-1, None] + steps[:, None] * fractions[None, :]).ravel()
+        ts = np.append(ts, self.duration)
+        ratio = 0.0
+        for start in range(0, len(ts), CHUNK):  # bounded memory on long trajectories
+            _, v, a, j = self.sample_many(ts[start : start + CHUNK])
+            # Stretching time by k divides velocity by k, acceleration by k², jerk by k³.
+            ratio = max(
+                ratio,
+                float(np.max(np.abs(v) / limits.velocity)),
+                float(np.sqrt(np.max(np.abs(a) / limits.acceleration))),
+                float(np.cbrt(np.max(np.abs(j) / limits.jerk))),
+            )
+        return ratio
 
-    def within(self, limits: Limits, period: float) -> TrajectoryReference:
+    def within(self, limits: Limits) -> TrajectoryReference:
         """This reference, or the same path slowed just enough to stay within the limits."""
-        ratio = self.peak_ratio(limits, period)
-        return self.stretched(ratio * 1.001) if ratio > 1.0 else self
+        ratio = self.peak_ratio(limits)
+        return self.stretched(ratio * STRETCH_MARGIN) if ratio > 1.0 else self
 
 
 def knot_accelerations(times: FloatArray, velocities: FloatArray) -> FloatArray:

@@ -2,7 +2,7 @@
 from rest to rest under bounds on u̇, ü and the jerk of u, chosen from the path's
 derivatives (a C² spline through the samples) so that no joint can exceed its velocity,
 acceleration or jerk limit; the result is checked as the drivers will interpolate it
-(`runtime.robotics.reference`, at their cycle), and slowed as a whole when needed."""
+(`runtime.robotics.reference`), and slowed as a whole when needed."""
 
 from __future__ import annotations
 
@@ -16,10 +16,9 @@ from scipy.interpolate import CubicSpline
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import RobotInfo
 from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.reference import Limits, TrajectoryReference
+from runtime.robotics.reference import STRETCH_MARGIN, Limits, TrajectoryReference
 
 SAMPLE_PERIOD = 0.008  # s between the trajectory points sent to the driver
-CHECK_PERIOD = 0.002  # s: the interpolated trajectory is checked at the fastest driver cycle
 MAX_SLOWDOWNS = 12
 
 
@@ -37,6 +36,21 @@ class TimedPath:
     def reference(self) -> TrajectoryReference:
         """The trajectory as a driver interpolates it."""
         return TrajectoryReference(self.times, self.positions, self.velocities, self.accelerations)
+
+    def stretched(self, factor: float) -> TimedPath:
+        """The same path `factor` times slower."""
+        return TimedPath(
+            self.times * factor,
+            self.positions,
+            self.velocities / factor,
+            self.accelerations / factor**2,
+        )
+
+    def within(self, limits: Limits) -> TimedPath:
+        """This trajectory, or the same path slowed just enough that the drivers'
+        interpolation of it stays within the limits."""
+        ratio = self.reference().peak_ratio(limits)
+        return self.stretched(ratio * STRETCH_MARGIN) if ratio > 1.0 else self
 
     def then(self, other: TimedPath) -> TimedPath:
         """This path followed by `other` (which starts where this one ends, at rest)."""
@@ -136,7 +150,7 @@ def _excess(
     dt = np.diff(timed.times)[:, None]
     speed = np.abs(np.diff(timed.positions, axis=0)) / dt
     ratio = float(np.max(speed / limits.velocity))
-    ratio = max(ratio, timed.reference().peak_ratio(limits, CHECK_PERIOD))
+    ratio = max(ratio, timed.reference().peak_ratio(limits))
     if kinematics is not None and tcp_cap is not None:
         step = max(1, len(timed.times) // 200)
         peak = max(

@@ -32,6 +32,7 @@ from runtime.interfaces.robot import (
     JogJointCommand,
     JointTrajectory,
     OperationalMode,
+    ProtectiveStopRequest,
     ToolCommand,
     TrajectoryState,
     TrajectoryWaypoint,
@@ -348,6 +349,28 @@ def test_a_protective_stop_is_a_fault_until_reset_and_nothing_resumes(driven: Dr
     until(lambda: d.state().flags.ready, 5, "ready again")
     assert emulated()["runtime_state"] == 2
     assert not d.state().flags.protective_stop
+
+
+def test_the_runtimes_protective_stop_stops_the_arm_and_holds_until_reset(
+    driven: Driven,
+) -> None:
+    """The path monitor's stop: the arm stops, and nothing moves it until errors are reset
+    and it is enabled again."""
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+    press = JogJointCommand(velocity=[0.2, 0, 0, 0, 0, 0], timeout=1.0)
+    driven.run(d.jog_joint(press))
+    until(lambda: emulated()["qd"][0] > 0.1, 5, "jogging")
+    reason = "the TCP left its planned path by 6.2 mm (tolerance 5.0 mm)"
+    state = driven.run(d.protective_stop(ProtectiveStopRequest(reason=reason)))
+    assert state.flags.error and reason in state.error_message
+    until(lambda: max(abs(v) for v in emulated()["qd"]) < 1e-6, 5, "halted")
+    with pytest.raises(RobotError):
+        driven.run(d.jog_joint(press))
+    driven.run(d.reset_errors())
+    driven.run(d.enable())
+    until(lambda: d.state().flags.ready, 5, "ready again")
 
 
 def test_reduced_mode_is_shown_and_the_arm_still_jogs(driven: Driven) -> None:

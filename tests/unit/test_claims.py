@@ -135,3 +135,31 @@ def test_a_call_whose_claim_ends_on_its_way_is_followed_by_a_halt() -> None:
         assert conn.received == ["halt program link closed", "POST /trajectory", "halt run-1 ended"]
 
     asyncio.run(scenario())
+
+
+def test_a_stream_under_a_claim_that_never_came_is_refused() -> None:
+    async def scenario() -> None:
+        links, conn, _, motion = setup()
+        stream = {"type": "velocity_command", "velocity": [0.1] * 6}
+        message = {"op": "send", "device": "robot", "gen": 3, "command": stream}
+        links._send(motion, {**message, "claim": "run-dead"})
+        assert conn.received == []
+        assert replies(motion)[-1]["error"]["code"] == "claim_ended"
+
+    asyncio.run(scenario())
+
+
+def test_what_a_claim_started_on_a_new_link_is_halted_when_its_claimant_goes() -> None:
+    """The robot's link was made again during the run (generation 3 -> 4): the run's next
+    move went on the new one, so the run's service going away halts that one too."""
+
+    async def scenario() -> None:
+        links, conn, program, motion = setup()
+        claim(links, program, "run-1")  # on generation 3
+        conn.generation = 4
+        message = {"op": "call", "ref": 2, "device": "robot", "gen": 4, "method": "POST"}
+        await links._call(motion, {**message, "path": "/trajectory", "claim": "run-1"})
+        links._left(program)
+        assert conn.received == ["POST /trajectory", "halt program link closed"]
+
+    asyncio.run(scenario())

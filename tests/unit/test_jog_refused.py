@@ -217,8 +217,8 @@ def test_a_cycle_refused_after_it_moved_the_robot_halts_it() -> None:
             assert [(e.press, e.state, e.reason) for e in ended] == [
                 ("p1", "refused", "jog_refused")
             ]
-            assert len(socket.sent("p1")) == 3
             await until(lambda: socket.halts("p1:refused"), "p1 halted")
+            assert len(socket.sent("p1")) == 3  # all read by now: the halt came after them
             await nothing_streams_after(socket, socket.halts("p1:refused")[0], "p1")
             await a_new_press_moves(socket, jogger, "p2")
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import os
 import socket
 import threading
 import time
@@ -29,7 +30,9 @@ from runtime.kit.serve import listening_socket
 from runtime.kit.settings import LinkSettings
 from runtime.robotics.robot_info import load_robot_info
 
-CONTROLLER = "127.0.0.31"
+# The dashboard's port is fixed: an address of this run's own, so that two runs of the
+# suite on one machine do not meet there.
+CONTROLLER = f"127.31.{os.getpid() % 250 + 1}.{os.getpid() // 250 % 250 + 2}"
 DASHBOARD_PORT = 29999
 OBSERVED = 10.0  # s of the driver's own state timestamps
 UR5E = load_robot_info("ur5e")

@@ -42,6 +42,24 @@ def world(host: str, command: str) -> str:
         return f.readline().strip()
 
 
+def place(host: str, position: list[float]) -> None:
+    """Put the emulated arm at `position`, at rest (it must be still)."""
+    answer = world(host, "place " + " ".join(repr(float(v)) for v in position))
+    if answer != "ok":
+        raise RuntimeError(f"the UR emulator did not place its arm: {answer}")
+
+
+def record(host: str) -> None:
+    """Start recording the emulated arm's joint positions, one per controller cycle."""
+    world(host, "record on")
+
+
+def recorded(host: str) -> list[list[float]]:
+    """Stop recording: the joint positions recorded, one per 2 ms cycle."""
+    positions: list[list[float]] = json.loads(world(host, "record off"))
+    return positions
+
+
 def emulated(host: str) -> dict[str, Any]:
     """The emulated controller's own state (joints, modes, commands seen, …)."""
     state: dict[str, Any] = json.loads(world(host, "state"))

@@ -14,8 +14,9 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from device_drivers.sim_robot.tracker import JointTracker, TrackerError
+from device_drivers.ur_rtde.emulator.servo import ServoJ, ServoJump
 from runtime.interfaces.common import Pose
-from runtime.interfaces.robot import RobotInfo
+from runtime.interfaces.robot import JointLimits, RobotInfo
 from runtime.robotics.kinematics import Kinematics
 
 log = logging.getLogger(__name__)
@@ -38,6 +39,11 @@ FREEDRIVE_MODE, END_FREEDRIVE_MODE, GET_FREEDRIVE_STATUS = 52, 53, 54
 STOP_SCRIPT = 255
 # Re-run every cycle while in the register; the script stays ready (its "realtime" set).
 REALTIME = frozenset({24, 11, 9, 10, 6, 25, 26, 27, 38, 58, 66, 67, 68, 69, 70, 71})
+RECORD_LIMIT = 60_000  # cycles of joint positions a recording keeps (two minutes)
+# The arm's acceleration and jerk over the robot file's, which are conservative values for
+# planning (the controller has its own): a servoJ stream planned at those limits overshoots
+# them a little between its targets (up to 3 % seen), and is still followed as it is.
+ARM_HEADROOM = 1.1
 
 
 @dataclass
@@ -56,7 +62,9 @@ class Controller:
     ) -> None:
         self.info, self.version, self.serial = info, version, serial
         self.kinematics = Kinematics(info)
-        self.tracker = JointTracker(info.joints, CYCLE, np.array(info.home, dtype=float))
+        self.tracker = JointTracker(
+            [_capable(j) for j in info.joints], CYCLE, np.array(info.home, dtype=float)
+        )
         self.lock = threading.RLock()
         self.started = time.monotonic()
         self.robot_mode = RUNNING
@@ -79,6 +87,9 @@ class Controller:
         self.executing = False
         self.move_blocking = False  # a blocking move whose end is signalled "done"
         self.motion = Motion()
+        self.servo = ServoJ(CYCLE, self.tracker.max_velocity)
+        # The arm's joint positions, one a cycle, while a test or benchmark records them.
+        self.recording: list[list[float]] | None = None
         self.operational_mode = "NONE"  # no mode selection configured (UR's default)
         self.freedrive = False
         self.hand = np.zeros(len(info.joints))  # a hand pushing the arm (moves it in teach mode)
@@ -186,6 +197,9 @@ class Controller:
         register (as the controller's rtde_set_watchdog watches that register)."""
         if f"input_int_register_{self.offset}" in names:
             self.last_kick = time.monotonic()
+            if self.cmd() == SERVOJ:  # each one, in order (servo.py says why)
+                # servoj(q, a, v, t, lookahead_time, gain): D6, D7 unused, D10 see servo.py
+                self.servo.command(self.vector(), self.d(8), self.d(9))
 
     def _process(self, cmd: int) -> None:
         """A command that is not re-run every cycle, once."""
@@ -232,7 +246,9 @@ class Controller:
         if cmd == SPEEDJ:
             self.motion = Motion("velocity", self.vector())
         elif cmd == SERVOJ:
-            self.motion = Motion("servo", self.vector())
+            if self.motion.kind != "servo":  # the script's servo thread starts
+                self.servo.start()
+            self.motion = Motion("servo", self.vector())  # its targets: `inputs_written`
         elif cmd == SPEEDL:
             # The TCP twist as joint velocities through the Jacobian at this pose.
             jacobian = self.kinematics.jacobian(self.tracker.position)
@@ -286,10 +302,11 @@ class Controller:
                     self.safety_mode = PROTECTIVE_STOP
                     self._program_stops()
             elif m.kind == "servo":
-                self.tracker.step_position(m.target, np.zeros(len(m.target)))
+                t = self.tracker
+                t.follow(*self.servo.step((t.position, t.velocity, t.acceleration)))
             else:
                 self.tracker.hold()
-        except TrackerError as exc:
+        except (TrackerError, ServoJump) as exc:
             log.error("emulated arm: %s", exc)
             self.safety_mode = PROTECTIVE_STOP
             self._program_stops()
@@ -297,12 +314,32 @@ class Controller:
     def step(self) -> None:
         with self.lock:
             self._script_cycle()
+            if self.motion.kind != "servo":  # servoj commands for a program that ran none
+                self.servo.pending.clear()
             if self.robot_mode != RUNNING or self.safety_mode not in MOVING:
                 self.tracker.hold()
             elif self.freedrive:
                 self.tracker.step_velocity(self.hand)  # teach mode: where the hand takes it
             else:
                 self._move_cycle()
+            if self.recording is not None and len(self.recording) < RECORD_LIMIT:
+                self.recording.append(self.tracker.position.tolist())
+
+    def place(self, position: np.ndarray) -> bool:
+        """The arm put at `position` at once, at rest (a test's set-up, not a motion): only
+        while it is still and nothing moves it."""
+        with self.lock:
+            if self.motion.kind != "hold" or self.freedrive or self.tracker.moving:
+                return False
+            self.tracker.place(np.clip(position, self.tracker.lower, self.tracker.upper))
+            return True
+
+    def record(self, on: bool) -> list[list[float]]:
+        """Start recording the arm's joint positions (one a cycle, afresh), or stop and
+        return what was recorded."""
+        with self.lock:
+            recorded, self.recording = self.recording or [], [] if on else None
+            return [] if on else recorded
 
     def run(self) -> None:
         self._running.set()
@@ -412,6 +449,13 @@ class Controller:
             self.digital_outputs = (self.digital_outputs & ~(mask << shift)) | (
                 (value & mask) << shift
             )
+
+
+def _capable(joint: JointLimits) -> JointLimits:
+    jerk = None if joint.max_jerk is None else joint.max_jerk * ARM_HEADROOM
+    return joint.model_copy(
+        update={"max_acceleration": joint.max_acceleration * ARM_HEADROOM, "max_jerk": jerk}
+    )
 
 
 def _rotvec_pose(pose: Pose) -> list[float]:

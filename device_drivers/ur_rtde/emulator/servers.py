@@ -273,13 +273,19 @@ class Emulator:
         input N VALUE` (in the input's unit, V or mA), `operational mode manual|automatic|none` (the
         pendant's mode selection), `hand V1 … V6` (a hand pushing the arm at these joint
         velocities: it moves only in teach mode), `reset` (powered, normal, no program,
-        nothing held), `state`."""
+        nothing held), `place Q1 … Q6` (the arm put there at rest, if it is still: a test's
+        set-up), `record on` (record the arm's joint positions, one a cycle), `record off`
+        (stop: the recording, a JSON list), `state`."""
         c = self.controller
         words = command.split()
         if command == "protective stop":
             c.protective_stop()
         elif command == "reset":
             c.reset()
+        elif words[:1] == ["record"] and words[1:] in (["on"], ["off"]):
+            recorded = c.record(words[1] == "on")
+            if words[1] == "off":
+                return json.dumps(recorded)
         elif words[:1] == ["estop"] and words[1:] in (["on"], ["off"]):
             c.emergency_stop(words[1] == "on")
         elif words[:1] == ["reduced"] and words[1:] in (["on"], ["off"]):
@@ -317,6 +323,15 @@ class Emulator:
             if not np.all(np.isfinite(push)):
                 return f"emulator: not finite: {command!r}"
             c.hand = np.clip(push, -c.tracker.max_velocity, c.tracker.max_velocity)
+        elif words[:1] == ["place"] and len(words) == len(c.hand) + 1:
+            try:
+                position = np.array([float(w) for w in words[1:]])
+            except ValueError:
+                return f"emulator: not numbers: {command!r}"
+            if not np.all(np.isfinite(position)):
+                return f"emulator: not finite: {command!r}"
+            if not c.place(position):
+                return "emulator: the arm is moving"
         elif command == "state":
             return json.dumps(
                 {
