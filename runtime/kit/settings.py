@@ -130,8 +130,9 @@ class RuntimeSettings(BaseSettings):
     state_rate_hz: float = Field(default=100.0, gt=0, le=500)
     variable_history: int = Field(default=20, ge=1, le=1000)
     lease_seconds: float = Field(default=15.0, gt=0, le=3600)
-    # A process the launcher restarts again and again waits longer each time (0.5 s, doubled
-    # up to 10 s); one that stayed up this long (s) is restarted at once again.
+    # A process that exits is restarted after `restart_backoff` s, doubled at each exit up
+    # to 10 s, and back to the first wait once it has stayed up `restart_healthy_after` s.
+    restart_backoff: float = Field(default=0.5, ge=0.01, le=10)
     restart_healthy_after: float = Field(default=30.0, ge=0.5, le=3600)
     # Hold-to-run: the jog service halts a robot when heartbeats stop for this long.
     deadman_seconds: float = Field(default=0.1, ge=0.02, le=0.5)

@@ -240,7 +240,7 @@ def run(settings: RuntimeSettings) -> int:
     main = forking()
     if main is not None:
         preload(settings)
-    supervisor = Supervisor(settings.restart_healthy_after)
+    supervisor = Supervisor(settings.restart_healthy_after, settings.restart_backoff)
 
     def on_signal(signum: int, _: FrameType | None) -> None:
         supervisor.stopping = True

@@ -176,13 +176,17 @@ class Child:
 
 
 class Supervisor:
-    def __init__(self, healthy_after: float = HEALTHY_AFTER) -> None:
+    def __init__(
+        self, healthy_after: float = HEALTHY_AFTER, backoff_start: float = BACKOFF_START
+    ) -> None:
         self.children: list[Child] = []
         self.stopping = False
         self.healthy_after = healthy_after
+        self.backoff_start = backoff_start
 
     def add(self, child: Child) -> Child:
         self.children.append(child)
+        child.backoff = self.backoff_start
         child.spawn()
         return child
 
@@ -195,7 +199,7 @@ class Supervisor:
             code = child.proc.poll()
             if code is None:
                 if now - child.started > self.healthy_after:
-                    child.backoff = BACKOFF_START
+                    child.backoff = self.backoff_start
                 continue
             if child.restart_at is None:
                 child.exit_codes.append(code)

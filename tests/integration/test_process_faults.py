@@ -29,8 +29,9 @@ FAR_DEGREES = [round(math.degrees(v), 6) for v in FAR]
 @pytest.fixture(scope="module")
 def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cell]:
     home = tmp_path_factory.mktemp("faults")
-    # Killed again and again, the program service is restarted after 0.5 s each time.
-    runtime = Runtime(home, env=child_env(home, OPENPENDANT_RESTART_HEALTHY_AFTER="1"))
+    # Killed again and again, the program service is restarted at once each time.
+    env = child_env(home, OPENPENDANT_RESTART_HEALTHY_AFTER="1", OPENPENDANT_RESTART_BACKOFF="0.05")
+    runtime = Runtime(home, env=env)
     runtime.wait_ready()
     try:
         yield Cell(runtime)
