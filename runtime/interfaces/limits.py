@@ -78,24 +78,22 @@ class JointLimitChecker:
 
     def accelerations(self, values: Sequence[float], what: str) -> FloatArray:
         a = self.vector(values, what)
-        over = np.flatnonzero(np.abs(a) > self.max_acceleration * (1 + 1e-6) + LIMIT_EPSILON)
-        if over.size:
-            i = int(over[0])
-            raise RobotError(
-                f"{what} {a[i]:.4f} rad/s² of joint {self._joint(i)} exceeds its limit "
-                f"{self.max_acceleration[i]:.4f} rad/s²",
-                code="acceleration_limit",
-            )
+        self._check_within(a, self.max_acceleration, what, "rad/s²", "acceleration_limit")
         return a
 
     def _check_speed(self, v: FloatArray, what: str) -> None:
-        over = np.flatnonzero(np.abs(v) > self.max_velocity * (1 + 1e-6) + LIMIT_EPSILON)
+        self._check_within(v, self.max_velocity, what, "rad/s", "velocity_limit")
+
+    def _check_within(
+        self, values: FloatArray, limits: FloatArray, what: str, unit: str, code: str
+    ) -> None:
+        over = np.flatnonzero(np.abs(values) > limits * (1 + 1e-6) + LIMIT_EPSILON)
         if over.size:
             i = int(over[0])
             raise RobotError(
-                f"{what} {v[i]:.4f} rad/s of joint {self._joint(i)} exceeds its limit "
-                f"{self.max_velocity[i]:.4f} rad/s",
-                code="velocity_limit",
+                f"{what} {values[i]:.4f} {unit} of joint {self._joint(i)} exceeds its limit "
+                f"{limits[i]:.4f} {unit}",
+                code=code,
             )
 
     def trajectory(self, trajectory: JointTrajectory, start: FloatArray) -> CheckedTrajectory:

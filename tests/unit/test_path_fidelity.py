@@ -10,18 +10,23 @@ import pinocchio as pin
 import pytest
 
 from runtime.bench.bench_path_fidelity import follow, linear, moves
+from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import JointTrajectory, TrajectoryWaypoint
 from runtime.motion.executor import trajectory as as_trajectory
 from runtime.motion.moves import MovePlanner, Point
 from runtime.robotics.deviation import distances_to_polyline
 from runtime.robotics.reference import Limits, TrajectoryReference
 from runtime.robotics.robot_info import load_robot_info
+from runtime.robotics.timing import TimedPath
 from runtime.robotics.velocity import MANUAL_TCP_SPEED
 from runtime.robotics.world import World
 
 
-def off_line(model: str, offset: list[float], tcp_cap: float | None) -> tuple[float, float]:
-    """(worst distance of the executed TCP from the straight line, m; the plan's duration)."""
+def planned_line(
+    model: str, offset: list[float], tcp_cap: float | None = None
+) -> tuple[MovePlanner, FloatArray, pin.SE3, pin.SE3, TimedPath]:
+    """A fast linear move from the model's home by `offset`, planned: (the planner, home
+    joints, the TCP there, the goal, the timed trajectory)."""
     info = load_robot_info(model)
     world = World()
     world.add_robot("r", info)
@@ -31,11 +36,20 @@ def off_line(model: str, offset: list[float], tcp_cap: float | None) -> tuple[fl
     goal = pin.SE3(here.rotation, here.translation + np.array(offset))
     plan = planner.plan(linear(goal), home, [Point(None, goal)])
     assert plan.report.ok and plan.timed is not None, plan.report.message
-    done = follow(info, home, as_trajectory(plan.timed))
+    return planner, home, here, goal, plan.timed
+
+
+def worst_off_line(planner: MovePlanner, here: pin.SE3, goal: pin.SE3, done: FloatArray) -> float:
     tcp = np.array([planner.kinematics.tcp(q).translation for q in done])
-    assert np.linalg.norm(tcp[-1] - goal.translation) < 1e-6  # it got there
-    line = np.array([here.translation, goal.translation])
-    return float(np.max(distances_to_polyline(line, tcp))), plan.timed.duration
+    return float(np.max(distances_to_polyline(np.array([here.translation, goal.translation]), tcp)))
+
+
+def off_line(model: str, offset: list[float], tcp_cap: float | None) -> tuple[float, float]:
+    """(worst distance of the executed TCP from the straight line, m; the plan's duration)."""
+    planner, home, here, goal, timed = planned_line(model, offset, tcp_cap)
+    done = follow(planner.info, home, as_trajectory(timed))
+    assert np.linalg.norm(planner.kinematics.tcp(done[-1]).translation - goal.translation) < 1e-6
+    return worst_off_line(planner, here, goal, done), timed.duration
 
 
 def test_the_600_mm_linear_move_in_automatic_mode_stays_on_its_line() -> None:
@@ -71,16 +85,7 @@ def test_a_linear_move_in_manual_mode_stays_on_its_line_and_is_slower() -> None:
 def test_a_trajectory_past_the_jerk_limit_is_slowed_along_its_path() -> None:
     """Waypoints without accelerations: the controller estimates them, and the interpolated
     reference passes the jerk limit. It runs slower, on the same path, to its end."""
-    info = load_robot_info("ur5")
-    world = World()
-    world.add_robot("r", info)
-    planner = MovePlanner(world, "r", None)
-    home = np.array(info.home)
-    here = planner.kinematics.tcp(home).copy()
-    goal = pin.SE3(here.rotation, here.translation + np.array([0.0, 0.6, 0.0]))
-    plan = planner.plan(linear(goal), home, [Point(None, goal)])
-    assert plan.timed is not None
-    timed = plan.timed
+    planner, home, here, goal, timed = planned_line("ur5", [0.0, 0.6, 0.0])
     bare = JointTrajectory(
         waypoints=[
             TrajectoryWaypoint(time_from_start=float(t), position=list(p), velocity=list(v))
@@ -90,25 +95,15 @@ def test_a_trajectory_past_the_jerk_limit_is_slowed_along_its_path() -> None:
         ]
     )
     estimated = TrajectoryReference(timed.times, timed.positions, timed.velocities)
-    assert estimated.peak_ratio(Limits.of(info.joints)) > 1.0  # not followable as is
-    done = follow(info, home, bare)
-    tcp = np.array([planner.kinematics.tcp(q).translation for q in done])
-    line = np.array([here.translation, goal.translation])
-    assert float(np.max(distances_to_polyline(line, tcp))) < 1e-3
+    assert estimated.peak_ratio(Limits.of(planner.info.joints)) > 1.0  # not followable as is
+    done = follow(planner.info, home, bare)
+    assert worst_off_line(planner, here, goal, done) < 1e-3
     assert len(done) * 0.002 > timed.duration * 1.05  # slower than planned
 
 
 def test_the_planner_checks_its_trajectory_as_the_drivers_interpolate_it() -> None:
-    info = load_robot_info("ur5")
-    world = World()
-    world.add_robot("r", info)
-    planner = MovePlanner(world, "r", None)
-    home = np.array(info.home)
-    here = planner.kinematics.tcp(home).copy()
-    goal = pin.SE3(here.rotation, here.translation + np.array([0.0, 0.6, 0.0]))
-    plan = planner.plan(linear(goal), home, [Point(None, goal)])
-    assert plan.timed is not None
-    assert plan.timed.reference().peak_ratio(Limits.of(info.joints)) <= 1.0
+    planner, _, _, _, timed = planned_line("ur5", [0.0, 0.6, 0.0])
+    assert timed.reference().peak_ratio(Limits.of(planner.info.joints)) <= 1.0
 
 
 def test_the_benchmarks_moves_stay_on_their_paths_and_the_monitor_never_fires() -> None:
