@@ -48,17 +48,7 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Runtime, st
         text=True,
         env=child_env(home),
     )
-    # The emulator's servoJ stream, in this cell, left a program's moves' paths by 3.7 mm,
-    # 5.2 mm, 0.0202 rad and once 50 mm in nine runs (most moves: under 0.25 mm), and the
-    # path monitor stopped the program: why is open in issue 31's note. This test is about
-    # the program running unchanged on a UR (the monitor is as good as off here);
-    # test_ur_path checks the UR's path.
-    env = child_env(
-        home,
-        OPENPENDANT_MOTION__PATH_TOLERANCE="0.1",
-        OPENPENDANT_MOTION__JOINT_PATH_TOLERANCE="0.5",
-    )
-    runtime = Runtime(home, extra=["--no-sim"], env=env)
+    runtime = Runtime(home, extra=["--no-sim"])  # the path monitor at its defaults
     devices = [
         ("robot", DriverProc(home, "ur-rtde", "ur", "--address", HOST, "--model", "ur5e")),
         ("cell_io", DriverProc(home, "modbus-io", "cell-io", "--simulate", "--cell", CELL)),

@@ -44,6 +44,7 @@ RECORD_LIMIT = 60_000  # cycles of joint positions a recording keeps (two minute
 # planning (the controller has its own): a servoJ stream planned at those limits overshoots
 # them a little between its targets (up to 3 % seen), and is still followed as it is.
 ARM_HEADROOM = 1.1
+CATCH_UP = 0.1  # s
 
 
 @dataclass
@@ -87,7 +88,8 @@ class Controller:
         self.executing = False
         self.move_blocking = False  # a blocking move whose end is signalled "done"
         self.motion = Motion()
-        self.servo = ServoJ(CYCLE, self.tracker.max_velocity)
+        arm = self.tracker
+        self.servo = ServoJ(CYCLE, arm.max_velocity, arm.max_acceleration, arm.max_jerk)
         # The arm's joint positions, one a cycle, while a test or benchmark records them.
         self.recording: list[list[float]] | None = None
         self.operational_mode = "NONE"  # no mode selection configured (UR's default)
@@ -359,8 +361,10 @@ class Controller:
             delay = deadline - time.perf_counter()
             if delay > 0:
                 time.sleep(delay)
-            elif delay < -CYCLE:
+            elif delay < -CATCH_UP:  # held up for long: that time is lost
                 deadline = time.perf_counter()
+            # Held up for less, it catches up (cycles back to back), as a controller's
+            # clock, real-time, would not have lost that time.
 
     def tcp(self) -> Pose:
         """The TCP in the base frame (the simulated cell's frame)."""

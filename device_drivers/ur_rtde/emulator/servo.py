@@ -15,17 +15,23 @@ How it is emulated, and why:
   space (any straight TCP line) cuts inside it. The stream here is what was planned and
   checked, so the emulated arm follows the quintic interpolation through the targets
   (velocities and accelerations by central differences of the targets: the interpolation
-  every driver shares) `lookahead` late, which also lets it see the targets after the one
-  it heads for; and where the arm is not on the stream (when servoj begins, or after the
-  joint limits held it back) the difference, in position, velocity and acceleration, fades
-  out along a quintic over the lookahead. The gain has nothing left to do.
+  every driver shares) `lookahead` late (and a little later: see the buffer below), which
+  also lets it see the targets after the one it heads for; and where the arm is not on the
+  stream (when servoj begins, or after the joint limits held it back) the difference, in
+  position, velocity and acceleration, fades out along a quintic over the lookahead. The
+  gain has nothing left to do.
 - Every target the client sent is taken, in order, each t after the one before (not the
   latest target once every t of the controller's clock, as the script's loop reads it): a
   real client streams in step with the controller's cycle, but here the driver's 8 ms thread
-  and the emulator's 2 ms loop, on one loaded computer, are a few milliseconds apart now and
-  then; the latest-every-t reading then repeats one target and skips the next, a jerk no
-  real-time link gives. The two clocks drifting apart by more than the lookahead re-times
-  the stream there (it is neither run through faster nor left behind).
+  and the emulator's 2 ms loop share one loaded computer, and the driver now and then sends
+  a few targets late (and never catches up) or in a burst; the latest-every-t reading then
+  repeats one target and skips the next, a jerk no real-time link gives. So the stream is
+  played from a buffer `delay` deep (the lookahead, plus what a client's scheduling may
+  lose, `SLACK`), and where the client fell behind far enough to empty it the stream is
+  played slower, along its path, through the same time scaling a driver's speed override
+  uses (a time filter on the path, rather, would cut inside its curves, and re-timing single
+  targets made accelerations of 100 rad/s² that the arm could not follow), and at full speed
+  again once the buffer has filled. Never faster than it was sent.
 - The reference goes through the arm's tracker: followed exactly within the joint limits,
   and otherwise held under them (the position limits included).
 - A target farther from the one before than the joint could go at full speed within t and
@@ -38,11 +44,14 @@ import bisect
 import numpy as np
 
 from runtime.interfaces.limits import FloatArray
+from runtime.robotics.time_scaling import TimeScaling
 
 # Targets either side of the segment played: the central differences of the accelerations
 # at both its ends reach two targets beyond each.
 REACH = 2
 MIN_LOOKAHEAD, MAX_LOOKAHEAD = 0.03, 0.2  # s: the script manual's range
+SLACK = 0.1  # s: how late a client's targets may come (in all) before the stream slows
+SLOW_ZONE = 0.1  # s: with less of the stream left to play than this, it is played slower
 State = tuple[FloatArray, FloatArray, FloatArray]  # position, velocity, acceleration
 
 
@@ -51,9 +60,16 @@ class ServoJump(RuntimeError):
 
 
 class ServoJ:
-    def __init__(self, cycle: float, max_velocity: FloatArray) -> None:
+    def __init__(
+        self,
+        cycle: float,
+        max_velocity: FloatArray,
+        max_acceleration: FloatArray,
+        max_jerk: FloatArray,
+    ) -> None:
         self.cycle = cycle
         self.max_velocity = max_velocity
+        self._limits = (max_acceleration, max_jerk)
         self.pending: list[tuple[FloatArray, float, float]] = []  # sent, not yet taken
         self.start()
 
@@ -66,37 +82,56 @@ class ServoJ:
     def start(self) -> None:
         """servoj begins (the targets sent for it are already pending)."""
         self.clock = 0.0  # s: the controller's time since servoj began
-        self.delay = MIN_LOOKAHEAD  # s: how far behind that clock the stream is played
-        self.times: list[float] = []  # when each target is to be reached
+        self.lookahead, self.period = MIN_LOOKAHEAD, self.cycle  # the latest target's
+        self.tau: float | None = None  # the stream's time being played (0: its first target)
+        self.scaling = TimeScaling(*self._limits)  # how fast the stream is played
+        self.times: list[float] = []  # when each target is to be reached, on the stream
         self.positions: list[FloatArray] = []
-        self._key: tuple[float, int] | None = None  # the segment being played, and its
-        self._segment: tuple[float, FloatArray] = (0.0, np.zeros(0))  # length and quintic
-        self._played: State | None = None  # the stream where it was played last cycle
-        self._given: State | None = None  # the reference given last cycle
+        self._segments: dict[tuple[float, int], tuple[float, FloatArray]] = {}  # by key
+        self._played: State | None = None  # the stream as played last cycle
+        self._given: State | None = None  # the reference given last cycle (fade included)
         self._fade: tuple[float, FloatArray] | None = None  # since when, and its quintic
+
+    @property
+    def delay(self) -> float:
+        """How far behind the latest target the stream is played when the client keeps
+        time: the lookahead (late enough that the targets after the segment played have
+        arrived), and what a client's late targets may take from it before it slows."""
+        return max(self.lookahead, (REACH + 1) * self.period) + SLACK
 
     def step(self, arm: State) -> State:
         """One controller cycle, the arm's tracker at `arm`: the reference to follow."""
         for target, period, lookahead in self.pending:
-            # Late enough that the targets after the segment played have arrived.
-            self.delay = max(lookahead, (REACH + 1) * period)
+            self.lookahead, self.period = lookahead, period
             self._take(target, period, lookahead, arm[0])
         self.pending.clear()
         if not self.times:  # no target yet: it holds
             return arm[0].copy(), np.zeros_like(arm[0]), np.zeros_like(arm[0])
-        before = self._played or self._sample(self.clock - self.delay)
+        if self.tau is None:
+            self.tau = self.times[0] - self.delay
+        scaling = self.scaling
+        # The stream where it was played last cycle, as it is known now: targets that have
+        # arrived since may have changed it there (when it was played to its end).
+        rate, rate_speed = scaling.rate, scaling.rate_speed
+        now = self._sample(self.tau)
+        before = _scaled(now, rate, rate_speed)
+        # What may still be played before the segment played lacks the targets after it.
+        left = self.times[-1] - (REACH + 1) * self.period - self.tau
+        scaling.step(min(1.0, max(0.0, left / SLOW_ZONE)), now[1], now[2], self.cycle)
+        self.tau += self.cycle * 0.5 * (rate + scaling.rate)
         self.clock += self.cycle
-        played = self._played = self._sample(self.clock - self.delay)
-        given = self._given
-        if given is None or not all(np.array_equal(g, s) for g, s in zip(given, arm, strict=True)):
-            # The arm is not where it was sent: from where it is, onto the stream.
+        played = _scaled(self._sample(self.tau), scaling.rate, scaling.rate_speed)
+        moved = self._played is not None and not _same(before, self._played)
+        if self._given is None or moved or not _same(self._given, arm):
+            # The arm is not where the stream is: from where it is, onto the stream.
             p, v, a = (s - b for s, b in zip(arm, before, strict=True))
             zero = np.zeros_like(p)
-            self._fade = (self.clock - self.cycle, quintic(p, v, a, zero, zero, zero, self.delay))
-        reference = played
+            fade = quintic(p, v, a, zero, zero, zero, self.lookahead)
+            self._fade = (self.clock - self.cycle, fade)
+        self._played = reference = played
         if self._fade is not None:
             since, fade = self._fade
-            if self.clock - since >= self.delay:
+            if self.clock - since >= self.lookahead:
                 self._fade = None
             else:
                 off = evaluate(fade, self.clock - since)
@@ -114,13 +149,7 @@ class ServoJ:
                 f"servoj target out of reach: joint {joint + 1} by {step[joint]:.3f} rad "
                 f"in {period:.3f} s"
             )
-        if not self.times:
-            due = self.clock + period
-        else:  # re-timed where the clocks drifted apart, but always after the one before
-            played = self.clock - self.delay
-            due = min(max(self.times[-1] + period, played + period), self.clock + self.delay)
-            due = max(due, self.times[-1] + self.cycle)
-        self.times.append(due)
+        self.times.append(self.times[-1] + period if self.times else 0.0)
         self.positions.append(target)
 
     def _sample(self, tau: float) -> State:
@@ -129,14 +158,17 @@ class ServoJ:
             still = np.zeros_like(self.positions[0])
             return self.positions[0].copy(), still, still.copy()
         k = bisect.bisect_right(self.times, tau) - 1
-        if k > REACH:  # what is behind the window is needed no more
-            del self.times[: k - REACH], self.positions[: k - REACH]
-            k = REACH
+        if k > REACH + 1:  # what is behind the window (and the one before) is needed no more
+            del self.times[: k - REACH - 1], self.positions[: k - REACH - 1]
+            k = REACH + 1
         # A segment's ends change only while the targets after it are still coming.
         key = (self.times[k], min(len(self.times) - k, REACH + 2))
-        if key != self._key:
-            self._key, self._segment = key, self._coefficients(k)
-        h, coefficients = self._segment
+        segment = self._segments.get(key)
+        if segment is None:
+            if len(self._segments) > 8:
+                self._segments.clear()
+            segment = self._segments[key] = self._coefficients(k)
+        h, coefficients = segment
         return evaluate(coefficients, min(tau - self.times[k], h))
 
     def _coefficients(self, k: int) -> tuple[float, FloatArray]:
@@ -201,3 +233,13 @@ def evaluate(coefficients: FloatArray, s: float) -> State:
     )
     p, v, a = powers @ coefficients
     return p, v, a
+
+
+def _scaled(state: State, rate: float, rate_speed: float) -> State:
+    """The stream's state played at `rate` (changing by `rate_speed` per second)."""
+    p, v, a = state
+    return p, v * rate, a * rate * rate + v * rate_speed
+
+
+def _same(one: State, other: State) -> bool:
+    return all(np.array_equal(x, y) for x, y in zip(one, other, strict=True))
