@@ -37,6 +37,8 @@ FOLLOW_LIMIT_SLACK = 1.0 + 1e-6  # float noise on a reference at its limit
 # A planned trajectory's reference was checked at 8 points of each 8 ms segment; between
 # them it can pass a limit by a fraction of a percent, which is no reason to leave its path.
 REFERENCE_SLACK = 1.01
+COLLINEAR = 1e-9  # relative: a reference's vector this close to a line is on it
+LINE_DRIFT = 1e-6  # rad, rad/s: the arm this close to a reference's line is on it
 # rad/s and rad/s²: a holding joint slower than this, and slowing no faster, is at rest.
 AT_REST = 1e-9
 
@@ -77,6 +79,10 @@ class JointTracker:
         self._brake_in.max_acceleration = self.max_acceleration.tolist()
         self._brake_in.max_jerk = self._in.max_jerk
         self._brake_path = Trajectory(n)
+        # One coordinate along a straight line in joint space (`_step_along`).
+        self._line = Ruckig(1, dt)
+        self._line_in = InputParameter(1)
+        self._line_out = OutputParameter(1)
         self.guard_trips = 0
 
     @property
@@ -123,9 +129,12 @@ class JointTracker:
         )
 
     def step_velocity(self, velocity: FloatArray) -> None:
-        """Move each joint at its commanded velocity. Near its position limit a moving joint
-        aims at the limit instead, so it stops exactly there rather than running through;
-        far from it (the lookahead), it simply follows the velocity."""
+        """Move each joint at its commanded velocity, every joint's change of speed in step
+        (phase-synchronized), so the TCP keeps the direction the velocities give it: each
+        on its own profile, a reactive move speeding up from rest left its line by 13 mm.
+        Near its position limit a moving joint aims at the limit instead, so it stops
+        exactly there rather than running through; far from it (the lookahead), it simply
+        follows the velocity."""
         speed = np.minimum(np.abs(velocity), self.max_velocity)
         moving = speed > 1e-9
         limit = np.where(velocity > 0, self.upper, self.lower)
@@ -139,6 +148,7 @@ class JointTracker:
             np.where(near, limit, self.position),
             target_velocity,
             np.where(near, speed, self.max_velocity),
+            synchronization=Synchronization.No if near.any() else Synchronization.Phase,
         )
 
     def step_toward(self, target: FloatArray, max_velocity: FloatArray) -> None:
@@ -160,12 +170,26 @@ class JointTracker:
         room = np.where(velocity > 0, self.upper - target, target - self.lower)
         stop_speed = np.sqrt(self.max_acceleration * np.maximum(room, 0.0))
         bound = np.minimum(stop_speed, self.max_velocity)
-        capped = np.clip(velocity, -bound, bound)
+        # Bounds applied to the whole vector, not joint by joint: a reference along a line
+        # in joint space stays along it, which the phase synchronization below keeps.
+        capped = np.clip(velocity * _within(velocity, bound), -bound, bound)
         accel = np.zeros_like(position) if acceleration is None else acceleration
-        accel = np.where(capped == velocity, self._feasible_acceleration(capped, accel), 0.0)
+        if np.any(capped != velocity):
+            accel = np.zeros_like(accel)
+        else:
+            accel = accel * _within(accel, self._feasible_acceleration_bound(capped))
         if acceleration is not None and self._follows(target, capped, accel):
             return
-        self._run([_POSITION] * len(position), target, capped, self.max_velocity, accel)
+        if self._step_along(target, capped, accel):
+            return
+        self._run(
+            [_POSITION] * len(position),
+            target,
+            capped,
+            self.max_velocity,
+            accel,
+            synchronization=Synchronization.Phase,
+        )
 
     def follow(self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray) -> None:
         """Follow a planned trajectory's reference (already within the limits, or slowed
@@ -210,15 +234,76 @@ class JointTracker:
         self._in.current_acceleration = self.acceleration.tolist()
         return True
 
-    def _feasible_acceleration(self, velocity: FloatArray, acceleration: FloatArray) -> FloatArray:
+    def _step_along(
+        self, target: FloatArray, velocity: FloatArray, acceleration: FloatArray
+    ) -> bool:
+        """A reference moving along one straight line in joint space, with the arm on it (a
+        joint move, planned on that line and streamed): one step along the line, with one
+        generator for the line's own coordinate, so every joint stays on it. (Phase
+        synchronization meant the same, but ruckig left the line by 0.006 rad tracking a
+        streamed joint move, where the limits made another joint the slowest.) False when
+        the reference or the arm is not on one line: then the joints are tracked as usual."""
+        moving_reference = float(np.linalg.norm(velocity)) > 1e-9
+        basis = velocity if moving_reference else target - self.position
+        length = float(np.linalg.norm(basis))
+        if length < 1e-12:
+            return False
+        d = basis / length
+
+        def across(vector: FloatArray) -> float:
+            return float(np.linalg.norm(vector - float(vector @ d) * d))
+
+        if across(acceleration) > COLLINEAR * (1.0 + float(np.linalg.norm(acceleration))):
+            return False
+        # The arm's own state on the same line, but for the float drift of its steps.
+        if max(across(target - self.position), across(self.velocity)) > LINE_DRIFT:
+            return False
+        if across(self.acceleration) > LINE_DRIFT * 100:
+            return False
+        share = np.abs(d)
+        moving = share > 1e-12
+        top_speed = float(np.min(self.max_velocity[moving] / share[moving]))
+        top_acceleration = float(np.min(self.max_acceleration[moving] / share[moving]))
+        top_jerk = float(np.min(self.max_jerk[moving] / share[moving]))
+        speed = float(np.clip(velocity @ d, -top_speed, top_speed))
+        room = top_speed - abs(speed)
+        reach = min(0.9 * top_acceleration, math.sqrt(2.0 * top_jerk * 0.9 * room))
+        line = self._line_in
+        line.current_position = [float((self.position - target) @ d)]  # the target at 0
+        line.current_velocity = [float(self.velocity @ d)]
+        line.current_acceleration = [float(self.acceleration @ d)]
+        line.target_position = [0.0]
+        line.target_velocity = [speed]
+        line.target_acceleration = [float(np.clip(acceleration @ d, -reach, reach))]
+        line.max_velocity = [top_speed]
+        line.max_acceleration = [top_acceleration]
+        line.max_jerk = [top_jerk]
+        try:
+            result = self._line.update(line, self._line_out)
+        except (RuckigError, ValueError):
+            return False
+        if result not in (Result.Working, Result.Finished):
+            return False
+        out = self._line_out
+        position = target + d * out.new_position[0]
+        velocity_now = d * out.new_velocity[0]
+        acceleration_now = d * out.new_acceleration[0]
+        if self._cannot_stop_from(position, velocity_now, acceleration_now).any():
+            return False  # the joint-limit guard decides, joint by joint
+        self.position, self.velocity, self.acceleration = position, velocity_now, acceleration_now
+        self._in.current_position = self.position.tolist()
+        self._in.current_velocity = self.velocity.tolist()
+        self._in.current_acceleration = self.acceleration.tolist()
+        return True
+
+    def _feasible_acceleration_bound(self, velocity: FloatArray) -> FloatArray:
         """Arriving with the reference's acceleration avoids a lag. But jerk is limited, so a
         target state with acceleration a was reached through a velocity a²/2j away from its
         own; ruckig rejects targets where that passes the velocity limit."""
         room = np.maximum(self.max_velocity - np.abs(velocity), 0.0)
         reachable = np.sqrt(2.0 * self.max_jerk * 0.9 * room)
-        bound = np.minimum(0.9 * self.max_acceleration, reachable)
-        result: FloatArray = np.clip(acceleration, -bound, bound)
-        return result
+        bound: FloatArray = np.minimum(0.9 * self.max_acceleration, reachable)
+        return bound
 
     def _run(
         self,
@@ -302,3 +387,11 @@ class JointTracker:
             low < np.minimum(self.lower, position) - eps
         )
         return result
+
+
+def _within(vector: FloatArray, bound: FloatArray) -> float:
+    """The largest factor up to 1 that brings every element of `vector` within ±`bound`."""
+    over = np.abs(vector) > bound
+    if not np.any(over):
+        return 1.0
+    return float(np.min(bound[over] / np.abs(vector[over])))

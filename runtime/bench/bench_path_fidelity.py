@@ -20,10 +20,10 @@ from runtime.interfaces.robot import CommandMode, JointTrajectory, OperationalMo
 from runtime.kit.settings import MotionSettings
 from runtime.motion.executor import trajectory as as_trajectory
 from runtime.motion.models import MoveRequest
-from runtime.motion.monitor import PathDeviation, PathMonitor
 from runtime.motion.moves import MovePlanner, Point
 from runtime.robotics.deviation import distances_to_polyline
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.path_monitor import PathDeviation, PathMonitor
 from runtime.robotics.robot_info import load_robot_info
 from runtime.robotics.timing import TimedPath
 from runtime.robotics.world import World

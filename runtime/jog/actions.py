@@ -21,6 +21,7 @@ from runtime.interfaces.robot import (
 )
 from runtime.robotics.joint_move import PlannedMove
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.path_monitor import PathMonitor
 from runtime.robotics.velocity import VelocityController
 
 # The driver halts on its own if the stream stops for this long (the deadman's backstop).
@@ -181,16 +182,20 @@ class TwistJog(RampedJog):
 
 
 class PlannedMoveAction(Action):
-    """Follow a planned move by streaming its positions; the stream stopping halts it."""
+    """Follow a planned move by streaming its positions; the stream stopping halts it. With
+    a path monitor, the arm leaving the path that was checked ends it (PathDeviation)."""
 
     mode = CommandMode.position_command
 
-    def __init__(self, press: str, move: PlannedMove) -> None:
+    def __init__(self, press: str, move: PlannedMove, monitor: PathMonitor | None = None) -> None:
         super().__init__(press)
         self.move = move
+        self.monitor = monitor
         self.started: float | None = None
 
     def tick(self, state: RobotState, now: float) -> PositionCommand:
+        if self.monitor is not None:
+            self.monitor.check(np.array(state.joint_position))
         if self.started is None:
             self.started = now
         t = now - self.started

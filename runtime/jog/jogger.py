@@ -14,12 +14,18 @@ from typing import Any
 import numpy as np
 
 from runtime.clients.robot import RobotClient
-from runtime.interfaces.robot import CommandMode, OperationalMode, VelocityCommand
+from runtime.interfaces.robot import (
+    CommandMode,
+    OperationalMode,
+    ProtectiveStopRequest,
+    VelocityCommand,
+)
 from runtime.jog.actions import Action, RampedJog
 from runtime.kit.errors import OpenPendantError, RobotError
 from runtime.links.hub import LINK_FAULTS
 from runtime.robotics.avoidance import SAFETY
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.path_monitor import PathDeviation
 from runtime.robotics.velocity import MANUAL_TCP_SPEED, Constraint, VelocityController
 
 log = logging.getLogger(__name__)
@@ -158,6 +164,14 @@ class Jogger:
         with contextlib.suppress(OpenPendantError):
             await self.link.halt(tag=f"{action.press}:{why}")
 
+    async def _protective_stop(self, action: Action, reason: str) -> None:
+        """The arm left the path that was checked: halted, and a protective stop until
+        errors are reset, as the motion service's path monitor does."""
+        with contextlib.suppress(OpenPendantError):
+            await self.link.halt(tag=f"{action.press}:path_deviation")
+        with contextlib.suppress(OpenPendantError):
+            await self.link.protective_stop(ProtectiveStopRequest(reason=reason))
+
     def _end(self, action: Action, state: str, reason: str, message: str = "") -> None:
         if self.listener is not None:
             self.listener(Ended(action.press, state, reason, message or reason))
@@ -235,6 +249,12 @@ class Jogger:
                 continue
             try:
                 await self._tick(action)
+            except PathDeviation as exc:
+                if self.action is action:
+                    self.action = None
+                    log.warning("jog on %s ended: %s", self.link.name, exc.message)
+                    await self._protective_stop(action, exc.message)
+                    self._end(action, "halted", exc.code, exc.message)
             except OpenPendantError as exc:
                 if self.action is action:
                     self.action = None

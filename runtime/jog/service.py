@@ -19,7 +19,7 @@ from runtime.jog.models import SpeedRequest, TeachRequest
 from runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
 from runtime.jog.waypoints import robot_waypoints, teach
 from runtime.kit.app import create_app
-from runtime.kit.settings import RuntimeSettings
+from runtime.kit.settings import MotionSettings, RuntimeSettings
 from runtime.motion.client import MotionClient
 from runtime.paths import package_roots
 from runtime.robotics.velocity import MANUAL_TCP_SPEED
@@ -33,6 +33,7 @@ def jog_router(
     storage: StorageClient,
     deadman: float,
     paths: PathCheck,
+    path_tolerances: MotionSettings,
     socket_port: int | None = None,
 ) -> APIRouter:
     router = APIRouter(prefix="/jog")
@@ -53,7 +54,7 @@ def jog_router(
 
     @router.websocket("/ws")
     async def jog_socket(ws: WebSocket) -> None:
-        session = JogSession(directory, storage, deadman, paths)
+        session = JogSession(directory, storage, deadman, paths, path_tolerances)
         try:
             await session.out.serve(ws, on_message=session.handle)
         finally:
@@ -161,7 +162,14 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     app = create_app("jog", lifespan=lifespan)
     paths = PathCheck(motion)
     app.include_router(
-        jog_router(directory, storage, settings.deadman_seconds, paths, settings.jog_port or None)
+        jog_router(
+            directory,
+            storage,
+            settings.deadman_seconds,
+            paths,
+            settings.motion,
+            settings.jog_port or None,
+        )
     )
     app.include_router(avoidance_router(mirror))
     return app

@@ -42,8 +42,10 @@ from runtime.jog.models import (
 from runtime.jog.waypoints import joint_goal, teach
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue, OpenPendantError, RobotError
+from runtime.kit.settings import MotionSettings
 from runtime.kit.websocket import Fanout
 from runtime.robotics.joint_move import plan_joint_move
+from runtime.robotics.path_monitor import PathMonitor
 from runtime.variable_storage.client import StorageClient
 
 log = logging.getLogger(__name__)
@@ -51,6 +53,7 @@ log = logging.getLogger(__name__)
 JOINT_SPEED = math.radians(45)  # rad/s at 100 %
 LINEAR_SPEED = 0.25  # m/s at 100 %
 ANGULAR_SPEED = math.radians(45)  # rad/s at 100 %
+MONITOR_SAMPLE = 0.008  # s: a planned jog move's path, sampled for its monitor
 
 MESSAGES: dict[str, type[Any]] = {
     "jog": JogPress,
@@ -80,9 +83,15 @@ def mouse_speeds(binding: MouseBinding) -> FloatArray:
 
 class JogSession:
     def __init__(
-        self, directory: Directory, storage: StorageClient, deadman: float, paths: PathCheck
+        self,
+        directory: Directory,
+        storage: StorageClient,
+        deadman: float,
+        paths: PathCheck,
+        path_tolerances: MotionSettings,
     ) -> None:
         self.directory = directory
+        self.path_tolerances = path_tolerances  # the path monitor's, for planned jog moves
         self.storage = storage
         self.deadman = deadman
         self.paths = paths
@@ -344,12 +353,24 @@ class JogSession:
             target = pin.SE3(delta.rotation @ tcp.rotation, tcp.translation + delta.translation)
         return checker.positions(jogger.kinematics.inverse(target, q).tolist(), "step target")
 
-    @staticmethod
     def _plan(
-        press: str, jogger: Jogger, q: FloatArray, goal: FloatArray, speed: float, cap: float | None
+        self,
+        press: str,
+        jogger: Jogger,
+        q: FloatArray,
+        goal: FloatArray,
+        speed: float,
+        cap: float | None,
     ) -> PlannedMoveAction:
         move = plan_joint_move(jogger.kinematics, jogger.link.info, q, goal, speed, cap)
-        return PlannedMoveAction(press, move)
+        # The path checked (the straight joint line) as it is streamed, every 8 ms.
+        times = np.append(np.arange(0.0, move.duration, MONITOR_SAMPLE), move.duration)
+        planned = np.array([move.sample(float(t))[0] for t in times])
+        tolerances = self.path_tolerances
+        monitor = PathMonitor(
+            jogger.kinematics, planned, tolerances.path_tolerance, tolerances.joint_path_tolerance
+        )
+        return PlannedMoveAction(press, move, monitor)
 
     def _heartbeat(self, press: str) -> None:
         held = self.held.get(press)

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -21,10 +20,8 @@ from runtime.interfaces.robot import (
     TrajectoryWaypoint,
 )
 from runtime.kit.errors import OpenPendantError, RobotError
+from runtime.robotics.path_monitor import PathDeviation, PathMonitor
 from runtime.robotics.timing import TimedPath
-
-if TYPE_CHECKING:
-    from runtime.motion.monitor import PathMonitor
 
 WATCH_PERIOD = 0.02  # s
 # The robot's position and its setpoint this far apart means it is not following.
@@ -128,7 +125,7 @@ class Execution:
             await self._watch(trajectory_id)
         except BaseException as exc:
             await self.link.halt("motion: stop")
-            if isinstance(exc, MoveFailed) and exc.code == "path_deviation":
+            if isinstance(exc, PathDeviation):
                 # As a controller's path monitor would: held until errors are reset, and
                 # shown as the robot's fault with the distance.
                 with contextlib.suppress(OpenPendantError):

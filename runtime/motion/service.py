@@ -30,12 +30,12 @@ from runtime.motion.models import (
     PlanReport,
     Target,
 )
-from runtime.motion.monitor import PathMonitor
 from runtime.motion.moves import MovePlanner, Plan, Refused, resolve
 from runtime.motion.reactive import PERIOD as REACTIVE_PERIOD
 from runtime.motion.reactive import ReactiveExecution
 from runtime.motion.robots import Robots, world_pose
 from runtime.robotics.kinematics import Kinematics
+from runtime.robotics.path_monitor import PathMonitor
 from runtime.robotics.velocity import MANUAL_TCP_SPEED, VelocityController
 from runtime.variable_storage.client import StorageClient
 

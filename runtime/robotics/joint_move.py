@@ -1,5 +1,5 @@
 """Planned joint moves (jog steps, hold-to-run "move to", the motion service's move joint):
-time-optimal, jerk-limited and synchronized across joints (ruckig), slowed as a whole until
+time-optimal and jerk-limited along the straight joint line (ruckig), slowed as a whole until
 the TCP stays under the speed cap."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from ruckig import InputParameter, Result, Ruckig, Synchronization, Trajectory
+from ruckig import InputParameter, Result, Ruckig, Trajectory
 
 from runtime.interfaces.limits import FloatArray
 from runtime.interfaces.robot import RobotInfo
@@ -21,8 +21,13 @@ SAMPLES_FOR_TCP_CHECK = 200
 
 @dataclass
 class PlannedMove:
+    """A move along the straight joint line from `start` to `goal`: `trajectory` is the
+    distance travelled along it (one coordinate), every joint at start + direction · s."""
+
     trajectory: Trajectory
+    start: FloatArray
     goal: FloatArray
+    direction: FloatArray
 
     @property
     def duration(self) -> float:
@@ -34,16 +39,17 @@ class PlannedMove:
 
     def state(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Position, velocity and acceleration at time t."""
-        position, velocity, acceleration = self.trajectory.at_time(min(max(t, 0.0), self.duration))
-        return np.array(position), np.array(velocity), np.array(acceleration)
+        s, v, a = self.trajectory.at_time(min(max(t, 0.0), self.duration))
+        d = self.direction
+        return self.start + d * s[0], d * v[0], d * a[0]
 
 
-def peak_tcp_speed(kinematics: Kinematics, trajectory: Trajectory) -> float:
+def peak_tcp_speed(kinematics: Kinematics, move: PlannedMove) -> float:
     peak = 0.0
-    for t in np.linspace(0.0, float(trajectory.duration), SAMPLES_FOR_TCP_CHECK):
-        position, velocity, _ = trajectory.at_time(float(t))
-        jacobian = kinematics.jacobian(np.array(position))
-        peak = max(peak, float(np.linalg.norm(jacobian[:3] @ np.array(velocity))))
+    for t in np.linspace(0.0, move.duration, SAMPLES_FOR_TCP_CHECK):
+        position, velocity, _ = move.state(float(t))
+        jacobian = kinematics.jacobian(position)
+        peak = max(peak, float(np.linalg.norm(jacobian[:3] @ velocity)))
     return peak
 
 
@@ -54,41 +60,54 @@ def plan_joint_move(
     goal: FloatArray,
     speed: float,
     tcp_cap: float | None,
-    start_velocity: FloatArray | None = None,
     *,
     acceleration: float | None = None,
     fraction: float = MOVE_SPEED_FRACTION,
 ) -> PlannedMove:
     """`speed` (and `acceleration`, which defaults to it) scale the joints' limits, times
-    `fraction`: jogging moves never use the last half of a joint's speed."""
-    n = info.dof
+    `fraction`: jogging moves never use the last half of a joint's speed.
+
+    Planned as one coordinate, the distance along the straight joint line (each joint's
+    limit divided by its share of the line bounds it), so every joint is on that line at
+    every instant: the path collision checking saw. ruckig's phase synchronization of the
+    joints meant the same, but falls back to time synchronization where the joints' limits
+    are not in proportion: a Panda move left its line by 0.55 rad that way."""
+    offset = goal - start
+    length = float(np.linalg.norm(offset))
+    direction = offset / length if length > 0 else np.zeros_like(offset)
+    share = np.abs(direction)
+    moving = share > 1e-12
+
+    def along(limits: list[float]) -> float:
+        if not np.any(moving):
+            return 1.0  # nothing moves: any finite limit
+        return float(np.min(np.array(limits)[moving] / share[moving]))
+
     scale = fraction * speed
     accel_scale = fraction * (speed if acceleration is None else acceleration)
     for _ in range(8):
-        otg = Ruckig(n)
-        inp = InputParameter(n)
-        inp.current_position = start.tolist()
-        inp.current_velocity = (np.zeros(n) if start_velocity is None else start_velocity).tolist()
-        inp.current_acceleration = [0.0] * n
-        inp.target_position = goal.tolist()
-        # Phase synchronization keeps a move from rest on the straight joint-space line, the
-        # path that collision checking saw.
-        inp.synchronization = Synchronization.Phase
-        inp.target_velocity = [0.0] * n
-        inp.target_acceleration = [0.0] * n
-        inp.max_velocity = [j.max_velocity * scale for j in info.joints]
-        inp.max_acceleration = [j.max_acceleration * accel_scale for j in info.joints]
-        inp.max_jerk = [(j.max_jerk or math.inf) * accel_scale for j in info.joints]
-        trajectory = Trajectory(n)
+        otg = Ruckig(1)
+        inp = InputParameter(1)
+        inp.current_position = [0.0]
+        inp.current_velocity = [0.0]
+        inp.current_acceleration = [0.0]
+        inp.target_position = [length]
+        inp.target_velocity = [0.0]
+        inp.target_acceleration = [0.0]
+        inp.max_velocity = [along([j.max_velocity * scale for j in info.joints])]
+        inp.max_acceleration = [along([j.max_acceleration * accel_scale for j in info.joints])]
+        inp.max_jerk = [along([(j.max_jerk or math.inf) * accel_scale for j in info.joints])]
+        trajectory = Trajectory(1)
         result = otg.calculate(inp, trajectory)
         if result not in (Result.Working, Result.Finished):
             raise RuntimeError(f"cannot plan the move: {result}")
+        move = PlannedMove(trajectory, start.copy(), goal.copy(), direction)
         if tcp_cap is None:
             break
-        peak = peak_tcp_speed(kinematics, trajectory)
+        peak = peak_tcp_speed(kinematics, move)
         if peak <= tcp_cap:
             break
         # Slower in time, same path: velocity, acceleration and jerk limits scale together.
         scale *= 0.95 * tcp_cap / peak
         accel_scale *= 0.95 * tcp_cap / peak
-    return PlannedMove(trajectory, goal.copy())
+    return move

@@ -1,18 +1,20 @@
-"""A path monitor, as a robot controller has one: while a move runs, the robot's actual TCP
-is compared with the path that was planned and collision-checked; farther from it than the
-tolerance, the move is stopped (the executor halts the robot) with `path_deviation`."""
+"""A path monitor, as a robot controller has one: while a planned move runs (the motion
+service's moves, the Jog panel's steps and Move to), the robot's actual TCP is compared with
+the path that was planned and collision-checked; farther from it than the tolerance, the
+move is stopped (halted, and a protective stop) with `path_deviation`."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from runtime.interfaces.limits import FloatArray
-from runtime.motion.executor import MoveFailed
+from runtime.kit.errors import OpenPendantError
 from runtime.robotics.deviation import distances_to_polyline
 from runtime.robotics.kinematics import Kinematics
 
 
-class PathDeviation(MoveFailed):
+class PathDeviation(OpenPendantError):
+    status = 409
     code = "path_deviation"
 
 

@@ -76,6 +76,13 @@ class VelocityController:
         """Joint velocities that best give `twist` ([vx, vy, vz, wx, wy, wz] in the base
         frame, at the TCP) within every limit, starting from the `previous` command."""
         jacobian = self.kinematics.jacobian(q)
+        linear_speed = float(np.linalg.norm(twist[:3]))
+        if tcp_cap is not None and linear_speed > tcp_cap:
+            # Capped as asked, not after: solved for a faster twist, the joints could not
+            # change by as much in one period, and the least-squares answer within their
+            # limits turned the TCP off its direction (a reactive move in manual mode left its
+            # line by 40 mm).
+            twist = twist * (tcp_cap / linear_speed)
         weights = np.array([1.0, 1.0, 1.0, ANGULAR_WEIGHT, ANGULAR_WEIGHT, ANGULAR_WEIGHT])
         weighted = weights[:, None] * jacobian
         sigma = float(np.linalg.svd(weighted, compute_uv=False)[-1]) if q.size >= 6 else 0.0
@@ -98,6 +105,21 @@ class VelocityController:
         h: FloatArray | None,
         previous: FloatArray | None,
     ) -> FloatArray:
+        if previous is not None and g is None:
+            # The best velocity within every limit but the change from `previous`, then
+            # approached along a straight line in joint space, as far as every joint can
+            # change in one period: all joints in step, so the TCP keeps its direction
+            # while it speeds up (a QP bounding each joint's change on its own turned it).
+            # Near an obstacle keeping clear decides the direction: the QP below.
+            lower, upper = self._bounds(q, None)
+            target = _qp(hessian, gradient, None, None, lower, upper)
+            if target is not None:
+                change = target - previous
+                reach = self.max_acceleration * self.period
+                ratio = float(np.max(np.abs(change) / reach))
+                step = previous + change / max(ratio, 1.0)
+                if np.all(step >= lower - 1e-9) and np.all(step <= upper + 1e-9):
+                    return step
         lower, upper = self._bounds(q, previous)
         solution = _qp(hessian, gradient, g, h, lower, upper)
         if solution is None and g is not None:

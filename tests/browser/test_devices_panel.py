@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 import httpx
+import pytest
 from playwright.sync_api import BrowserContext, expect
 
 from runtime.bench.harness.processes import Runtime, SimRobotProc
@@ -88,12 +89,18 @@ def test_a_hostile_device_name_is_shown_as_text(
         sim.stop()
 
 
+@pytest.mark.parametrize("own_key", [False, True], ids=["another-key", "its-own-key"])
 def test_another_device_claiming_an_added_robot_is_shown_and_not_followed(
-    runtime: Runtime, tablet: BrowserContext, tmp_path: Path, artifacts: Path
+    runtime: Runtime, tablet: BrowserContext, tmp_path: Path, artifacts: Path, own_key: bool
 ) -> None:
+    """A device announcing an added robot's identity from another address: shown, never
+    followed without the user (issue 31), and the card says whether it proved it holds the
+    robot's pairing key (with its own key: the same robot on a new address, perhaps)."""
     add_robot(runtime)
     real = runtime.api("GET", "/devices/robot").json()
-    impostor = SimRobotProc(tmp_path, name="sim-ur5", extra=["--uuid", real["uuid"]])
+    # With the runtime's data directory, its simulator has the robot's uuid and key.
+    home = runtime.home if own_key else tmp_path
+    impostor = SimRobotProc(home, name="sim-ur5", extra=["--uuid", real["uuid"]])
     try:
         impostor.wait_ready()
         page = tablet.new_page()
@@ -109,12 +116,19 @@ def test_another_device_claiming_an_added_robot_is_shown_and_not_followed(
             print(f"shown {notice.inner_text()!r}; claim {claim}; real {real['url']}")
             raise
         expect(notice).to_contain_text("not followed")
+        proof = card.get_by_test_id("device-claim-proof")
+        if own_key:
+            expect(proof).to_have_attribute("data-proven", "yes", timeout=10_000)
+            expect(proof).to_contain_text("proved it holds robot's pairing key")
+        else:
+            expect(proof).to_have_attribute("data-proven", "no")
+            expect(proof).to_contain_text("has not proved it holds robot's pairing key")
         # In the list of what is on the network, too: one entry, the other address named.
         listed = page.locator(f"[data-testid=detected-device][data-uuid='{real['uuid']}']")
         expect(listed).to_have_count(1)
         expect(listed.get_by_test_id("detected-also-at")).to_contain_text(impostor.url)
         expect(card.get_by_test_id("device-status")).to_have_text("Connected")
-        page.screenshot(path=artifacts / "claim.png")
+        page.screenshot(path=artifacts / f"claim-{'own' if own_key else 'other'}-key.png")
         card.get_by_test_id("repoint-device").tap()
         expect(page.get_by_test_id("confirm-repoint")).to_be_visible()
         page.get_by_role("button", name="Cancel").tap()

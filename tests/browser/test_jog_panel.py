@@ -6,6 +6,7 @@ robot said with what to do (a UR's own words for its power-on and unlock too).""
 
 from __future__ import annotations
 
+import re
 import time
 from pathlib import Path
 
@@ -273,6 +274,65 @@ def test_what_stops_the_robot_is_said_with_what_to_do(
     finally:
         spare.stop()
         runtime.api("DELETE", "/devices/spare")
+
+
+def test_a_move_pushed_off_its_path_is_a_protective_stop_said_in_the_card(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    """The path monitor (issue 31): a hand pushes the arm off a joint move's path; the Jog
+    panel's card says it is a protective stop, with the monitor's words and what to do;
+    Reset error clears it."""
+    sim = runtime.api("GET", "/devices/robot").json()["url"]
+    wait_for(
+        lambda: runtime.api("GET", "/devices/robot/lease").json()["holder"] is None,
+        20,
+        what="the earlier pendants' control released",
+    )
+    lease = runtime.api("POST", "/devices/robot/lease", json={"holder": "tests"}).json()["token"]
+    mine = {"X-Lease-Token": lease}
+    try:
+        assert runtime.api("POST", "/jog/robots/robot/enable", headers=mine).status_code == 200
+        q = np.array(runtime.api("GET", "/devices/robot/state").json()["joint_position"])
+        goal = q.copy()
+        goal[0] += -0.8 if q[0] > 0 else 0.8  # the base turns, away from its limit
+        request = {"kind": "joint", "target": {"joints": goal.tolist()}, "speed": 0.3}
+        started = runtime.api("POST", "/motion/robots/robot/moves", json=request, headers=mine)
+        assert started.status_code == 202, started.text
+        move = started.json()["id"]
+        wait_for(
+            lambda: runtime.api("GET", f"/motion/moves/{move}").json()["progress"] > 0.05,
+            10,
+            what="the move under way",
+        )
+        httpx.put(f"{sim}/sim/hand", json={"velocity": [0, 0.3, 0, 0, 0, 0]}, timeout=5)
+        ended = wait_for(
+            lambda: (lambda s: s if s["state"] not in ("planning", "running") else None)(
+                runtime.api("GET", f"/motion/moves/{move}").json()
+            ),
+            10,
+            what="the move stopped",
+        )
+        assert ended["code"] == "path_deviation", ended
+    finally:
+        httpx.put(f"{sim}/sim/hand", json={"velocity": [0.0] * 6}, timeout=5)
+        runtime.api("DELETE", "/devices/robot/lease", headers=mine)
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/jog")
+    fault = page.get_by_test_id("robot-fault")
+    expect(fault).to_have_attribute("data-kind", "protective_stop", timeout=10_000)
+    expect(fault).to_contain_text("pushed off its path")
+    detail = page.get_by_test_id("robot-fault-detail")  # the monitor's words, either check
+    expect(detail).to_have_text(
+        re.compile(r"protective stop: the (TCP|joints) left (its|their) planned path by")
+    )
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("You have control")
+    page.get_by_role("button", name="Reset error").tap()
+    expect(fault).to_have_count(0, timeout=5_000)
+    page.get_by_test_id("control").tap()
+    expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+    assert errors.errors == []
 
 
 def test_without_control_the_pad_does_nothing(

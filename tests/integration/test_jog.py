@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import struct
 import time
 from collections.abc import Iterator
@@ -19,6 +20,7 @@ import pytest
 
 from runtime.bench.harness.jog import Cell, JogClient
 from runtime.bench.harness.processes import STILL, Runtime, SpaceMouseProc, child_env, wait_for
+from runtime.robotics.deviation import distances_to_polyline
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
 from tests.support.posts import LEFT, RIGHT, clear_posts, put_posts
@@ -74,6 +76,27 @@ def test_base_frame_translation_moves_along_the_axis(
     assert direction * moved[index] > 0.005  # how far depends on the host's scheduling
     assert np.abs(np.delete(moved, index)).max() < 1e-3  # straight along the axis
     assert np.linalg.norm(pin.log3(before.rotation.T @ after.rotation)) < 1e-3
+
+
+@pytest.mark.parametrize(("axis", "frame"), [("x", "base"), ("y", "base"), ("z", "tool")])
+def test_a_cartesian_jog_at_full_speed_keeps_its_line(
+    cell: Cell, jog: JogClient, axis: str, frame: str
+) -> None:
+    """Speeding up to 250 mm/s, running and stopping when let go (issue 31): the TCP stays
+    on its line all along, not only where it ends, measured on the simulator's setpoints
+    (the joints' velocities change in step, and the line is steered back to)."""
+    start = tcp(cell.robot.q())
+    first = cell.robot.state()["seqno"]
+    jog.hold(0.8, kind="cartesian", axis=axis, direction=1, frame=frame, speed=1.0)
+    cell.robot.wait_stopped()
+    samples = cell.robot.setpoints(first)
+    index = "xyz".index(axis)
+    along = start.rotation[:, index] if frame == "tool" else np.eye(3)[index]
+    moved = np.array([tcp(np.array(q)).translation for q in samples["position"]])
+    moved -= start.translation
+    off = np.linalg.norm(moved - np.outer(moved @ along, along), axis=1)
+    assert float((moved @ along)[-1]) > 0.05
+    assert off.max() < 1e-3, f"{off.max() * 1000:.3f} mm off the line"  # 0.2-0.35 mm seen
 
 
 def test_tool_frame_translation_follows_the_tool_axis(cell: Cell, jog: JogClient) -> None:
@@ -251,8 +274,47 @@ def test_move_to_stops_when_the_button_is_let_go(cell: Cell, jog: JogClient) -> 
     assert jog.status(press, ("stopped", "halted", "done"))["state"] == "stopped"
     cell.robot.wait_stopped()
     assert np.abs(cell.robot.q() - far).max() > 0.3  # it did not get there on its own
-    assert jog.move_to("far_away")["state"] == "done"
+    stopped = cell.robot.q()
+    first = cell.robot.state()["seqno"]
+    ended = jog.move_to("far_away")
+    assert ended["state"] == "done", (ended["reason"], ended["message"])
     assert np.abs(cell.robot.q() - far).max() < 1e-6
+    # Along the straight joint line that was checked for collisions, all the way (issue 31:
+    # the simulator tracked the streamed positions joint by joint, 0.02 rad off it).
+    followed = np.array(cell.robot.setpoints(first)["position"])
+    off = float(np.max(distances_to_polyline(np.array([stopped, far]), followed)))
+    assert off < 1e-4, f"{off:.4f} rad off the joint line"
+
+
+def test_move_to_pushed_off_its_path_is_stopped_as_a_protective_stop(
+    cell: Cell, jog: JogClient
+) -> None:
+    """Move to follows the straight joint line that was checked for collisions, under the
+    path monitor (issue 31): a hand pushing the arm off it ends the press `halted` with
+    `path_deviation`, and the robot stays in a protective stop until errors are reset."""
+    start = np.array(INFO.home)
+    far = start + np.array([1.2, 0.0, 0.0, 0.0, 0.0, 0.0])  # the base turns
+    cell.runtime.api(
+        "PUT",
+        "/variables/base_turned",
+        json={"type": "joint_waypoint", "value": {"joints": far.tolist(), "robot": "robot"}},
+    )
+    press = jog.press(type="move_to", waypoint="base_turned", speed=0.3)
+    try:
+        with jog.held(press):
+            wait_for(lambda: cell.robot.q()[0] > start[0] + 0.1, 10, what="the move under way")
+            pushed = cell.robot.http.put("/sim/hand", json={"velocity": [0, 0.3, 0, 0, 0, 0]})
+            assert pushed.status_code == 200, pushed.text
+            ended = jog.status(press, ("halted", "stopped", "done", "refused"))
+    finally:
+        cell.robot.http.put("/sim/hand", json={"velocity": [0.0] * 6})
+    assert (ended["state"], ended["reason"]) == ("halted", "path_deviation"), ended
+    assert re.search(r"left (its|their) planned path", ended["message"]), ended["message"]
+    cell.robot.wait_stopped()
+    assert np.abs(cell.robot.q() - far).max() > 0.3  # it did not go on
+    state = cell.robot.state()
+    assert state["flags"]["protective_stop"] and state["flags"]["error"]
+    assert "planned path" in state["error_message"]
 
 
 def test_move_to_through_an_obstacle_is_refused_and_nothing_moves(

@@ -18,6 +18,9 @@ export const de: Catalogue = {
     "Um {time} meldete sich ein Gerät als {name} von {url}. Dem wurde nicht gefolgt: {name} antwortet weiterhin unter {address}.",
   "devices.claim_named":
     "Um {time} meldete sich ein Gerät als {name} („{claimed}“) von {url}. Dem wurde nicht gefolgt: {name} antwortet weiterhin unter {address}.",
+  "devices.claim_proven":
+    "Was dort antwortet, hat bewiesen, dass es den Kopplungsschlüssel von {name} hat: {name} ist vielleicht wirklich umgezogen (neue Adresse). Vor dem Verwenden die Zelle prüfen.",
+  "devices.claim_unproven": "Was dort antwortet, hat nicht bewiesen, dass es den Kopplungsschlüssel von {name} hat.",
   "devices.use_address": "{url} verwenden…",
   "devices.repoint_heading": "{name} auf {url} umstellen?",
   "devices.repoint_text":
@@ -278,8 +281,8 @@ export const de: Catalogue = {
   "fault.estop.title": "NOT-HALT an {robot}",
   "fault.estop.todo": "Zelle sichern, NOT-HALT-Taster entriegeln, dann Fehler quittieren und freigeben.",
   "fault.protective_stop.title": "Schutzstopp an {robot}",
-  "fault.protective_stop.todo": "Der Roboter hat selbst gestoppt (Kollision, Schutzeinrichtung, Grenze). Ursache finden und beheben, dann Fehler quittieren und freigeben.",
-  "fault.protective_stop.todo_unlock": "Der Roboter hat selbst gestoppt (Kollision, Schutzeinrichtung, Grenze). Ursache finden und beheben, dann „Entsperren & quittieren“ (die Steuerung erlaubt es 5 s nach dem Stopp) und „Einschalten & freigeben“ tippen.",
+  "fault.protective_stop.todo": "Der Roboter hat selbst gestoppt (Kollision, Schutzeinrichtung, Grenze, oder er wurde von seiner Bahn gedrängt). Ursache finden und beheben, dann Fehler quittieren und freigeben.",
+  "fault.protective_stop.todo_unlock": "Der Roboter hat selbst gestoppt (Kollision, Schutzeinrichtung, Grenze, oder er wurde von seiner Bahn gedrängt). Ursache finden und beheben, dann „Entsperren & quittieren“ (die Steuerung erlaubt es 5 s nach dem Stopp) und „Einschalten & freigeben“ tippen.",
   "fault.error.title": "{robot} hat einen Fehler",
   "fault.error.todo": "Beheben, was die Meldung unten nennt, dann Fehler quittieren und freigeben.",
   "fault.reduced": "Reduzierter Modus: die reduzierten Sicherheitsgrenzen der Steuerung gelten",

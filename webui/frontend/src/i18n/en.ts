@@ -18,6 +18,9 @@ export const en = {
     "At {time} a device announced itself as {name} from {url}. It was not followed: {name} still answers at {address}.",
   "devices.claim_named":
     "At {time} a device announced itself as {name} (\"{claimed}\") from {url}. It was not followed: {name} still answers at {address}.",
+  "devices.claim_proven":
+    "What answers there proved it holds {name}'s pairing key: {name} may really have moved there (a new address). Check the cell before you use it.",
+  "devices.claim_unproven": "What answers there has not proved it holds {name}'s pairing key.",
   "devices.use_address": "Use {url}…",
   "devices.repoint_heading": "Move {name} to {url}?",
   "devices.repoint_text":
@@ -274,8 +277,8 @@ export const en = {
   "fault.estop.title": "Emergency stop on {robot}",
   "fault.estop.todo": "Make the cell safe, release the E-stop button, then tap Reset error and Enable.",
   "fault.protective_stop.title": "Protective stop on {robot}",
-  "fault.protective_stop.todo": "The robot stopped itself (a collision, a safeguard, a limit). Find and clear the cause, then tap Reset error and Enable.",
-  "fault.protective_stop.todo_unlock": "The robot stopped itself (a collision, a safeguard, a limit). Find and clear the cause, then tap Unlock & reset (the controller allows it 5 s after the stop) and Power on & enable.",
+  "fault.protective_stop.todo": "The robot stopped itself (a collision, a safeguard, a limit, or it was pushed off its path). Find and clear the cause, then tap Reset error and Enable.",
+  "fault.protective_stop.todo_unlock": "The robot stopped itself (a collision, a safeguard, a limit, or it was pushed off its path). Find and clear the cause, then tap Unlock & reset (the controller allows it 5 s after the stop) and Power on & enable.",
   "fault.error.title": "{robot} has a fault",
   "fault.error.todo": "Fix what the message below names, then tap Reset error and Enable.",
   "fault.reduced": "Reduced mode: the controller's reduced safety limits apply",

@@ -204,6 +204,15 @@ export class OpDevicesPanel extends LitElement {
           address: d.url,
         })}
       </div>
+      <div
+        class="sub ${claim.proven ? "warn-text" : "muted"}"
+        data-testid="device-claim-proof"
+        data-proven=${claim.proven ? "yes" : "no"}
+      >
+        ${t(claim.proven ? "devices.claim_proven" : "devices.claim_unproven", {
+          name: d.local_name,
+        })}
+      </div>
       <div class="row">
         <button
           data-testid="repoint-device"
