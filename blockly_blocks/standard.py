@@ -156,6 +156,8 @@ def math_number_property(block: Block, g: Generator) -> str:
         ("EVEN", "ODD", "PRIME", "WHOLE", "POSITIVE", "NEGATIVE", "DIVISIBLE_BY"),
     )
     number = g.value(block, "NUMBER_TO_CHECK", "0")
+    if prop != "DIVISIBLE_BY":  # Blockly's block has a divisor input only then
+        return f"math_is({prop!r}, {number})"
     return f"math_is({prop!r}, {number}, {g.value(block, 'DIVISOR', 'None')})"
 
 
@@ -244,13 +246,20 @@ def index_of(block: Block, g: Generator) -> str:
 
 
 WHERE = ("FROM_START", "FROM_END", "FIRST", "LAST", "RANDOM")
+NUMBERED = ("FROM_START", "FROM_END")
+
+
+def _position(block: Block, g: Generator, where: str, name: str = "AT") -> str:
+    """The number of a position; Blockly's block removes its input for FIRST, LAST and RANDOM
+    (a stale one left in the JSON is not part of the block)."""
+    return g.value(block, name, "1") if where in NUMBERED else "None"
 
 
 @value("text_charAt")
 def text_char_at(block: Block, g: Generator) -> str:
     where = g.option(block, "WHERE", WHERE)
     text_value = g.value(block, "VALUE", repr(""))
-    return f"item_get({text_value}, 'GET', {where!r}, {g.value(block, 'AT', '1')})"
+    return f"item_get({text_value}, 'GET', {where!r}, {_position(block, g, where)})"
 
 
 @value("text_getSubstring", "lists_getSublist")
@@ -258,10 +267,9 @@ def sub_sequence(block: Block, g: Generator) -> str:
     source = "STRING" if block.type == "text_getSubstring" else "LIST"
     where1 = g.option(block, "WHERE1", ("FROM_START", "FROM_END", "FIRST"))
     where2 = g.option(block, "WHERE2", ("FROM_START", "FROM_END", "LAST"))
-    return (
-        f"sub_sequence({g.value(block, source, '[]')}, {where1!r}, {g.value(block, 'AT1', '1')}, "
-        f"{where2!r}, {g.value(block, 'AT2', '1')})"
-    )
+    at1 = _position(block, g, where1, "AT1")
+    at2 = _position(block, g, where2, "AT2")
+    return f"sub_sequence({g.value(block, source, '[]')}, {where1!r}, {at1}, {where2!r}, {at2})"
 
 
 @value("text_changeCase")
@@ -337,7 +345,7 @@ def _get_index_call(block: Block, g: Generator) -> str:
     where = g.option(block, "WHERE", WHERE)
     return (
         f"item_get({g.value(block, 'VALUE', '[]')}, {mode!r}, {where!r}, "
-        f"{g.value(block, 'AT', '1')})"
+        f"{_position(block, g, where)})"
     )
 
 
@@ -360,7 +368,7 @@ def lists_set_index(block: Block, g: Generator) -> list[str]:
     where = g.option(block, "WHERE", WHERE)
     return [
         f"item_set({g.value(block, 'LIST', '[]')}, {mode!r}, {where!r}, "
-        f"{g.value(block, 'AT', '1')}, {g.value(block, 'TO')})"
+        f"{_position(block, g, where)}, {g.value(block, 'TO')})"
     ]
 
 
