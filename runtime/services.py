@@ -19,6 +19,7 @@ from plugins.api import Service
 from plugins.registry import registry
 from runtime.auth.audit import AUDIT_FILE, AuditLog
 from runtime.auth.roles import Role
+from runtime.auth.setup import sign_ins
 from runtime.kit.logs import setup_logging
 from runtime.kit.serve import listening_socket, run_app
 from runtime.kit.service_guard import InternalOnly, TicketRequired
@@ -91,7 +92,8 @@ def run_service(
         public = socket.socket(fileno=public_fd)
         # What a browser reaches directly: the UI's origin only, with an operator's ticket.
         audit = AuditLog(settings.data_dir / AUDIT_FILE)
-        guarded = WebGuard(TicketRequired(app, Role.operator, audit), web_policy(settings))
+        ticketed = TicketRequired(app, Role.operator, sign_ins(settings), audit)
+        guarded = WebGuard(ticketed, web_policy(settings))
         app = PublicPaths(internal, guarded, int(public.getsockname()[1]), spec.public_paths)
         sockets.append(public)
     else:

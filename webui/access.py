@@ -5,8 +5,6 @@ audit entry for each change."""
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
 from http.cookies import SimpleCookie
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
@@ -16,6 +14,7 @@ from runtime.auth.roles import Role
 from runtime.auth.store import AuthStore, Identity
 from runtime.kit.constant_time import same_secret
 from runtime.kit.service_guard import refuse
+from runtime.kit.sign_in_watch import ENDED, EndsWithSignIn
 from webui import policy
 from webui.proxy import BAD_PATH, PathRefused, service_path
 
@@ -23,8 +22,7 @@ SESSION_COOKIE = "op_session"
 CSRF_HEADER = "x-csrf-token"
 DOCS = ("/docs", "/redoc", "/openapi.json")
 SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS"})
-RECHECK_EVERY = 2.0  # s between re-checks of an open socket's session or token
-ENDED = 4401  # close code: the socket's sign-in ended
+RECHECK_EVERY = 1.0  # s between re-checks of an open socket's session or token
 
 
 def headers_of(scope: Scope) -> dict[str, str]:
@@ -107,12 +105,49 @@ class AccessGuard:
         # The sign-in routes record what they do themselves (with what the request cannot say).
         own_record = scope["path"].startswith("/api/auth/")
         if scope["type"] == "websocket" and identity is not None and isinstance(need, Role):
-            socket = _EndedWithItsIdentity(self.store, headers, need, receive, send)
-            receive, send = socket.receive, socket.send
+            await self._watched(scope, receive, send, headers, identity, need, watching)
+            return
         if identity is None or method in SAFE_METHODS or watching or own_record:
             await self.app(scope, receive, send)
             return
         await self.app(scope, receive, self._audited(scope, send, identity))
+
+    async def _watched(
+        self,
+        scope: Scope,
+        receive: Receive,
+        send: Send,
+        headers: dict[str, str],
+        who: Identity,
+        need: Role,
+        watching: bool,
+    ) -> None:
+        """A socket lives only as long as what opened it: a sign-out, a new password, a
+        lower role, a revoked token or an expired session closes it (ENDED) within
+        RECHECK_EVERY s, however busy it is, and the app behind sees the client leave."""
+
+        async def ended() -> str | None:
+            now = identify(self.store, headers, touch=False)
+            if now is None:
+                return "token_revoked" if who.via == "token" else "session_ended"
+            return "role_changed" if now.role < need else None
+
+        socket = EndsWithSignIn(ended, RECHECK_EVERY, receive, send)
+        try:
+            sending = socket.send if watching else self._audited(scope, socket.send, who)
+            await self.app(scope, socket.receive, sending)
+        finally:
+            await socket.stop()
+            if socket.why is not None:
+                self.audit.record(
+                    user=who.user,
+                    role=who.role.name,
+                    address=client_address(scope),
+                    action="CLOSE",
+                    target=scope["path"],
+                    status=ENDED,
+                    detail={"why": socket.why},
+                )
 
     def _refusal(
         self, scope: Scope, headers: dict[str, str], who: Identity | None, need: policy.Need
@@ -156,45 +191,3 @@ class AccessGuard:
                 )
 
         return sending
-
-
-class _EndedWithItsIdentity:
-    """An open socket lives only as long as what opened it: a sign-out, a new password, a
-    lower role, a revoked token or an expired session closes it within RECHECK_EVERY s
-    (code 4401), and the app behind sees the client leave."""
-
-    def __init__(
-        self, store: AuthStore, headers: dict[str, str], need: Role, receive: Receive, send: Send
-    ) -> None:
-        self.store, self.headers, self.need = store, headers, need
-        self._receive, self._send = receive, send
-        self._pending: asyncio.Future[Message] | None = None
-        self._closed = False
-
-    def _allowed(self) -> bool:
-        who = identify(self.store, self.headers, touch=False)
-        return who is not None and who.role >= self.need
-
-    async def receive(self) -> Message:
-        if self._pending is None:
-            self._pending = asyncio.ensure_future(self._receive())
-        while True:
-            done, _ = await asyncio.wait({self._pending}, timeout=RECHECK_EVERY)
-            if done:
-                message, self._pending = self._pending.result(), None
-                return message
-            if not self._allowed():
-                self._pending.cancel()
-                self._pending = None
-                if not self._closed:
-                    self._closed = True
-                    with contextlib.suppress(Exception):
-                        await self._send({"type": "websocket.close", "code": ENDED, "reason": ""})
-                return {"type": "websocket.disconnect", "code": ENDED}
-
-    async def send(self, message: Message) -> None:
-        if self._closed:
-            return  # closed for its user: what the app still had to say goes nowhere
-        if message["type"] == "websocket.close":
-            self._closed = True
-        await self._send(message)

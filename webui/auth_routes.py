@@ -196,9 +196,11 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
 
     @router.post("/ticket")
     async def ticket(request: Request) -> dict[str, Any]:
-        """A ticket to open the jog socket on its own port (valid for a minute)."""
+        """A ticket to open one jog socket on its own port (within a minute); the socket
+        closes when this session ends or this token is revoked."""
         who = identity(request)
-        return {"ticket": tickets.issue(who.user, int(who.role)), "lifetime": tickets.LIFETIME}
+        ticket = tickets.issue(who.user, int(who.role), session=who.session, token=who.token)
+        return {"ticket": ticket, "lifetime": tickets.LIFETIME}
 
     @router.get("/users")
     async def users() -> list[dict[str, Any]]:

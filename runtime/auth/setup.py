@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from runtime.auth.roles import Role
+from runtime.auth.standing import SignIns
 from runtime.auth.store import AuthStore
 from runtime.kit.settings import RuntimeSettings
 
@@ -15,12 +16,20 @@ def auth_path(data_dir: Path) -> Path:
     return data_dir / "auth.sqlite"
 
 
+def _session_limits(settings: RuntimeSettings) -> tuple[float, float]:
+    """(idle, absolute) in seconds."""
+    return settings.auth.session_idle_minutes * 60, settings.auth.session_hours * 3600
+
+
 def auth_store(settings: RuntimeSettings) -> AuthStore:
-    return AuthStore(
-        auth_path(settings.data_dir),
-        idle_seconds=settings.auth.session_idle_minutes * 60,
-        absolute_seconds=settings.auth.session_hours * 3600,
-    )
+    idle, absolute = _session_limits(settings)
+    return AuthStore(auth_path(settings.data_dir), idle_seconds=idle, absolute_seconds=absolute)
+
+
+def sign_ins(settings: RuntimeSettings) -> SignIns:
+    """What a service other than the gateway reads of the store: whether a sign-in stands."""
+    idle, absolute = _session_limits(settings)
+    return SignIns(auth_path(settings.data_dir), idle_seconds=idle, absolute_seconds=absolute)
 
 
 def create_token(data_dir: Path, role: str, name: str) -> str:

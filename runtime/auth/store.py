@@ -84,6 +84,7 @@ class Identity:
     via: str  # "session" | "token"
     session: str | None = None  # the session's id digest, to end it
     csrf: str | None = None
+    token: str | None = None  # the API token's id
 
 
 @dataclass(frozen=True)
@@ -114,6 +115,12 @@ def private(path: Path) -> None:
 
 def digest(secret: str) -> str:
     return hashlib.sha256(secret.encode()).hexdigest()
+
+
+def session_expired(
+    created: float, last_seen: float, now: float, idle: float, absolute: float
+) -> bool:
+    return now - last_seen > idle or now - created > absolute
 
 
 def check_username(name: str) -> str:
@@ -325,7 +332,7 @@ class AuthStore:
         if row is None:
             return None
         last = max(row[4], self._touched.get(sid, 0.0))
-        if now - last > self.idle or now - row[3] > self.absolute:
+        if session_expired(row[3], last, now, self.idle, self.absolute):
             self.close_session(sid)
             return None
         if not touch:
@@ -373,7 +380,7 @@ class AuthStore:
         if row[3] is None or now - row[3] > TOUCH_EVERY:
             with self._tx() as db:
                 db.execute("UPDATE tokens SET last_used = ? WHERE id = ?", (now, row[0]))
-        return Identity(f"token:{row[1]}", Role.named(row[2]), "token")
+        return Identity(f"token:{row[1]}", Role.named(row[2]), "token", token=row[0])
 
     def tokens(self) -> list[TokenInfo]:
         with self._lock:

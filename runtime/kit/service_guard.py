@@ -1,10 +1,11 @@
 """What a service's ports answer. Its own port: the gateway and the other services (the
 run's secret), and anyone's /health. Its public port (the jog socket's): a browser with a
-ticket of a role that may use the path."""
+ticket of a role that may use the path, once, while the sign-in it was given to stands."""
 
 from __future__ import annotations
 
 import asyncio
+import json
 from urllib.parse import parse_qs
 
 from starlette.responses import JSONResponse
@@ -12,10 +13,29 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from runtime.auth.audit import AuditLog
 from runtime.auth.roles import Role
+from runtime.auth.standing import SignIns
 from runtime.kit import tickets
 from runtime.kit.internal import HEADER, internal_token, is_internal
+from runtime.kit.sign_in_watch import ENDED, EndsWithSignIn
 
 OPEN_PATHS = frozenset({"/health"})
+# s between checks of an open jog socket's sign-in: it closes well within 2 s of its end.
+RECHECK_EVERY = 0.5
+USED = "this ticket was used already (a ticket opens one socket), or is older than this service"
+
+
+async def deny(
+    scope: Scope, receive: Receive, send: Send, status: int, code: str, message: str
+) -> None:
+    """As `refuse`, but a socket is answered with the HTTP status and the JSON error (where
+    the server can: ASGI's websocket.http.response), so a client can tell why."""
+    if scope["type"] == "websocket" and "websocket.http.response" in scope.get("extensions", {}):
+        body = json.dumps({"error": {"code": code, "message": message}}).encode()
+        headers = [(b"content-type", b"application/json"), (b"content-length", b"%d" % len(body))]
+        await send({"type": "websocket.http.response.start", "status": status, "headers": headers})
+        await send({"type": "websocket.http.response.body", "body": body})
+        return
+    await refuse(scope, receive, send, status, code, message)
 
 
 async def refuse(
@@ -57,55 +77,87 @@ class InternalOnly:
 
 
 class TicketRequired:
-    """A socket opened straight from a browser shows the ticket the gateway gave its user;
-    its opening and closing go to the audit log under that user (the gateway, which audits
-    everything else, does not see this port)."""
+    """A socket opened straight from a browser shows the ticket the gateway gave its user.
+    A ticket opens one socket, and only while the sign-in it was given to stands; the socket
+    closes (ENDED) within RECHECK_EVERY s of that sign-in's end, and what it drove halts as
+    when a client goes. Its opening and closing, with the reason, go to the audit log under
+    that user (the gateway, which audits everything else, does not see this port)."""
 
-    def __init__(self, app: ASGIApp, role: int, audit: AuditLog | None = None) -> None:
+    def __init__(
+        self,
+        app: ASGIApp,
+        role: int,
+        sign_ins: SignIns,
+        audit: AuditLog | None = None,
+        every: float = RECHECK_EVERY,
+    ) -> None:
         self.app = app
         self.role = role
+        self.sign_ins = sign_ins
         self.audit = audit
+        self.every = every
+        self.redeemed = tickets.Redeemed()
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] in ("http", "websocket"):
-            query = parse_qs(bytes(scope.get("query_string", b"")).decode("latin-1"))
-            holder = tickets.check(next(iter(query.get("ticket", [])), None))
-            if holder is None:
-                await refuse(
-                    scope, receive, send, 401, "unauthenticated", "sign in first (no valid ticket)"
-                )
-                return
-            if holder[1] < self.role:
-                await refuse(scope, receive, send, 403, "forbidden", "your role may not do this")
-                return
-            if scope["type"] == "websocket" and self.audit is not None:
-                await self._audited(scope, receive, send, *holder)
-                return
+        if scope["type"] not in ("http", "websocket"):
+            await self.app(scope, receive, send)
+            return
+        query = parse_qs(bytes(scope.get("query_string", b"")).decode("latin-1"))
+        ticket = tickets.check(next(iter(query.get("ticket", [])), None))
+        if ticket is None:
+            await deny(
+                scope, receive, send, 401, "unauthenticated", "sign in first (no valid ticket)"
+            )
+            return
+        if not self.redeemed.take(ticket):
+            await deny(scope, receive, send, 401, "ticket_used", USED)
+            return
+        standing = await asyncio.to_thread(self.sign_ins.standing, ticket)
+        if standing.role is None:
+            message = f"the sign-in this ticket was given to has ended ({standing.why})"
+            await deny(scope, receive, send, 401, standing.why, message)
+            return
+        if standing.role < self.role:
+            await deny(scope, receive, send, 403, "forbidden", "your role may not do this")
+            return
+        if scope["type"] == "websocket":
+            await self._watched(scope, receive, send, ticket, standing.role)
+            return
         await self.app(scope, receive, send)
 
-    async def _audited(
-        self, scope: Scope, receive: Receive, send: Send, user: str, role: int
+    async def _ended(self, ticket: tickets.Ticket) -> str | None:
+        standing = await asyncio.to_thread(self.sign_ins.standing, ticket)
+        if standing.role is None:
+            return standing.why
+        return "role_changed" if standing.role < self.role else None
+
+    async def _watched(
+        self, scope: Scope, receive: Receive, send: Send, ticket: tickets.Ticket, role: Role
     ) -> None:
-        audit = self.audit
-        assert audit is not None
+        watch = EndsWithSignIn(lambda: self._ended(ticket), self.every, receive, send)
         client = scope.get("client")
         entry = {
-            "user": user,
-            "role": Role(role).name,
+            "user": ticket.user,
+            "role": role.name,
             "address": str(client[0]) if client else "",
             "target": scope["path"],
         }
+        audit = self.audit
         opened = False
 
         async def sending(message: Message) -> None:
             nonlocal opened
-            await send(message)
-            if message["type"] == "websocket.accept":
+            await watch.send(message)
+            if message["type"] == "websocket.accept" and audit is not None:
                 opened = True
                 await asyncio.to_thread(audit.record, action="OPEN", status=101, **entry)
 
         try:
-            await self.app(scope, receive, sending)
+            await self.app(scope, watch.receive, sending)
         finally:
-            if opened:
-                await asyncio.to_thread(audit.record, action="CLOSE", status=200, **entry)
+            await watch.stop()
+            if opened and audit is not None:
+                status, why = (ENDED, watch.why) if watch.why else (200, "closed")
+                await asyncio.to_thread(
+                    audit.record, action="CLOSE", status=status, detail={"why": why}, **entry
+                )

@@ -4,6 +4,7 @@ is accepted), each role exactly its rights; services answer only the runtime."""
 
 from __future__ import annotations
 
+import json
 import re
 import time
 from collections.abc import Iterator
@@ -16,11 +17,12 @@ from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import ClientConnection, connect
 
 from runtime.auth.roles import Role
-from runtime.auth.setup import auth_path
+from runtime.auth.setup import auth_path, create_token
 from runtime.auth.store import AuthStore
 from runtime.bench.harness.processes import Runtime, wait_for
 from runtime.kit.settings import RuntimeSettings
 from runtime.services import all_services, load_factory
+from tests.support.sign_in import revoke_token, sign_out, signed_in
 from webui import policy
 
 # No real-time margins here: runs alongside the rest (tests/suite.py).
@@ -203,6 +205,40 @@ def test_the_jog_port_wants_an_operators_ticket(runtime: Runtime) -> None:
     # The gateway never sees this port: the jog service writes its sockets to the audit log.
     operator = ("token:tests-operator", "operator")
     wait_for(lambda: jog_entries()[:2] == [("CLOSE", *operator), ("OPEN", *operator)], 10)
+
+
+def jog_port_url(runtime: Runtime, ticket: str) -> str:
+    port = runtime.api("GET", "/jog/settings").json()["socket_port"]
+    return f"ws://127.0.0.1:{port}/jog/ws?ticket={ticket}"
+
+
+def ticket_of(runtime: Runtime, sign_in: dict[str, str]) -> str:
+    return str(runtime.api("POST", "/auth/ticket", role=None, headers=sign_in).json()["ticket"])
+
+
+def jog_port_refusal(runtime: Runtime, ticket: str) -> tuple[int, str]:
+    with pytest.raises(InvalidStatus) as refused:
+        connect(jog_port_url(runtime, ticket), open_timeout=5)
+    answer = refused.value.response
+    return answer.status_code, json.loads(answer.body or b"{}").get("error", {}).get("code", "")
+
+
+def test_a_jog_ticket_opens_one_socket(runtime: Runtime) -> None:
+    ticket = ticket_of(runtime, runtime.auth("operator"))
+    with connect(jog_port_url(runtime, ticket)):
+        pass
+    assert jog_port_refusal(runtime, ticket) == (401, "ticket_used")
+
+
+def test_a_jog_ticket_dies_with_the_sign_in_that_asked_for_it(runtime: Runtime) -> None:
+    session = signed_in(runtime, "operator")
+    ticket = ticket_of(runtime, session)
+    sign_out(runtime, session)
+    assert jog_port_refusal(runtime, ticket) == (401, "session_ended")
+    secret = create_token(runtime.data_dir, "operator", "ticket-script")
+    ticket = ticket_of(runtime, {"Authorization": f"Bearer {secret}"})
+    revoke_token(runtime, "ticket-script")
+    assert jog_port_refusal(runtime, ticket) == (401, "token_revoked")
 
 
 def test_services_answer_only_the_runtime(runtime: Runtime) -> None:

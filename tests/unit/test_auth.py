@@ -146,8 +146,9 @@ def test_the_audit_log_cannot_be_changed(tmp_path: Path) -> None:
 
 
 def test_tickets_are_signed_and_short_lived() -> None:
-    ticket = tickets.issue("op", int(Role.operator), now=100.0)
-    assert tickets.check(ticket, now=120.0) == ("op", 2)
+    ticket = tickets.issue("op", int(Role.operator), token="t1", now=100.0)
+    found = tickets.check(ticket, now=120.0)
+    assert found is not None and (found.user, found.role) == ("op", 2)
     assert tickets.check(ticket, now=100.0 + tickets.LIFETIME + 1) is None
     payload, signature = ticket.split(".")
     assert tickets.check(f"{payload}.{'0' * len(signature)}", now=120.0) is None

@@ -22,7 +22,8 @@ _presses = itertools.count(1)
 
 class JogClient:
     """The jog socket where the UI opens it: the jog service's own port (or, with
-    `via_gateway`, through the webui at /api/jog/ws)."""
+    `via_gateway`, through the webui at /api/jog/ws). `auth`: the sign-in's headers (a
+    session's cookie and CSRF token, or a bearer token); by default the tests' operator."""
 
     def __init__(
         self,
@@ -30,16 +31,19 @@ class JogClient:
         robot: str = "robot",
         token: str | None = None,
         via_gateway: bool = False,
+        auth: dict[str, str] | None = None,
     ) -> None:
         self.runtime = runtime
         self.robot = robot
         self.token = token
         url = runtime.ws_url("/jog/ws")
-        headers = runtime.auth("operator")
+        headers = auth if auth is not None else runtime.auth("operator")
         port = runtime.api("GET", "/jog/settings").json()["socket_port"]
         if port and not via_gateway:
             # Straight to the jog service's port, with a ticket, as the UI opens it.
-            ticket = runtime.api("POST", "/auth/ticket", role="operator").json()["ticket"]
+            ticket = runtime.api("POST", "/auth/ticket", role=None, headers=headers).json()[
+                "ticket"
+            ]
             url = f"ws://127.0.0.1:{port}/jog/ws?ticket={ticket}"
             headers = {}
         self._socket = connect(url, additional_headers=headers)
