@@ -139,6 +139,7 @@ class Panel:
 
 @dataclass(frozen=True)
 class Plugin:
+    # Also the namespace of its variables, "<name>.": programs read them but never store them.
     name: str
     description: str = ""
     kinds: Sequence[DeviceKind] = ()

@@ -1,7 +1,13 @@
 """What a running program may keep in the variable storage (`store(name, value)`): plain
-values of its own, under names that are only names, each small and all of a program's
-together bounded. Programs, devices, tools, waypoints and frames are the user's: a program
-reads them but never overwrites them."""
+values of its own, under names that are only names and outside the reserved namespaces,
+each small and all of a program's together bounded. Programs, devices, tools, waypoints and
+frames are the user's: a program reads them but never overwrites them.
+
+The bound counts every version of a program's values that the store's history keeps, not
+only the current ones: a program rewriting big values (or emptying them between writes)
+grew the database by 37.8 MB of history in 8 s. The store knows which versions each
+writer left and refuses, in the transaction of the write, one that would take them past
+the budget; counting it here instead would race with the history's evictions."""
 
 from __future__ import annotations
 
@@ -9,14 +15,14 @@ import json
 from typing import Any
 
 from runtime.interfaces.variables import NAME_PATTERN
-from runtime.kit.errors import NotFound
+from runtime.kit.errors import Conflict, NotFound
+from runtime.program.reserved_names import refuse_reserved
 from runtime.variable_storage.client import StorageClient
 from sandbox.supervisor import CallRefused
 
 MAX_VALUE_BYTES = 64 * 1024
 MAX_PROGRAM_BYTES = 1024 * 1024
 PROGRAM_TYPES = frozenset({"bool", "number", "string", "list", "json", "pose"})
-RESERVED_PREFIXES = ("program.", "devices.", "tools.")
 
 
 def checked_name(name: Any) -> str:
@@ -33,6 +39,10 @@ def owner_tag(program: str) -> str:
     return f"stored-by:{program}"
 
 
+def writer_of(program: str) -> str:
+    return f"program:{program}"
+
+
 def encoded_size(value: Any) -> int:
     try:
         return len(json.dumps(value, allow_nan=False, separators=(",", ":")).encode())
@@ -42,7 +52,8 @@ def encoded_size(value: Any) -> int:
 
 async def put_value(storage: StorageClient, program: str, name: Any, kind: str, value: Any) -> None:
     name = checked_name(name)
-    if kind not in PROGRAM_TYPES or name.startswith(RESERVED_PREFIXES):
+    refuse_reserved(name)
+    if kind not in PROGRAM_TYPES:
         raise CallRefused(f"a program cannot store {name!r}: it is the user's", "reserved_name")
     size = encoded_size(value)
     if size > MAX_VALUE_BYTES:
@@ -58,14 +69,18 @@ async def put_value(storage: StorageClient, program: str, name: Any, kind: str, 
         raise CallRefused(
             f"{name} is a {existing.type}; a program cannot overwrite it", "reserved_name"
         )
-    tag = owner_tag(program)
-    kept = await storage.query(tag=tag)
-    total = size + sum(encoded_size(v.value) for v in kept if v.name != name)
-    if total > MAX_PROGRAM_BYTES:
-        raise CallRefused(
-            f"{program} would keep {total} bytes in the variable storage; a program may keep "
-            f"{MAX_PROGRAM_BYTES}",
-            "storage_full",
+    tags = sorted({*(existing.tags if existing else []), owner_tag(program)})
+    try:
+        await storage.put(
+            name, kind, value, tags=tags, writer=writer_of(program), budget=MAX_PROGRAM_BYTES
         )
-    tags = sorted({*(existing.tags if existing else []), tag})
-    await storage.put(name, kind, value, tags=tags)
+    except Conflict as exc:
+        if exc.code != "storage_full":
+            raise
+        raise CallRefused(
+            f"{program} would keep {exc.details.get('bytes')} bytes in the variable storage: "
+            f"{exc.details.get('versions')} versions of its values, the earlier ones the "
+            f"history keeps included; a program may keep {MAX_PROGRAM_BYTES}. Store fewer, "
+            "smaller or less often changed values",
+            "storage_full",
+        ) from None

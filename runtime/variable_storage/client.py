@@ -40,6 +40,8 @@ class StorageClient:
         tags: list[str] | None = None,
         doc: str | None = None,
         expected_version: int | None = None,
+        writer: str | None = None,
+        budget: int | None = None,
     ) -> Variable:
         body: dict[str, Any] = {"type": type_name, "value": value}
         if tags is not None:
@@ -48,6 +50,10 @@ class StorageClient:
             body["doc"] = doc
         if expected_version is not None:
             body["expected_version"] = expected_version
+        if writer is not None:
+            body["writer"] = writer
+        if budget is not None:
+            body["budget"] = budget
         return await self.http.request(
             "PUT", f"/variables/{_path(name)}", json=body, model=Variable
         )

@@ -29,6 +29,10 @@ class PutVariable(Strict):
     tags: list[str] | None = None
     doc: str | None = Field(default=None, max_length=10_000)
     expected_version: int | None = Field(default=None, ge=0, le=2**53)
+    # Who writes (a program's run: "program:<name>") and the bytes its versions may occupy,
+    # history included: the write is refused (409 storage_full) past it.
+    writer: str | None = Field(default=None, max_length=128)
+    budget: int | None = Field(default=None, ge=0, le=2**53)
 
 
 class RenameVariable(Strict):
@@ -110,6 +114,8 @@ def variables_router(store: VariableStore, changes: Fanout) -> APIRouter:
             tags=body.tags,
             doc=body.doc,
             expected_version=body.expected_version,
+            writer=body.writer,
+            budget=body.budget,
         )
         notify("changed", variable)
         return variable

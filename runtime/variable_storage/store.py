@@ -1,6 +1,11 @@
 """SQLite persistence of variables and their history. A write returns only after its
 transaction is durably committed (WAL + synchronous=FULL), so an acknowledged write survives
-a crash or a kill -9 of the process."""
+a crash or a kill -9 of the process.
+
+A write may name its writer (a program's run: `program:<name>`) and that writer's budget:
+every version in the history remembers who wrote it and how many bytes it holds, so the
+bytes a writer's versions occupy are known exactly, evictions included, and a write that
+would take them past the budget is refused in the same transaction that would make it."""
 
 from __future__ import annotations
 
@@ -22,7 +27,12 @@ from runtime.kit.errors import Conflict, InvalidValue, NotFound
 from runtime.variable_storage.types import validate_value
 
 TAG_PATTERN = re.compile(r"^[A-Za-z0-9_.:\-]{1,64}\Z")
-SCHEMA_VERSION = 1
+WRITER_PATTERN = re.compile(r"^[A-Za-z0-9_.:\-]{1,128}\Z")
+SCHEMA_VERSION = 2
+# What a version costs besides its texts: its numbers, SQLite's record and index entries and
+# the pages' slack (measured: 60-100 bytes). Charged so that a writer of many tiny values is
+# bounded too.
+VERSION_OVERHEAD = 100
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -45,9 +55,19 @@ CREATE TABLE IF NOT EXISTS history (
     doc TEXT NOT NULL,
     updated REAL NOT NULL,
     deleted INTEGER NOT NULL DEFAULT 0,
+    writer TEXT,
+    bytes INTEGER NOT NULL DEFAULT 0,
     PRIMARY KEY (name, version)
 );
 """
+# Schema 1 had no writer or size per version; its versions count for no writer.
+MIGRATIONS = (
+    "ALTER TABLE history ADD COLUMN writer TEXT",
+    "ALTER TABLE history ADD COLUMN bytes INTEGER NOT NULL DEFAULT 0",
+)
+INDEXES = (
+    "CREATE INDEX IF NOT EXISTS history_writer ON history (writer, bytes) WHERE writer IS NOT NULL"
+)
 
 
 class HistoryEntry(BaseModel):
@@ -58,6 +78,14 @@ class HistoryEntry(BaseModel):
     doc: str
     updated: float
     deleted: bool
+
+
+class Usage(BaseModel):
+    """What one writer's versions occupy in the history (its current values among them)."""
+
+    writer: str
+    versions: int
+    bytes: int
 
 
 def check_name(name: str) -> None:
@@ -90,8 +118,13 @@ class VariableStore:
             for statement in SCHEMA.strip().split(";"):
                 if statement.strip():
                     self._db.execute(statement)
+            columns = {row[1] for row in self._db.execute("PRAGMA table_info(history)")}
+            if "writer" not in columns:
+                for statement in MIGRATIONS:
+                    self._db.execute(statement)
+            self._db.execute(INDEXES)
             self._db.execute(
-                "INSERT OR IGNORE INTO meta (key, value) VALUES ('schema_version', ?)",
+                "INSERT OR REPLACE INTO meta (key, value) VALUES ('schema_version', ?)",
                 (str(SCHEMA_VERSION),),
             )
 
@@ -163,6 +196,16 @@ class VariableStore:
             for r in rows
         ]
 
+    def usage(self, writer: str) -> Usage:
+        with self._lock:
+            return self._usage(writer)
+
+    def _usage(self, writer: str) -> Usage:
+        versions, size = self._db.execute(
+            "SELECT COUNT(*), COALESCE(SUM(bytes), 0) FROM history WHERE writer = ?", (writer,)
+        ).fetchone()
+        return Usage(writer=writer, versions=versions, bytes=size)
+
     # Writes ---------------------------------------------------------------------------------
 
     def put(
@@ -174,14 +217,26 @@ class VariableStore:
         tags: list[str] | None = None,
         doc: str | None = None,
         expected_version: int | None = None,
+        writer: str | None = None,
+        budget: int | None = None,
     ) -> Variable:
+        """`budget`: refuse the write (storage_full) if the bytes `writer`'s versions would
+        occupy afterwards, this one in and whatever it pushes out of the history out, exceed
+        it."""
         check_name(name)
         normalised = validate_value(type_name, value)
         checked_tags = None if tags is None else check_tags(tags)
+        if writer is not None and not WRITER_PATTERN.match(writer):
+            raise InvalidValue(f"invalid writer {writer[:40]!r}", code="invalid_writer")
+        if budget is not None and writer is None:
+            raise InvalidValue("a budget is a writer's: name the writer", code="invalid_writer")
         with self._write():
-            return self._put_locked(
-                name, type_name, normalised, checked_tags, doc, expected_version
+            variable = self._put_locked(
+                name, type_name, normalised, checked_tags, doc, expected_version, writer
             )
+            if writer is not None and budget is not None:
+                self._check_budget(writer, budget)
+            return variable
 
     def put_many(self, items: list[dict[str, Any]]) -> list[Variable]:
         """All or nothing: every item is validated before any is written."""
@@ -205,7 +260,7 @@ class VariableStore:
         if errors:
             raise InvalidValue("nothing imported: " + "; ".join(errors), code="invalid_import")
         with self._write():
-            return [self._put_locked(*p, expected_version=None) for p in prepared]
+            return [self._put_locked(*p, expected_version=None, writer=None) for p in prepared]
 
     def delete(self, name: str, expected_version: int | None = None) -> Variable:
         with self._write():
@@ -227,23 +282,31 @@ class VariableStore:
             if self._current(to) is not None:
                 raise Conflict(f"a variable named {to!r} exists already", code="exists")
             moved = self._put_locked(
-                to, current.type, current.value, current.tags, current.doc, expected_version=None
+                to,
+                current.type,
+                current.value,
+                current.tags,
+                current.doc,
+                expected_version=None,
+                writer=None,
             )
             self._delete_locked(current)
             return current, moved
 
     def _delete_locked(self, current: Variable) -> None:
         self._db.execute("DELETE FROM variables WHERE name = ?", (current.name,))
+        tags = json.dumps(current.tags)
         self._db.execute(
-            "INSERT INTO history (name, version, type, value, tags, doc, updated, deleted) "
-            "VALUES (?, ?, ?, NULL, ?, ?, ?, 1)",
+            "INSERT INTO history (name, version, type, value, tags, doc, updated, deleted, "
+            "bytes) VALUES (?, ?, ?, NULL, ?, ?, ?, 1, ?)",
             (
                 current.name,
                 self._next_version(current.name),
                 current.type,
-                json.dumps(current.tags),
+                tags,
                 current.doc,
                 time.time(),
+                version_bytes(current.name, "", tags, current.doc, ""),
             ),
         )
         self._prune(current.name)
@@ -256,6 +319,7 @@ class VariableStore:
         tags: list[str] | None,
         doc: str | None,
         expected_version: int | None,
+        writer: str | None,
     ) -> Variable:
         current = self._current(name)
         self._check_version(current, expected_version)
@@ -277,6 +341,7 @@ class VariableStore:
             version=version,
         )
         encoded = json.dumps(value, allow_nan=False)
+        tags_text = json.dumps(variable.tags)
         self._db.execute(
             "INSERT INTO variables (name, type, value, tags, doc, created, updated, version) "
             "VALUES (?, ?, ?, ?, ?, ?, ?, ?) ON CONFLICT(name) DO UPDATE SET "
@@ -286,7 +351,7 @@ class VariableStore:
                 name,
                 type_name,
                 encoded,
-                json.dumps(variable.tags),
+                tags_text,
                 variable.doc,
                 variable.created,
                 now,
@@ -294,9 +359,19 @@ class VariableStore:
             ),
         )
         self._db.execute(
-            "INSERT INTO history (name, version, type, value, tags, doc, updated, deleted) "
-            "VALUES (?, ?, ?, ?, ?, ?, ?, 0)",
-            (name, version, type_name, encoded, json.dumps(variable.tags), variable.doc, now),
+            "INSERT INTO history (name, version, type, value, tags, doc, updated, deleted, "
+            "writer, bytes) VALUES (?, ?, ?, ?, ?, ?, ?, 0, ?, ?)",
+            (
+                name,
+                version,
+                type_name,
+                encoded,
+                tags_text,
+                variable.doc,
+                now,
+                writer,
+                version_bytes(name, encoded, tags_text, variable.doc, writer or ""),
+            ),
         )
         self._prune(name)
         return variable
@@ -328,6 +403,16 @@ class VariableStore:
                 details={"version": actual},
             )
 
+    def _check_budget(self, writer: str, budget: int) -> None:
+        usage = self._usage(writer)
+        if usage.bytes > budget:
+            raise Conflict(
+                f"{writer} would keep {usage.bytes} bytes in {usage.versions} versions "
+                f"(the history's included); its budget is {budget}",
+                code="storage_full",
+                details={**usage.model_dump(), "budget": budget},
+            )
+
     def _prune(self, name: str) -> None:
         self._db.execute(
             "DELETE FROM history WHERE name = ? AND version <= "
@@ -338,6 +423,13 @@ class VariableStore:
     def integrity_check(self) -> str:
         with self._lock:
             return str(self._db.execute("PRAGMA integrity_check").fetchone()[0])
+
+
+def version_bytes(name: str, value: str, tags: str, doc: str, writer: str) -> int:
+    """What one version holds: its texts as stored (the name and the writer twice, as they
+    also key the history's indexes) and its row."""
+    texts = (name, name, value, tags, doc, writer, writer)
+    return sum(len(text.encode()) for text in texts) + VERSION_OVERHEAD
 
 
 def _variable(row: tuple[Any, ...]) -> Variable:

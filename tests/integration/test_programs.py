@@ -7,9 +7,11 @@ from __future__ import annotations
 
 import json
 import math
+import sqlite3
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import httpx
@@ -551,9 +553,58 @@ def test_a_program_cannot_fill_the_store(ready: Cell) -> None:
     assert sum(len(v["value"]) for v in kept) <= 1024 * 1024
     big = run_to_end(ready, "big_value", "store('blob', 'x' * 70000)\n")
     assert big["error"]["code"] == "too_large"
-    # Rewriting its own values never fills the program's share.
-    again = run_to_end(ready, "rewriter", "for i in range(30):\n    store('same', 'y' * 60000)\n")
-    assert again["state"] == "finished", again["error"]
+
+
+def in_use(database: Path) -> int:
+    """The bytes of a SQLite database's pages in use, its WAL's newest included."""
+    db = sqlite3.connect(f"file:{database}?mode=ro", uri=True)
+    try:
+        pages = db.execute("PRAGMA page_count").fetchone()[0]
+        free = db.execute("PRAGMA freelist_count").fetchone()[0]
+        return int((pages - free) * db.execute("PRAGMA page_size").fetchone()[0])
+    finally:
+        db.close()
+
+
+REWRITER = """
+for round in range(21):
+    for i in range(6):
+        at_block('big')
+        store('kept' + str(i), 'y' * 60000)
+        at_block('empty')
+        store('kept' + str(i), '')
+        print(round, i)
+"""
+
+
+def test_a_program_rewriting_big_values_is_stopped_at_its_budget_with_the_history_counted(
+    ready: Cell,
+) -> None:
+    """Issue 32: 30 variables written 21 times with 60 KB and emptied grew the database from
+    0.1 to 37.8 MB with no error: the budget counted current values only, while the store
+    keeps 20 versions of each."""
+    database = ready.runtime.data_dir / "variables.sqlite"
+    before = in_use(database)
+    ended = run_to_end(ready, "rewriter", REWRITER)
+    assert ended["state"] == "error", "the loop ran to its end"
+    error = ended["error"]
+    assert error["code"] == "storage_full", error
+    assert error["block"] == "big"
+    assert "the earlier ones the history keeps included" in error["message"]
+    assert "a program may keep 1048576" in error["message"]
+    written = [o["text"] for o in ended["output"] if o["stream"] == "out"]
+    assert 15 <= len(written) <= 17  # a mebibyte of 60 KB versions, no more
+    kept = ready.runtime.api("GET", "/variables", params={"tag": "stored-by:rewriter"}).json()
+    assert sorted(v["name"] for v in kept) == [f"kept{i}" for i in range(6)]
+    assert all(v["value"] == "" for v in kept)  # every current value empty: all is history
+    versions = [
+        entry
+        for v in kept
+        for entry in ready.runtime.api("GET", f"/variables/{v['name']}/history").json()
+    ]
+    assert sum(len(e["value"]) for e in versions) <= 1024 * 1024
+    # The store's size: what the program left and a few pages of SQLite's own.
+    assert in_use(database) - before <= 1024 * 1024 + 128 * 1024
 
 
 def test_a_program_names_only_variables_and_never_the_users_own(ready: Cell) -> None:
@@ -569,6 +620,63 @@ def test_a_program_names_only_variables_and_never_the_users_own(ready: Cell) -> 
         assert ended["error"]["code"] == code, (source, ended["error"])
     assert ready.runtime.api("GET", "/programs/victim").json()["python"] == "print('mine')\n"
     assert ready.runtime.api("GET", "/variables/far").json()["type"] == "joint_waypoint"
+
+
+# The runtime's namespaces and a plugin's (the core's blocks register as the plugin "blocks").
+RESERVED = ("frames.", "calibration.", "tools.", "detectors.", "program.", "vision.", "devices.")
+
+
+@pytest.mark.parametrize("prefix", [*RESERVED, "blocks."])
+def test_a_program_cannot_store_under_a_reserved_namespace(ready: Cell, prefix: str) -> None:
+    """Issue 32: a program's store('frames.robot', …) succeeded and broke every move."""
+    name = f"{prefix}probe"
+    mine = {"position": [0.1, 0.2, 0.3], "orientation": [0.0, 0.0, 0.0, 1.0]}
+    saved = ready.runtime.api(
+        "PUT", f"/variables/{name}", role="programmer", json={"type": "pose", "value": mine}
+    )
+    assert saved.status_code == 200, saved.text
+    try:
+        source = f"at_block('store')\nstore({name!r}, pose(500, 0, 0))\n"
+        ended = run_to_end(ready, "reserver", source)
+        assert ended["state"] == "error"
+        error = ended["error"]
+        assert (error["code"], error["block"]) == ("reserved_name", "store"), error
+        assert error["message"].startswith(f"{name} is reserved: names under {prefix} are ")
+        assert "a program may read but not change" in error["message"]
+        assert "changes them in the" in error["message"]
+        after = ready.runtime.api("GET", f"/variables/{name}").json()
+        assert (after["value"], after["version"]) == (mine, saved.json()["version"])
+    finally:
+        ready.runtime.api("DELETE", f"/variables/{name}")
+
+
+def test_an_operators_program_cannot_break_motion_through_a_robots_frame(ready: Cell) -> None:
+    """Issue 32: after an operator-run store('frames.robot', pose(500, 0, 0)) every plan was
+    refused ("should be a frame, not a pose") and a programmer's save of the frame got 409."""
+    assert ready.runtime.api("GET", "/variables/frames.robot").status_code == 404
+    save_python(ready, "reframer", "at_block('store')\nstore('frames.robot', pose(500, 0, 0))\n")
+    started = ready.runtime.api("POST", "/programs/reframer/run", role="operator", json={})
+    assert started.status_code == 202, started.text
+    ended = watch(ready, "reframer", ("finished", "error", "stopped"), 30)
+    assert ended["state"] == "error", "the program stored a robot's frame"
+    assert ended["error"]["code"] == "reserved_name", ended["error"]
+    assert "a programmer changes them in the Scene panel" in ended["error"]["message"]
+    assert ready.runtime.api("GET", "/variables/frames.robot").status_code == 404
+    plan = ready.runtime.api(
+        "POST", "/motion/robots/robot/plan", json={"kind": "joint", "target": {"joints": PLACE}}
+    )
+    assert plan.status_code == 200, plan.text
+    identity = {"pose": {"position": [0, 0, 0], "orientation": [0, 0, 0, 1]}, "parent": "world"}
+    try:
+        frame = ready.runtime.api(
+            "PUT",
+            "/variables/frames.robot",
+            role="programmer",
+            json={"type": "frame", "value": identity},
+        )
+        assert frame.status_code == 200, frame.text
+    finally:
+        ready.runtime.api("DELETE", "/variables/frames.robot")
 
 
 def test_program_names_with_paths_or_control_characters_are_refused(ready: Cell) -> None:

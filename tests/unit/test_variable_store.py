@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import sqlite3
 from pathlib import Path
@@ -10,7 +11,7 @@ from typing import Any
 import pytest
 
 from runtime.kit.errors import Conflict, InvalidValue, NotFound
-from runtime.variable_storage.store import VariableStore
+from runtime.variable_storage.store import VariableStore, version_bytes
 from runtime.variable_storage.types import types
 
 UNIT_Q = [0.0, 0.0, 0.7071067811865476, 0.7071067811865476]
@@ -287,3 +288,118 @@ def test_rename_moves_value_tags_and_doc_in_one_step(store: VariableStore) -> No
     with pytest.raises(NotFound):
         store.get("wp_old")
     assert store.history("wp_old")[0].deleted
+
+
+# A writer's budget (issue 32): every version the history keeps counts, exactly.
+
+
+def writer_bytes(name: str, value: Any, tags: list[str], writer: str) -> int:
+    return version_bytes(name, json.dumps(value), json.dumps(tags), "", writer)
+
+
+def test_a_writers_usage_is_every_version_the_history_keeps(store: VariableStore) -> None:
+    big, tags = "x" * 1000, ["mine"]
+    one = writer_bytes("n", big, tags, "program:a")
+    for i in range(1, 8):  # depth 5: from the sixth on, each write pushes one out
+        store.put("n", "string", big, tags=tags, writer="program:a", budget=5 * one)
+        assert store.usage("program:a").model_dump() == {
+            "writer": "program:a",
+            "versions": min(i, 5),
+            "bytes": min(i, 5) * one,
+        }
+    # Another writer's versions and the user's are not a's, and push a's out.
+    store.put("n", "string", big, tags=tags, writer="program:b")
+    store.put("n", "string", "y")
+    assert store.usage("program:a").bytes == 3 * one
+    assert store.usage("program:b").bytes == one
+    assert store.usage("nobody").model_dump() == {"writer": "nobody", "versions": 0, "bytes": 0}
+
+
+def test_a_write_past_the_budget_is_refused_and_changes_nothing(store: VariableStore) -> None:
+    big, tags = "x" * 1000, ["mine"]
+    one = writer_bytes("n", big, tags, "program:a")
+    for _ in range(5):
+        store.put("n", "string", big, tags=tags, writer="program:a", budget=5 * one)
+    # Emptying the value keeps the history it leaves: a new name's big value is too much.
+    store.put("n", "string", "", tags=tags, writer="program:a", budget=5 * one)
+    kept = store.usage("program:a")
+    with pytest.raises(Conflict) as err:
+        store.put("m", "string", big, tags=tags, writer="program:a", budget=5 * one)
+    assert err.value.code == "storage_full"
+    assert err.value.details["bytes"] > 5 * one and err.value.details["budget"] == 5 * one
+    assert "history" in err.value.message
+    assert store.usage("program:a") == kept
+    with pytest.raises(NotFound):
+        store.get("m")
+    with pytest.raises(NotFound):
+        store.history("m")
+    with pytest.raises(InvalidValue):
+        store.put("m", "string", "", budget=10)  # a budget without its writer
+    with pytest.raises(InvalidValue):
+        store.put("m", "string", "", writer="a b")
+
+
+def in_use(path: Path) -> int:
+    """The bytes of the database's pages in use (the WAL's newest included)."""
+    db = sqlite3.connect(path)
+    try:
+        pages = db.execute("PRAGMA page_count").fetchone()[0]
+        free = db.execute("PRAGMA freelist_count").fetchone()[0]
+        return int((pages - free) * db.execute("PRAGMA page_size").fetchone()[0])
+    finally:
+        db.close()
+
+
+def rewrite_and_empty(store: VariableStore, budget: int) -> tuple[int, Conflict | None]:
+    """The loop of issue 32: 30 names, 21 rounds of 60 KB each emptied again; how many big
+    values were written, and the refusal that stopped it."""
+    written = 0
+    try:
+        for _ in range(21):
+            for i in range(30):
+                store.put(f"blob{i}", "string", "x" * 60000, writer="program:p", budget=budget)
+                store.put(f"blob{i}", "string", "", writer="program:p", budget=budget)
+                written += 1
+    except Conflict as exc:
+        return written, exc
+    return written, None
+
+
+def test_rewriting_and_emptying_big_values_is_stopped_at_the_budget(tmp_path: Path) -> None:
+    """Issue 32: 30 variables written 21 times with 60 KB and emptied grew the database
+    from 0.1 to 37.8 MB with every current value small."""
+    store = VariableStore(tmp_path / "v.sqlite", history_depth=20)
+    budget = 1024 * 1024
+    before = in_use(store.path)
+    written, refused = rewrite_and_empty(store, budget)
+    assert refused is not None and refused.code == "storage_full"
+    assert 15 <= written <= 17  # a mebibyte of 60 KB versions, no more
+    assert store.usage("program:p").bytes <= budget
+    # What the store keeps of it: the budget and a few pages of SQLite's own.
+    assert in_use(store.path) - before <= budget + 64 * 1024
+
+
+def test_a_schema_1_store_is_migrated_and_its_versions_count_for_nobody(tmp_path: Path) -> None:
+    path = tmp_path / "v.sqlite"
+    old = sqlite3.connect(path)
+    old.executescript(
+        "CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);"
+        "INSERT INTO meta VALUES ('schema_version', '1');"
+        "CREATE TABLE variables (name TEXT PRIMARY KEY, type TEXT NOT NULL, value TEXT NOT NULL,"
+        " tags TEXT NOT NULL, doc TEXT NOT NULL, created REAL NOT NULL, updated REAL NOT NULL,"
+        " version INTEGER NOT NULL);"
+        "CREATE TABLE history (name TEXT NOT NULL, version INTEGER NOT NULL, type TEXT NOT NULL,"
+        " value TEXT, tags TEXT NOT NULL, doc TEXT NOT NULL, updated REAL NOT NULL,"
+        " deleted INTEGER NOT NULL DEFAULT 0, PRIMARY KEY (name, version));"
+        "INSERT INTO variables VALUES ('n', 'number', '1', '[]', '', 0, 0, 1);"
+        "INSERT INTO history VALUES ('n', 1, 'number', '1', '[]', '', 0, 0);"
+    )
+    old.close()
+    store = VariableStore(path)
+    assert store.get("n").value == 1 and store.history("n")[0].value == 1
+    assert store.put("n", "number", 2, writer="program:p", budget=1000).version == 2
+    assert store.usage("program:p").versions == 1
+    meta = store._db.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
+    assert meta == ("2",)
+    store.close()
+    assert VariableStore(path).usage("program:p").versions == 1  # reopened: nothing redone
