@@ -22,27 +22,43 @@ export class OpApp extends LitElement {
   static styles = [
     shared,
     css`
+      /* The shell is the viewport: the document never scrolls, so nothing (a swipe, a tap
+         that brings a control into view, an anchor) can move the safety bar off the screen.
+         Only the navigation and the panel scroll, each inside itself. */
       :host {
+        position: fixed;
+        inset: 0;
         display: grid;
-        grid-template-rows: auto 1fr;
-        height: 100vh;
-        height: 100dvh;
+        grid-template-rows: auto minmax(0, 1fr);
+        grid-template-columns: minmax(0, 1fr);
+        overflow: clip;
         background: var(--bg);
+      }
+      :host([signed-out]) {
+        display: block;
+        overflow: auto;
       }
       .body {
         display: grid;
-        grid-template-columns: 112px 1fr;
+        grid-template-columns: 112px minmax(0, 1fr);
+        grid-template-rows: minmax(0, 1fr);
         min-height: 0;
+        overflow: clip;
       }
       nav {
         display: flex;
         flex-direction: column;
         gap: 8px;
         padding: 10px 8px;
+        min-height: 0;
+        overflow-x: hidden;
+        overflow-y: auto;
+        overscroll-behavior: contain;
         background: var(--panel);
         border-right: 1px solid var(--line);
       }
       nav button {
+        flex: none;
         display: flex;
         flex-direction: column;
         align-items: center;
@@ -61,36 +77,38 @@ export class OpApp extends LitElement {
       }
       main {
         overflow: auto;
+        overscroll-behavior: contain;
         padding: 16px;
         min-width: 0;
+        min-height: 0;
       }
       @media (max-width: 700px) {
         .body {
-          grid-template-columns: 1fr;
-          grid-template-rows: 1fr auto;
+          grid-template-columns: minmax(0, 1fr);
+          grid-template-rows: minmax(0, 1fr) auto;
         }
+        /* A row at the bottom that scrolls sideways when the panels do not fit the width. */
         nav {
           order: 2;
           flex-direction: row;
-          justify-content: space-around;
-          border-right: none;
-          border-top: 1px solid var(--line);
-          padding: 6px;
-        }
-        nav {
           gap: 2px;
           padding: 4px 2px;
+          min-width: 0;
+          overflow-x: auto;
+          overflow-y: hidden;
+          border-right: none;
+          border-top: 1px solid var(--line);
         }
         nav button {
-          flex: 1;
-          min-width: 0;
+          flex: 1 0 60px;
+          min-width: 60px;
           min-height: 64px;
           padding: 4px 0;
           font-size: 10.5px;
           letter-spacing: -0.2px;
           overflow: hidden;
         }
-        /* Seven panels share a phone's width: a long name (German) is cut, not the page. */
+        /* A long name (German) is cut, not the page. */
         nav button span {
           max-width: 100%;
           overflow: hidden;
@@ -160,6 +178,28 @@ export class OpApp extends LitElement {
     plugins.load().catch(() => {
       this.retry = window.setTimeout(() => this.loadPlugins(), 2000);
     });
+  }
+
+  protected willUpdate(): void {
+    this.toggleAttribute("signed-out", session.me === null);
+  }
+
+  private revealed = "";
+
+  protected updated(): void {
+    const nav = this.renderRoot.querySelector("nav");
+    const current = nav?.querySelector<HTMLElement>('button[aria-current="page"]');
+    const key = `${this.panel}:${nav?.childElementCount ?? 0}`;
+    if (!nav || !current || key === this.revealed) return;
+    this.revealed = key;
+    // The current panel's entry shown (a link to the last one, or more panels than fit), by
+    // scrolling the navigation alone: scrollIntoView would scroll every ancestor it can.
+    const box = nav.getBoundingClientRect();
+    const entry = current.getBoundingClientRect();
+    if (entry.top < box.top) nav.scrollTop -= box.top - entry.top;
+    else if (entry.bottom > box.bottom) nav.scrollTop += entry.bottom - box.bottom;
+    if (entry.left < box.left) nav.scrollLeft -= box.left - entry.left;
+    else if (entry.right > box.right) nav.scrollLeft += entry.right - box.right;
   }
 
   render() {

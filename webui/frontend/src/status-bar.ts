@@ -2,11 +2,27 @@ import { LitElement, css, html } from "lit";
 import { ApiError, api, errorText } from "./api";
 import { control } from "./control";
 import { FocusController, focus } from "./focus";
-import { linkLabel, modeLabel } from "./format";
+import { linkLabel } from "./format";
 import { t } from "./i18n";
 import { FeedController, feed } from "./live";
+import { chipState } from "./robot-chip";
 import { shared } from "./styles";
 import type { AddedDevice, RobotState } from "./types";
+
+/** The robots that have been in focus on this page: each is slowed to the first speed once. */
+const focusedHere = new Set<string>();
+let firstSpeedAsked: Promise<number | null> | null = null;
+
+/** The site's first speed override (a ratio), from the jog service; null if unknown. */
+function firstSpeed(): Promise<number | null> {
+  firstSpeedAsked ??= api<{ first_speed_ratio?: number }>("GET", "/api/jog/settings")
+    .then((settings) => settings.first_speed_ratio ?? null)
+    .catch(() => {
+      firstSpeedAsked = null; // asked again next time
+      return null;
+    });
+  return firstSpeedAsked;
+}
 
 // Always on screen, above every panel and never scrolled away: the runtime link, the robots
 // with the one in focus (tap another to focus it), its mode and faults, the speed override,
@@ -59,6 +75,32 @@ export class OpStatusBar extends LitElement {
         background: var(--raised);
         box-shadow: inset 0 -4px 0 var(--accent);
       }
+      /* The link's or the fault's colour over the whole chip, in focus or not. */
+      button.robot.bad {
+        background: var(--bad-bg);
+        color: var(--bad-fg);
+        border-color: var(--bad);
+      }
+      button.robot.warn {
+        background: var(--warn-bg);
+        color: var(--warn-fg);
+        border-color: var(--warn);
+      }
+      button.robot.bad[aria-pressed="true"],
+      button.robot.warn[aria-pressed="true"] {
+        border-color: var(--accent);
+      }
+      button.robot .state {
+        white-space: nowrap;
+      }
+      button.robot.ok .state,
+      button.robot.idle .state {
+        color: var(--muted);
+      }
+      button.robot.bad .state,
+      button.robot.warn .state {
+        font-weight: 800;
+      }
       .choose {
         color: var(--warn);
         font-weight: 700;
@@ -102,27 +144,53 @@ export class OpStatusBar extends LitElement {
         border-radius: 10px;
       }
       @media (max-width: 700px) {
+        /* Two rows on a phone, under 15 % of its height: the robots (scrolling sideways when
+           there are many) and STOP, then the speed override. */
         :host {
-          gap: 6px;
-          padding: 6px 8px;
+          gap: 4px 6px;
+          padding: 4px 6px;
+          min-height: 0;
         }
-        /* Two rows on a phone: the robots and STOP, then the speed override. */
         .brand,
         .link-ok {
           display: none;
         }
         .robots {
           flex: 1 1 0;
+          flex-wrap: nowrap;
+          overflow-x: auto;
+          overscroll-behavior: contain;
+          scrollbar-width: none;
+          gap: 6px;
+        }
+        button.robot {
+          flex: none;
+          min-height: 48px;
+          padding: 2px 10px;
+          gap: 6px;
+          font-size: 15px;
+        }
+        .choose {
+          white-space: nowrap;
         }
         .stop {
           order: 1;
-          min-width: 96px;
+          min-width: 88px;
+          min-height: 52px;
+          padding: 0 12px;
+          font-size: 20px;
         }
         .speed,
         .offline,
         .notice {
           order: 2;
           flex: 1 1 100%;
+        }
+        .speed input {
+          min-height: 48px;
+        }
+        .offline {
+          padding: 4px 10px;
         }
       }
     `,
@@ -136,12 +204,23 @@ export class OpStatusBar extends LitElement {
   }
 
   protected willUpdate(): void {
-    // A robot newly in focus brings its own speed override to the slider.
+    // A robot newly in focus brings its own speed override to the slider; the first time
+    // it comes into focus on this pendant, an override above the site's first speed is
+    // lowered to it (lowering needs nobody's control), so nobody's first hold here runs at
+    // the speed someone else left.
     const robot = focus.robot;
     const ratio = feed.states.get(robot)?.speed_ratio;
     if (robot !== this.shownRobot && ratio !== undefined) {
       this.shownRobot = robot;
       if (Math.round(ratio * 100) !== focus.speed) focus.setSpeed(ratio * 100);
+      if (!focusedHere.has(robot)) {
+        focusedHere.add(robot);
+        void firstSpeed().then((first) => {
+          if (focus.robot === robot && first !== null && focus.speed > Math.round(first * 100)) {
+            this.setSpeed(Math.round(first * 100));
+          }
+        });
+      }
     }
   }
 
@@ -182,28 +261,18 @@ export class OpStatusBar extends LitElement {
   }
 
   private robotChip(device: AddedDevice, state: RobotState | undefined, inFocus: boolean) {
-    const link = device.status === "connected" ? "ok" : device.status === "connecting" ? "warn" : "bad";
-    const live = feed.online && device.status === "connected";
-    let badge = html``;
-    if (live && state?.flags.estop) badge = html`<span class="chip bad">${t("app.estop")}</span>`;
-    else if (live && state?.flags.protective_stop)
-      badge = html`<span class="chip bad">${t("app.protective_stop")}</span>`;
-    else if (live && state?.flags.error)
-      badge = html`<span class="chip bad" title=${state.error_message}>${t("app.error")}</span>`;
-    else if (live && state && !state.flags.enabled)
-      badge = html`<span class="chip">${t("app.disabled")}</span>`;
-    return html`<button class="robot" data-testid="status-robot" data-name=${device.local_name}
+    const chip = chipState(device, state, feed.online);
+    return html`<button class="robot ${chip.level}" data-testid="status-robot"
+      data-name=${device.local_name} data-level=${chip.level}
       aria-pressed=${inFocus ? "true" : "false"}
       title=${inFocus ? t("app.in_focus") : t("app.focus_robot", { name: device.local_name })}
       @click=${() => focus.choose(device.local_name)}>
-      <span class="dot ${feed.online ? link : "bad"}" title=${linkLabel(device.status)}></span>
+      <span class="dot ${chip.level === "idle" ? "ok" : chip.level}"
+        title=${feed.online ? linkLabel(device.status) : ""}></span>
       <strong>${device.local_name}</strong>
-      ${live && state
-        ? html`<span class="muted">${modeLabel(state.operational_mode)}</span>`
-        : html`<span class="muted"
-            >${feed.online ? linkLabel(device.status) : t("app.link.unknown")}</span
-          >`}
-      ${badge}
+      <span class="state" data-testid="status-robot-state" title=${chip.detail}
+        >${chip.text}</span>
+      ${chip.disabled ? html`<span class="chip">${t("app.disabled")}</span>` : ""}
     </button>`;
   }
 
