@@ -28,6 +28,8 @@ from plugins.registry import registry
 from runtime.device_manager.addresses import RecentAddresses, halt_at, halt_route, unsettled
 from runtime.device_manager.models import ConnectionStatus
 from runtime.device_manager.tools import send_tool_setup
+from runtime.interfaces.endpoints import endpoints
+from runtime.interfaces.robot import Robot
 from runtime.interfaces.variables import DeviceRecord
 from runtime.kit.device_auth import HEADER, DeviceAuth, sign
 from runtime.kit.discovery import clean_text
@@ -293,6 +295,8 @@ class DeviceConnection:
                         timeout = self.timing.driver_timeout
                         await command_ws.send(json.dumps({"type": "session", "timeout": timeout}))
                     first = await state_ws.recv()
+                    if self.record.kind == "robot":
+                        first = await self._start_slow(http, state_ws, first)
             except InvalidStatus as exc:
                 refused = exc.response.status_code == 401
                 self._failed(
@@ -313,6 +317,29 @@ class DeviceConnection:
                 if ws is not None:
                     ws.transport.abort()  # no handshake to wait for, no queued data sent
             await http.aclose()
+
+    async def _start_slow(
+        self, http: httpx.AsyncClient, state_ws: ClientConnection, first: str | bytes
+    ) -> str | bytes:
+        """A robot whose link comes up (added, back, the runtime restarted) runs at no more
+        than the site's first speed override: nobody's first hold after that is at full
+        speed. Its first state then says so."""
+        ratio = json.loads(first).get("speed_ratio")
+        slow = self.timing.first_speed_ratio
+        if not isinstance(ratio, int | float) or ratio <= slow + 1e-9:
+            return first  # none to lower (a state that is no robot's is refused later)
+        ep = endpoints(Robot)["set_speed_ratio"]
+        response = await http.request(
+            ep.method, ep.url(), json={"ratio": slow}, timeout=CALL_TIMEOUT
+        )
+        if response.status_code != 200:
+            raise ValueError(
+                f"its speed override could not be lowered: HTTP {response.status_code}"
+            )
+        log.info(
+            "%s: speed override lowered from %.0f %% to %.0f %%", self.name, ratio * 100, slow * 100
+        )
+        return await state_ws.recv()
 
     async def _apply_tool(self, http: httpx.AsyncClient, info: dict[str, Any]) -> dict[str, Any]:
         """The stored tool setup, applied before anything moves: a robot never runs on a

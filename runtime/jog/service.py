@@ -19,7 +19,7 @@ from runtime.jog.models import SpeedRequest, TeachRequest
 from runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
 from runtime.jog.waypoints import robot_waypoints, teach
 from runtime.kit.app import create_app
-from runtime.kit.settings import MotionSettings, RuntimeSettings
+from runtime.kit.settings import RuntimeSettings
 from runtime.motion.client import MotionClient
 from runtime.paths import package_roots
 from runtime.robotics.velocity import MANUAL_TCP_SPEED
@@ -31,11 +31,11 @@ LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 def jog_router(
     directory: Directory,
     storage: StorageClient,
-    deadman: float,
     paths: PathCheck,
-    path_tolerances: MotionSettings,
-    socket_port: int | None = None,
+    site: RuntimeSettings,
 ) -> APIRouter:
+    deadman = site.deadman_seconds
+    socket_port = site.jog_port or None
     router = APIRouter(prefix="/jog")
 
     @router.get("/settings")
@@ -50,11 +50,14 @@ def jog_router(
             "angular_speed": ANGULAR_SPEED,
             "manual_tcp_speed": MANUAL_TCP_SPEED,
             "heartbeat_ms": max(10, min(50, round(deadman * 1000 / 4))),
+            # A robot's speed override when it first comes into focus on a pendant (and when
+            # its link comes up): lowered to this, never raised.
+            "first_speed_ratio": site.link.first_speed_ratio,
         }
 
     @router.websocket("/ws")
     async def jog_socket(ws: WebSocket) -> None:
-        session = JogSession(directory, storage, deadman, paths, path_tolerances)
+        session = JogSession(directory, storage, deadman, paths, site.motion)
         try:
             await session.out.serve(ws, on_message=session.handle)
         finally:
@@ -161,15 +164,6 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
 
     app = create_app("jog", lifespan=lifespan)
     paths = PathCheck(motion)
-    app.include_router(
-        jog_router(
-            directory,
-            storage,
-            settings.deadman_seconds,
-            paths,
-            settings.motion,
-            settings.jog_port or None,
-        )
-    )
+    app.include_router(jog_router(directory, storage, paths, settings))
     app.include_router(avoidance_router(mirror))
     return app

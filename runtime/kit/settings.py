@@ -45,6 +45,10 @@ class LinkSettings(BaseModel):
     # A driver halts the robot and ends the runtime's session after this long without a
     # message from it (the device manager sends a keepalive every quarter of it).
     driver_timeout: float = Field(default=0.3, ge=0.05, le=5.0)
+    # A robot's speed override when its link comes up (added, back after a loss, the runtime
+    # started again) and when it first comes into focus on a pendant: lowered to this if it
+    # was higher, so nobody's first hold runs at full speed. Raising it needs control.
+    first_speed_ratio: float = Field(default=0.25, gt=0.0, le=1.0)
 
 
 class AuthSettings(BaseModel):

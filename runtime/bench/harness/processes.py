@@ -40,6 +40,10 @@ LOOPBACK_ENV = {"OPENPENDANT_DISCOVERY__INTERFACES": '["127.0.0.1"]'}
 # no more, and two fewer processes per runtime keep the suite's time (test_modbus_runtime
 # starts the whole cell).
 ROBOT_ONLY_ENV = {"OPENPENDANT_DEVICES": json.dumps([default_devices()[0].model_dump()])}
+# Robots come up at the full speed override in tests and benchmarks (the site's default is
+# 25 %: every move and jog would take four times as long); test_first_speed.py
+# and the browser's first hold run with the default.
+FULL_SPEED_ENV = {"OPENPENDANT_LINK__FIRST_SPEED_RATIO": "1.0"}
 
 
 def child_env(home: Path, **extra: str) -> dict[str, str]:
@@ -47,6 +51,7 @@ def child_env(home: Path, **extra: str) -> dict[str, str]:
     env.pop("OPENPENDANT_SETTINGS_JSON", None)
     env.update(LOOPBACK_ENV)
     env.update(ROBOT_ONLY_ENV)
+    env.update(FULL_SPEED_ENV)
     env["XDG_DATA_HOME"] = str(home)
     env["PYTHONUNBUFFERED"] = "1"
     env.update(extra)
