@@ -155,7 +155,11 @@ class AccessGuard:
         if who is None:
             return 401, "unauthenticated", "sign in first"
         if isinstance(need, Role) and who.role < need:
-            return 403, "forbidden", f"a {who.role.name} may not do this (a {need.name} may)"
+            return (
+                403,
+                "forbidden",
+                f"{_a(who.role.name)} may not do this ({_a(need.name)} may)",
+            )
         method = scope.get("method", "WS")
         if who.via == "session" and scope["type"] == "http" and method not in SAFE_METHODS:
             sent = headers.get(CSRF_HEADER, "")
@@ -191,3 +195,8 @@ class AccessGuard:
                 )
 
         return sending
+
+
+def _a(role: str) -> str:
+    """The role with its article: "an operator", "a viewer"."""
+    return f"{'an' if role[:1] in 'aeiou' else 'a'} {role}"

@@ -193,7 +193,9 @@ def test_the_jog_port_wants_an_operators_ticket(runtime: Runtime) -> None:
     for ticket in ("", "?ticket=forged.0000", "?ticket=" + "x" * 40):
         with pytest.raises(InvalidStatus):
             connect(url + ticket, open_timeout=5)
-    assert runtime.api("POST", "/auth/ticket", role="viewer").status_code == 403
+    refused = runtime.api("POST", "/auth/ticket", role="viewer")
+    assert refused.status_code == 403
+    assert refused.json()["error"]["message"] == "a viewer may not do this (an operator may)"
     ticket = runtime.api("POST", "/auth/ticket", role="operator").json()["ticket"]
     with connect(f"{url}?ticket={ticket}"):
         pass
