@@ -6,6 +6,7 @@ audit entry for each change."""
 from __future__ import annotations
 
 from http.cookies import SimpleCookie
+from typing import Any
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
@@ -139,15 +140,7 @@ class AccessGuard:
         finally:
             await socket.stop()
             if socket.why is not None:
-                self.audit.record(
-                    user=who.user,
-                    role=who.role.name,
-                    address=client_address(scope),
-                    action="CLOSE",
-                    target=scope["path"],
-                    status=ENDED,
-                    detail={"why": socket.why},
-                )
+                self._record(scope, who, "CLOSE", ENDED, {"why": socket.why})
 
     def _refusal(
         self, scope: Scope, headers: dict[str, str], who: Identity | None, need: policy.Need
@@ -176,25 +169,29 @@ class AccessGuard:
                 status = int(message["status"])
             await send(message)
             if message["type"] == "http.response.body" and not message.get("more_body"):
-                self.audit.record(
-                    user=who.user,
-                    role=who.role.name,
-                    address=client_address(scope),
-                    action=scope.get("method", "WS"),
-                    target=scope["path"],
-                    status=status,
-                )
+                self._record(scope, who, scope.get("method", "WS"), status)
             elif message["type"] == "websocket.accept":
-                self.audit.record(
-                    user=who.user,
-                    role=who.role.name,
-                    address=client_address(scope),
-                    action="OPEN",
-                    target=scope["path"],
-                    status=101,
-                )
+                self._record(scope, who, "OPEN", 101)
 
         return sending
+
+    def _record(
+        self,
+        scope: Scope,
+        who: Identity,
+        action: str,
+        status: int,
+        detail: dict[str, Any] | None = None,
+    ) -> None:
+        self.audit.record(
+            user=who.user,
+            role=who.role.name,
+            address=client_address(scope),
+            action=action,
+            target=scope["path"],
+            status=status,
+            detail=detail,
+        )
 
 
 def _a(role: str) -> str:

@@ -24,19 +24,12 @@ from runtime.auth.store import AuthStore, digest
 from runtime.kit import tickets
 from runtime.kit.service_guard import TicketRequired
 from runtime.kit.sign_in_watch import ENDED
+from tests.unit.test_auth import Clock
 from webui.access import SESSION_COOKIE, AccessGuard
 from webui.auth_routes import auth_router
 
 UI = "http://127.0.0.1:8080"
 PASSWORD = "operator password"
-
-
-class Clock:
-    def __init__(self) -> None:
-        self.now = 1_000_000.0
-
-    def __call__(self) -> float:
-        return self.now
 
 
 @pytest.fixture
