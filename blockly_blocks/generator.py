@@ -18,6 +18,7 @@ from blockly_blocks.names import NameTable
 from blockly_blocks.workspace import Block, Reader, Workspace, WorkspaceError, parse_json
 from plugins.api import resolve
 from plugins.registry import registry
+from runtime.kit.words import Words, words
 
 INDENT = "    "
 StatementGen = Callable[[Block, "Generator"], list[str]]
@@ -57,6 +58,7 @@ def known_types() -> frozenset[str]:
 class Problem:
     block: str
     message: str
+    words: Words
 
 
 @dataclass(frozen=True)
@@ -111,7 +113,9 @@ class Generator:
         var_id = ref.get("id") if isinstance(ref, dict) else None
         if var_id not in self.workspace.variables:
             raise WorkspaceError(
-                f"block {block.type} uses a variable that does not exist", block.id
+                f"block {block.type} uses a variable that does not exist",
+                block.id,
+                words("program.unknown_variable", block=block_kind(block)),
             )
         return self.var_name(var_id)
 
@@ -128,11 +132,19 @@ class Generator:
         child = block.inputs.get(name)
         if child is None:
             if not optional:
-                self.problem(block, f"{describe(block)}: {input_label(name)} is empty")
+                self.problem(
+                    block,
+                    f"{describe(block)}: {input_label(name)} is empty",
+                    words("program.input_empty", block=block_kind(block), input=input_words(name)),
+                )
             return default
         gen = VALUES.get(child.type)
         if gen is None or (child.type in DUAL and DUAL[child.type](child)):
-            raise WorkspaceError(f"a {child.type} block cannot be used as a value", child.id)
+            raise WorkspaceError(
+                f"a {child.type} block cannot be used as a value",
+                child.id,
+                words("program.not_a_value", type=child.type),
+            )
         return gen(child, self)
 
     def body(self, block: Block, name: str) -> list[str]:
@@ -146,16 +158,14 @@ class Generator:
         while block is not None:
             gen = STATEMENTS.get(block.type)
             if gen is None or (block.type in DUAL and not DUAL[block.type](block)):
-                raise WorkspaceError(
-                    f"a {block.type} block cannot be used as a statement", block.id
-                )
+                raise not_a_statement(block)
             lines.append(f"at_block({block.id!r})")
             lines.extend(gen(block, self))
             block = block.next
         return lines
 
-    def problem(self, block: Block, message: str) -> None:
-        self.problems.append(Problem(block.id, message))
+    def problem(self, block: Block, message: str, said: Words) -> None:
+        self.problems.append(Problem(block.id, message, said))
 
     def program(self) -> list[str]:
         top = sorted(self.workspace.top, key=lambda b: (b.y, b.x))
@@ -163,7 +173,11 @@ class Generator:
             if block.type in DEFINITIONS:
                 name = self.text_field(block, "NAME")
                 if name in self.procedures:
-                    raise WorkspaceError(f"two functions are named {name!r}", block.id)
+                    raise WorkspaceError(
+                        f"two functions are named {name!r}",
+                        block.id,
+                        words("program.two_functions", name=name),
+                    )
                 self.procedures[name] = block
         variables = [self.var_name(v) for v in self.workspace.variables]
         lines = [f"{v} = None" for v in variables]
@@ -180,14 +194,16 @@ class Generator:
             lines += self.stack(block)
         for loose in values:
             if loose.next is not None:
-                raise WorkspaceError(
-                    f"a {loose.type} block cannot be used as a statement", loose.id
-                )
+                raise not_a_statement(loose)
             VALUES[loose.type](loose, self)  # not run, as in Blockly, but still checked
         # The program is the stack that starts highest (then leftmost); another stack lying
         # apart would run after it unseen: it must be attached, or deleted.
         for loose in [*runnable[1:], *values]:
-            self.problem(loose, f"{describe(loose)} is not part of the program: {LOOSE}")
+            self.problem(
+                loose,
+                f"{describe(loose)} is not part of the program: {LOOSE}",
+                words("program.loose", block=block_kind(loose)),
+            )
         return lines
 
 
@@ -207,16 +223,51 @@ INPUT_LABELS = {
 }
 
 
+# The same labels as words a UI says in its language: program.input.<word>.
+INPUT_WORDS = {
+    "BOOL": "condition",
+    "CONDITION": "condition",
+    "TIMES": "times",
+    "TARGET": "target",
+    "LIST": "list",
+    "TEXT": "text",
+    "VALUE": "value",
+    "NUM": "number",
+    "FROM": "start",
+    "TO": "end",
+    "BY": "step",
+}
+
+
 def input_label(name: str) -> str:
     if name.startswith("IF") and name[2:].isdigit():
         return "the condition"
     return INPUT_LABELS.get(name, f"the {name.lower().replace('_', ' ')} input")
 
 
-def describe(block: Block) -> str:
+def input_words(name: str) -> Words:
+    if name.startswith("IF") and name[2:].isdigit():
+        return words("program.input.condition")
+    if name in INPUT_WORDS:
+        return words(f"program.input.{INPUT_WORDS[name]}")
+    return words("program.input.named", name=name.lower().replace("_", " "))
+
+
+def block_kind(block: Block) -> str:
     """A block as people see it: its type without the category prefix."""
-    kind = block.type.split("_", 1)[-1].replace("_", " ")
-    return f"the '{kind}' block"
+    return block.type.split("_", 1)[-1].replace("_", " ")
+
+
+def describe(block: Block) -> str:
+    return f"the '{block_kind(block)}' block"
+
+
+def not_a_statement(block: Block) -> WorkspaceError:
+    return WorkspaceError(
+        f"a {block.type} block cannot be used as a statement",
+        block.id,
+        words("program.not_a_statement", type=block.type),
+    )
 
 
 def _is_statement(block: Block) -> bool:

@@ -5,8 +5,9 @@ functions."""
 from __future__ import annotations
 
 from blockly_blocks.catalog import static_options
-from blockly_blocks.generator import Generator, py_string
+from blockly_blocks.generator import Generator, block_kind, py_string
 from blockly_blocks.workspace import Block, WorkspaceError
+from runtime.kit.words import words
 
 MAX_NAME = 128
 
@@ -17,7 +18,11 @@ def _choice(block: Block, g: Generator, name: str) -> str:
         return g.option(block, name, options)
     text = g.text_field(block, name)
     if not text:
-        raise WorkspaceError(f"block {block.type}: no {name.lower()} chosen", block.id)
+        raise WorkspaceError(
+            f"block {block.type}: no {name.lower()} chosen",
+            block.id,
+            words("program.nothing_chosen", block=block_kind(block)),
+        )
     if not len(text) <= MAX_NAME or not text.isprintable():
         raise WorkspaceError(f"block {block.type}: {name} must be a short name", block.id)
     return text

@@ -12,6 +12,7 @@ from blockly_blocks.generator import (
     value,
 )
 from blockly_blocks.workspace import Block, WorkspaceError
+from runtime.kit.words import words
 
 MAX_ITEMS = 500
 
@@ -441,7 +442,11 @@ def procedures_def(block: Block, g: Generator) -> list[str]:
 def _call(block: Block, g: Generator) -> str:
     name = block.extra.get("name")
     if not isinstance(name, str) or name not in g.procedures:
-        raise WorkspaceError(f"the function {str(name)[:40]!r} is not defined", block.id)
+        raise WorkspaceError(
+            f"the function {str(name)[:40]!r} is not defined",
+            block.id,
+            words("program.no_function", name=str(name)[:40]),
+        )
     count = len(_params(g.procedures[name]))
     args = ", ".join(g.value(block, f"ARG{i}") for i in range(count))
     return f"{g.names.get('procedure', name)}({args})"
@@ -460,7 +465,11 @@ def procedures_call_value(block: Block, g: Generator) -> str:
 @statement("procedures_ifreturn")
 def procedures_ifreturn(block: Block, g: Generator) -> list[str]:
     if g.procedure is None:
-        raise WorkspaceError("'if return' is only allowed inside a function", block.id)
+        raise WorkspaceError(
+            "'if return' is only allowed inside a function",
+            block.id,
+            words("program.return_outside"),
+        )
     result = g.value(block, "VALUE") if g.procedure.type == "procedures_defreturn" else ""
     return [f"if {g.value(block, 'CONDITION', 'False')}:", indent([f"return {result}".rstrip()])[0]]
 

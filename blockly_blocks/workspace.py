@@ -10,6 +10,8 @@ import sys
 from dataclasses import dataclass, field
 from typing import Any
 
+from runtime.kit.words import Words, words
+
 MAX_WORKSPACE_BYTES = 4 * 1024 * 1024
 MAX_BLOCKS = 5000
 MAX_NESTING = 60  # blocks inside blocks (value inputs and statement bodies)
@@ -21,10 +23,14 @@ JSON_RECURSION_LIMIT = 4 * MAX_BLOCKS + 1000
 
 
 class WorkspaceError(Exception):
-    def __init__(self, message: str, block: str | None = None) -> None:
+    """Why a workspace gives no program; `said`, the words a UI shows in its language (those
+    of the faults a user of the editor can meet: the rest are the JSON's)."""
+
+    def __init__(self, message: str, block: str | None = None, said: Words | None = None) -> None:
         super().__init__(message)
         self.message = message
         self.block = block
+        self.words = said
 
 
 @dataclass
@@ -138,7 +144,11 @@ class Reader:
         if not isinstance(kind, str):
             raise WorkspaceError("a block has no type", block_id)
         if kind not in self.known:
-            raise WorkspaceError(f"unknown block type {kind[:64]!r}", block_id)
+            raise WorkspaceError(
+                f"unknown block type {kind[:64]!r}",
+                block_id,
+                words("program.unknown_block", type=kind[:64]),
+            )
         if block_id in self.ids:
             raise WorkspaceError(f"block id {block_id!r} is used twice", block_id)
         self.ids.add(block_id)

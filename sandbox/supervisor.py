@@ -22,6 +22,7 @@ from functools import cache
 from typing import Any, Protocol
 
 from plugins.registry import registry
+from runtime.kit.words import Words, words, words_of
 from sandbox.protocol import (
     FUNCTIONS_ENV,
     MAX_LINE_BYTES,
@@ -52,10 +53,11 @@ ENDED = (RunState.stopped, RunState.error, RunState.finished)
 class CallRefused(Exception):
     """What a host raises to refuse a program's request; the program gets the message."""
 
-    def __init__(self, message: str, code: str = "error") -> None:
+    def __init__(self, message: str, code: str = "error", said: Words | None = None) -> None:
         super().__init__(message)
         self.message = message
         self.code = code
+        self.words = said
 
 
 class Host(Protocol):
@@ -79,6 +81,7 @@ class OutputLine:
     stream: str  # out | info | warning | error | system
     block: str | None
     ts: float = field(default_factory=time.time)
+    words: Words | None = None  # an error line as a UI says it in its language
 
 
 @dataclass
@@ -88,6 +91,7 @@ class RunError:
     line: int | None = None
     block: str | None = None
     code: str | None = None
+    words: Words | None = None  # the message as a UI says it in its language
 
 
 Listener = Callable[[], None]
@@ -286,8 +290,9 @@ class ProgramRun:
                     break
                 await self._handle(decode(line))
         except ProtocolError as exc:
+            said = words("run.protocol", reason=str(exc))
             await self._halt_and_fail(
-                RunError(f"the program broke the worker protocol: {exc}", "protocol")
+                RunError(f"the program broke the worker protocol: {exc}", "protocol", words=said)
             )
             return
         await self._process.wait()
@@ -314,12 +319,15 @@ class ProgramRun:
         elif kind == "output":
             self._add_output(str(message.get("text", "")), message.get("stream"), message)
         elif kind == "error":
+            text = str(message.get("message", "error"))[:MAX_OUTPUT_CHARS]
+            error_kind = str(message.get("kind", "error"))
             error = RunError(
-                message=str(message.get("message", "error"))[:MAX_OUTPUT_CHARS],
-                kind=str(message.get("kind", "error")),
+                message=text,
+                kind=error_kind,
                 line=message.get("line") if isinstance(message.get("line"), int) else None,
                 block=_block(message.get("block")),
                 code=str(message["code"]) if message.get("code") else None,
+                words=words_of(message.get("words")) or _error_words(error_kind, text),
             )
             await self._halt_and_fail(error)
         elif kind == "done":
@@ -348,7 +356,10 @@ class ProgramRun:
             try:
                 reply = {"ok": True, "value": await self.host.call(fn, args)}
             except CallRefused as exc:
-                reply = {"ok": False, "error": {"code": exc.code, "message": exc.message}}
+                error: dict[str, Any] = {"code": exc.code, "message": exc.message}
+                if exc.words is not None:
+                    error["words"] = exc.words.body()
+                reply = {"ok": False, "error": error}
         if not self.ended_state:
             with contextlib.suppress(ProtocolError, ConnectionError, RuntimeError):
                 await self._send({"t": "reply", "id": call_id, **reply})
@@ -364,7 +375,10 @@ class ProgramRun:
         await asyncio.sleep(self.limits.wall_seconds)
         if not self.ended_state:
             limit = self.limits.wall_seconds
-            await self._halt_and_fail(RunError(f"the run took longer than {limit:g} s", "timeout"))
+            said = words("run.timeout", seconds=limit)
+            await self._halt_and_fail(
+                RunError(f"the run took longer than {limit:g} s", "timeout", words=said)
+            )
 
     async def _halt_and_fail(self, error: RunError) -> None:
         if self.ended_state or self._stopping:
@@ -375,7 +389,10 @@ class ProgramRun:
         if error.block is not None:
             self.block = error.block
         line = f" (line {error.line})" if error.line else ""
-        self._add_output(f"{error.message}{line}", "error", {"block": error.block})
+        said = error.words
+        if said is not None and error.line:
+            said = words("run.at_line", message=said, line=error.line)
+        self._add_output(f"{error.message}{line}", "error", {"block": error.block}, said)
         try:
             await self.host.halt()
         except Exception:  # the error is the news; a failed halt is logged
@@ -389,13 +406,24 @@ class ProgramRun:
         if code is not None and code < 0:
             name = signal.Signals(-code).name
             if -code == signal.SIGXCPU:
+                seconds = self.limits.cpu_seconds
                 return RunError(
-                    f"the program used its {self.limits.cpu_seconds} s of CPU time", "cpu_limit"
+                    f"the program used its {seconds} s of CPU time",
+                    "cpu_limit",
+                    words=words("run.cpu_limit", seconds=seconds),
                 )
-            return RunError(f"the program's worker was killed ({name}); out of memory?", name)
+            return RunError(
+                f"the program's worker was killed ({name}); out of memory?",
+                name,
+                words=words("run.killed", signal=name),
+            )
         tail = self._stderr.decode(errors="replace").strip().splitlines()[-1:]
         detail = f": {tail[0]}" if tail else ""
-        return RunError(f"the program's worker ended unexpectedly (exit {code}){detail}", "worker")
+        return RunError(
+            f"the program's worker ended unexpectedly (exit {code}){detail}",
+            "worker",
+            words=words("run.worker_ended", exit=str(code), detail=detail),
+        )
 
     # Helpers -------------------------------------------------------------------------------
 
@@ -406,10 +434,13 @@ class ProgramRun:
         with contextlib.suppress(ConnectionError):
             await self._process.stdin.drain()
 
-    def _add_output(self, text: str, stream: Any, message: dict[str, Any]) -> None:
+    def _add_output(
+        self, text: str, stream: Any, message: dict[str, Any], said: Words | None = None
+    ) -> None:
         kind = stream if stream in ("out", "info", "warning", "error", "system") else "out"
+        block = _block(message.get("block"))
         self.output.append(
-            OutputLine(next(self._seq), text[:MAX_OUTPUT_CHARS], kind, _block(message.get("block")))
+            OutputLine(next(self._seq), text[:MAX_OUTPUT_CHARS], kind, block, words=said)
         )
 
     def _kill(self) -> None:
@@ -447,3 +478,9 @@ class ProgramRun:
 
 def _block(value: Any) -> str | None:
     return value[:64] if isinstance(value, str) else None
+
+
+def _error_words(kind: str, message: str) -> Words:
+    """A program's error the runtime did not word: Python's own ("ZeroDivisionError: …"),
+    the compiler's, or a sandbox function's check of its arguments."""
+    return words("run.compile" if kind == "compile" else "run.exception", error=message)

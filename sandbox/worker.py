@@ -165,7 +165,11 @@ class Worker:
         if reply.get("ok"):
             return reply.get("value")
         error = reply.get("error") or {}
-        raise ProgramError(str(error.get("message", "failed")), str(error.get("code", "error")))
+        raise ProgramError(
+            str(error.get("message", "failed")),
+            str(error.get("code", "error")),
+            error.get("words"),
+        )
 
     def output(self, text: str, stream: str) -> None:
         start, count = self._output_window
@@ -315,6 +319,7 @@ def run(worker: Worker, start: dict[str, Any], isolation: list[str]) -> None:
                 "line": error_line(exc),
                 "block": worker.block,
                 "code": getattr(exc, "code", None) if isinstance(exc, ProgramError) else None,
+                "words": getattr(exc, "words", None) if isinstance(exc, ProgramError) else None,
             }
         )
         return

@@ -16,6 +16,7 @@ from runtime.auth.store import AuthStore, Identity
 from runtime.kit.constant_time import same_secret
 from runtime.kit.service_guard import refuse
 from runtime.kit.sign_in_watch import ENDED, EndsWithSignIn
+from runtime.kit.words import Words, role_words, words
 from webui import policy
 from webui.proxy import BAD_PATH, PathRefused, service_path
 
@@ -144,21 +145,38 @@ class AccessGuard:
 
     def _refusal(
         self, scope: Scope, headers: dict[str, str], who: Identity | None, need: policy.Need
-    ) -> tuple[int, str, str] | None:
+    ) -> tuple[int, str, str, Words] | None:
         if who is None:
-            return 401, "unauthenticated", "sign in first"
+            return self._signed_out(headers)
         if isinstance(need, Role) and who.role < need:
             return (
                 403,
                 "forbidden",
                 f"{_a(who.role.name)} may not do this ({_a(need.name)} may)",
+                words("access.role", role=role_words(who.role.name), need=role_words(need.name)),
             )
         method = scope.get("method", "WS")
         if who.via == "session" and scope["type"] == "http" and method not in SAFE_METHODS:
             sent = headers.get(CSRF_HEADER, "")
             if not who.csrf or not same_secret(sent, who.csrf):
-                return 403, "csrf_failed", "the request lacks this session's CSRF token"
+                message = "the request lacks this session's CSRF token"
+                return 403, "csrf_failed", message, words("access.csrf")
         return None
+
+    def _signed_out(self, headers: dict[str, str]) -> tuple[int, str, str, Words]:
+        """401, saying why where this tablet's session ended lately (the sign-in screen
+        tells the operator: expired, signed out, a new role or password, removed)."""
+        secret = cookie_value(headers, SESSION_COOKIE)
+        why = self.store.ended(secret) if secret else None
+        if why is None:
+            return 401, "unauthenticated", "sign in first", words("access.sign_in")
+        message = f"sign in again: this session ended ({why.replace('_', ' ')})"
+        return (
+            401,
+            "session_ended",
+            message,
+            words("access.session_ended", why=words(f"session.{why}")),
+        )
 
     def _audited(self, scope: Scope, send: Send, who: Identity) -> Send:
         status = 0

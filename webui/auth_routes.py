@@ -18,6 +18,7 @@ from runtime.kit import tickets
 from runtime.kit.constant_time import same_secret
 from runtime.kit.errors import InvalidValue, OpenPendantError
 from runtime.kit.settings import is_loopback
+from webui import policy
 from webui.access import SESSION_COOKIE, client_address
 
 RoleName = Literal["viewer", "operator", "programmer", "admin"]
@@ -183,6 +184,18 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
     async def me(request: Request) -> dict[str, Any]:
         who = identity(request)
         return {"user": who.user, "role": who.role.name, "csrf": who.csrf, "via": who.via}
+
+    @router.get("/policy")
+    async def rights() -> dict[str, Any]:
+        """The table of rights this gateway enforces, for the UI to disable what the role
+        signed in may not do: the rules in order (the first that matches a method and a path
+        below /api decides), the roles from least to most, and the need of a request no
+        rule names."""
+        return {
+            "rules": policy.served(),
+            "roles": [role.name for role in Role],
+            "otherwise": policy.ADMIN.name,
+        }
 
     @router.post("/me/password")
     async def change_password(

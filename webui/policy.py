@@ -41,6 +41,7 @@ RULES: tuple[Rule, ...] = (
     rule(("POST",), "/auth/(login|setup|pin)", PUBLIC),
     rule(("POST",), "/auth/logout", VIEW),
     rule(READ, "/auth/me", VIEW),
+    rule(READ, "/auth/policy", VIEW),
     rule(("POST",), "/auth/me/password", VIEW),
     rule(("POST",), "/auth/ticket", OPERATE),
     rule(ANY, "/auth/(users|tokens)(/{})?", ADMIN),
@@ -110,6 +111,21 @@ def need(method: str, path: str) -> Need:
         if method in entry.methods and entry.pattern.match(path):
             return entry.need
     return ADMIN
+
+
+def served() -> list[dict[str, object]]:
+    """The table as the UI evaluates it (GET /api/auth/policy), in order: each rule's methods,
+    its pattern as JavaScript's RegExp reads it the same (`$` there is the end of the text,
+    as `\\Z` is here) and the role it needs by name. A request no rule names is an
+    administrator's."""
+    return [
+        {
+            "methods": list(entry.methods),
+            "pattern": entry.pattern.pattern.removesuffix("\\Z") + "$",
+            "need": entry.need.name if isinstance(entry.need, Role) else entry.need,
+        }
+        for entry in RULES
+    ]
 
 
 def named(method: str, path: str) -> bool:

@@ -27,6 +27,9 @@ from runtime.interfaces.camera import (
 from runtime.interfaces.device import DeviceIdentity
 from runtime.kit.errors import DeviceError
 
+CELL_WAIT = 30.0  # s the robot named by `cell` may take to come up (all start at once)
+CELL_LOOK = 0.5  # s between looks for it
+
 
 @dataclass(frozen=True)
 class Board:
@@ -54,6 +57,7 @@ class SimCamera(CameraDriver):
         seed: int | None = None,
         cell: CellClient | None = None,
         tags: str = "4x4_50",
+        cell_wait: float = CELL_WAIT,
     ) -> None:
         info = CameraInfo(
             model="simulated camera", width=camera.width, height=camera.height, fps=fps
@@ -65,6 +69,13 @@ class SimCamera(CameraDriver):
         # The robot's cell in view (its parts and flange tag, asked at every frame).
         self.cell, self.tags = cell, tags
         self.scene: dict[str, Any] | None = None
+        # A cell that never answered is a robot name that matches none (the camera would
+        # draw an empty table): the camera starts first, so only after `cell_wait` is it
+        # said, in its state and by refusing frames; found later, it is forgotten.
+        self.cell_wait = cell_wait
+        self.cell_seen = False
+        self._looking_since = time.monotonic()
+        self._looking: asyncio.Task[None] | None = None
         self._renderer: Renderer | None = None
         self._rng = np.random.default_rng(seed)
         self._lock = threading.Lock()  # renders one at a time (the ray table is shared)
@@ -75,7 +86,32 @@ class SimCamera(CameraDriver):
 
     async def start(self) -> None:
         # The rays of every pixel, found once (seconds at full size): before the first frame.
+        self._looking_since = time.monotonic()
+        if self.cell is not None:
+            self._looking = asyncio.create_task(self._look_for_cell(self.cell))
         self._renderer = await asyncio.to_thread(Renderer, self.camera)
+
+    async def shutdown(self) -> None:
+        if self._looking is not None:
+            self._looking.cancel()
+
+    async def _look_for_cell(self, cell: CellClient) -> None:
+        while not self.cell_seen:
+            if await cell.ask("parts") is not None:
+                self.cell_seen = True
+                return
+            await asyncio.sleep(CELL_LOOK)
+
+    def missing_cell(self) -> str:
+        """Why the camera shows no cell, once the robot it names had time to come up."""
+        if self.cell is None or self.cell_seen:
+            return ""
+        if time.monotonic() - self._looking_since < self.cell_wait:
+            return ""
+        return (
+            f"no simulated robot named {self.cell.robot!r} answers on this computer: "
+            f"--cell must name a running simulated robot (waited {self.cell_wait:.0f} s)"
+        )
 
     def state(self) -> CameraState:
         return CameraState(
@@ -84,7 +120,7 @@ class SimCamera(CameraDriver):
             connected=self._renderer is not None,
             frames=self.frames,
             last_frame=self.last_frame,
-            error="" if self._renderer is not None else "starting",
+            error="starting" if self._renderer is None else self.missing_cell(),
         )
 
     def put_board(self, pose: np.ndarray | None) -> None:
@@ -93,6 +129,9 @@ class SimCamera(CameraDriver):
     async def capture(self, request: CaptureRequest) -> Image:
         if self._renderer is None:
             raise DeviceError("the camera is still starting", code="not_ready", status=503)
+        missing = self.missing_cell()
+        if missing:
+            raise DeviceError(missing, code="no_cell", status=409)
         # Frames come at the camera's rate, however fast they are asked for.
         wait = self._last + self._period - time.monotonic()
         if wait > 0:
@@ -101,6 +140,7 @@ class SimCamera(CameraDriver):
         taken = time.time()
         scene = await self.cell.ask("scene") if self.cell is not None else None
         self.scene = scene if scene is not None and "error" not in scene else None
+        self.cell_seen = self.cell_seen or scene is not None
         pixels = await asyncio.to_thread(self._render, self.scene)
         self.frames += 1
         self.last_frame = taken

@@ -10,7 +10,7 @@ from fastapi import APIRouter
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from scipy.spatial.transform import Rotation
 
-from device_drivers.sim_camera.driver import Board, SimCamera
+from device_drivers.sim_camera.driver import CELL_WAIT, Board, SimCamera
 from device_drivers.sim_camera.optics import CameraModel, look_at
 from device_drivers.sim_cell.link import CellClient
 from runtime.imaging.boards import DICTIONARIES, BoardSpec
@@ -51,6 +51,12 @@ class SimCameraOptions(BaseModel):
         description="the simulated robot whose cell is in view (its parts and flange tag)",
     )
     tags: str = Field(default="4x4_50", description="the ArUco dictionary of the cell's tags")
+    cell_wait: float = Field(
+        default=CELL_WAIT,
+        ge=0,
+        le=600,
+        description="seconds the --cell robot may take to come up before it is an error",
+    )
 
     def default_name(self) -> str:
         return "sim-camera"
@@ -109,6 +115,7 @@ def create(name: str, uuid: str, options: SimCameraOptions) -> SimCamera:
         blur=options.blur,
         cell=CellClient(options.cell) if options.cell else None,
         tags=options.tags,
+        cell_wait=options.cell_wait,
     )
 
 

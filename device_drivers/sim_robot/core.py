@@ -22,6 +22,7 @@ from runtime.interfaces.robot import (
     TrajectoryStatus,
 )
 from runtime.kit.errors import InvalidValue, NotFound, RobotError
+from runtime.kit.words import words
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.reference import Limits, RunningTrajectory, TrajectoryReference
 from runtime.robotics.time_scaling import TimeScaling
@@ -105,9 +106,15 @@ class SimCore:
 
     def enable(self) -> None:
         if self.estop:
-            raise RobotError("the E-stop is engaged; release it first", code="estop")
+            raise RobotError(
+                "the E-stop is engaged; release it first", code="estop", words=words("robot.estop")
+            )
         if self.error:
-            raise RobotError("the robot has an error; reset errors first", code="robot_fault")
+            raise RobotError(
+                "the robot has an error; reset errors first",
+                code="robot_fault",
+                words=words("robot.reset_first"),
+            )
         self.enabled = True
 
     def disable(self) -> None:
@@ -128,7 +135,11 @@ class SimCore:
 
     def set_mode(self, mode: CommandMode) -> None:
         if mode is not CommandMode.halt and not self.ready:
-            raise RobotError("the robot is not ready for motion", code="not_enabled")
+            raise RobotError(
+                "the robot is not ready for motion",
+                code="not_enabled",
+                words=words("robot.not_enabled"),
+            )
         if mode is not self.mode:
             # Passing through halt: whatever the old mode was doing stops here.
             self.halt(f"mode changed to {mode.value}")
@@ -245,9 +256,17 @@ class SimCore:
 
     def _require(self, mode: CommandMode) -> None:
         if not self.ready:
-            raise RobotError("the robot is not ready for motion", code="not_enabled")
+            raise RobotError(
+                "the robot is not ready for motion",
+                code="not_enabled",
+                words=words("robot.not_enabled"),
+            )
         if self.mode is not mode:
-            raise RobotError(f"the robot is in {self.mode.value} mode", code="wrong_mode")
+            raise RobotError(
+                f"the robot is in {self.mode.value} mode",
+                code="wrong_mode",
+                words=words("robot.wrong_mode", needed=mode.value, mode=self.mode.value),
+            )
 
     def _end_trajectory(self, state: TrajectoryState, message: str = "") -> None:
         if self.trajectory is None:

@@ -54,6 +54,11 @@ CREATE TABLE IF NOT EXISTS sessions (
     created REAL NOT NULL,
     last_seen REAL NOT NULL
 );
+CREATE TABLE IF NOT EXISTS ended_sessions (
+    id TEXT PRIMARY KEY,
+    why TEXT NOT NULL,
+    at REAL NOT NULL
+);
 CREATE TABLE IF NOT EXISTS tokens (
     id TEXT PRIMARY KEY,
     digest TEXT UNIQUE NOT NULL,
@@ -221,7 +226,7 @@ class AuthStore:
         with self._tx() as db:
             self._keep_an_admin(db, name, role)
             db.execute("UPDATE users SET role = ? WHERE name = ?", (role.name, name))
-            self._end_sessions(db, name)
+            self._end_sessions(db, name, "role_changed")
 
     def set_password(self, name: str, password: str) -> None:
         hashed = self.hasher.hash(check_password(password))
@@ -231,7 +236,7 @@ class AuthStore:
                 "UPDATE users SET password = ?, failed = 0, locked_until = 0 WHERE name = ?",
                 (hashed, name),
             )
-            self._end_sessions(db, name)
+            self._end_sessions(db, name, "password_changed")
 
     def set_pin(self, name: str, pin: str | None) -> None:
         if pin is not None and not PIN.match(pin):
@@ -244,8 +249,8 @@ class AuthStore:
     def delete_user(self, name: str) -> None:
         with self._tx() as db:
             self._keep_an_admin(db, name, None)
+            self._end_sessions(db, name, "user_removed")
             db.execute("DELETE FROM users WHERE name = ?", (name,))
-            self._end_sessions(db, name)
 
     def _require_user(self, db: sqlite3.Connection, name: str) -> str:
         row = db.execute("SELECT role FROM users WHERE name = ?", (name,)).fetchone()
@@ -333,7 +338,7 @@ class AuthStore:
             return None
         last = max(row[4], self._touched.get(sid, 0.0))
         if session_expired(row[3], last, now, self.idle, self.absolute):
-            self.close_session(sid)
+            self.close_session(sid, "expired")
             return None
         if not touch:
             return Identity(row[0], Role.named(row[1]), "session", session=sid, csrf=row[2])
@@ -343,16 +348,35 @@ class AuthStore:
                 db.execute("UPDATE sessions SET last_seen = ? WHERE id = ?", (now, sid))
         return Identity(row[0], Role.named(row[1]), "session", session=sid, csrf=row[2])
 
-    def close_session(self, sid: str) -> None:
-        self._touched.pop(sid, None)
+    def close_session(self, sid: str, why: str = "signed_out") -> None:
         with self._tx() as db:
-            db.execute("DELETE FROM sessions WHERE id = ?", (sid,))
+            self._end(db, [sid], why)
 
-    def _end_sessions(self, db: sqlite3.Connection, name: str) -> None:
+    def _end_sessions(self, db: sqlite3.Connection, name: str, why: str) -> None:
         ended = [r[0] for r in db.execute("SELECT id FROM sessions WHERE user = ?", (name,))]
-        db.execute("DELETE FROM sessions WHERE user = ?", (name,))
-        for sid in ended:
+        self._end(db, ended, why)
+
+    def _end(self, db: sqlite3.Connection, sids: list[str], why: str) -> None:
+        """End sessions, remembering why for as long as their cookies could be shown (the
+        sign-in screen says it: expired, signed out, a new role…)."""
+        now = self.clock()
+        for sid in sids:
             self._touched.pop(sid, None)
+            db.execute("DELETE FROM sessions WHERE id = ?", (sid,))
+            db.execute(
+                "INSERT OR REPLACE INTO ended_sessions (id, why, at) VALUES (?, ?, ?)",
+                (sid, why, now),
+            )
+        db.execute("DELETE FROM ended_sessions WHERE at < ?", (now - self.absolute,))
+
+    def ended(self, secret: str) -> str | None:
+        """Why the session of this cookie ended, if it did lately (None: never known, or
+        long ago)."""
+        with self._lock:
+            row = self._db.execute(
+                "SELECT why FROM ended_sessions WHERE id = ?", (digest(secret),)
+            ).fetchone()
+        return None if row is None else str(row[0])
 
     # API tokens ------------------------------------------------------------------------------
 

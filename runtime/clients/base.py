@@ -14,6 +14,7 @@ from pydantic import BaseModel
 
 from runtime.interfaces.endpoints import Endpoint
 from runtime.kit.errors import OpenPendantError, RobotError, Unavailable
+from runtime.kit.words import words_of
 from runtime.links.hub import DeviceView, LinkHub, Refusal
 
 READY_TIMEOUT = 2.0
@@ -124,5 +125,6 @@ def _refusal(status: int, content: Any, what: str) -> OpenPendantError:
     if status == 409:  # a device's refusal (limits, mode, state)
         error = content.get("error", {}) if isinstance(content, dict) else {}
         message = str(error.get("message") or f"{what} was refused")
-        return RobotError(message, code=str(error.get("code") or "device_error"))
+        code = str(error.get("code") or "device_error")
+        return RobotError(message, code=code, words=words_of(error.get("words")))
     return OpenPendantError.from_body(status, content)

@@ -11,13 +11,19 @@ from runtime.device_manager.models import AddedDevice, DeviceDetails
 __all__ = ["AddedDevice", "DeviceDetails", "DeviceManagerClient", "LeaseGranted", "require_token"]
 from runtime.kit.client import ServiceClient
 from runtime.kit.errors import OpenPendantError
+from runtime.kit.words import words
 
 LEASE_HEADER = "X-Lease-Token"
 
 
 def require_token(name: str, token: str | None) -> str:
     if token is None:
-        raise OpenPendantError(f"take control of {name} first", code="lease_required", status=409)
+        raise OpenPendantError(
+            f"take control of {name} first",
+            code="lease_required",
+            status=409,
+            words=words("lease.required", device=name),
+        )
     return token
 
 

@@ -35,6 +35,7 @@ from runtime.kit.device_auth import HEADER, DeviceAuth, sign
 from runtime.kit.discovery import clean_text
 from runtime.kit.errors import OpenPendantError, Unavailable
 from runtime.kit.settings import LinkSettings
+from runtime.kit.words import link_words, words
 from runtime.links.freshness import Freshness, state_stamp
 
 log = logging.getLogger(__name__)
@@ -177,7 +178,11 @@ class DeviceConnection:
         try:
             self._outbox.put_nowait(json.dumps({**command, "id": ident}))
         except asyncio.QueueFull:
-            raise Unavailable(f"{self.name} is not taking commands", code="link_stale") from None
+            raise Unavailable(
+                f"{self.name} is not taking commands",
+                code="link_stale",
+                words=words("link.stale", device=self.name),
+            ) from None
 
     def halt(self, tag: str | None = None) -> bool:
         """Stop always wins: on whatever session is live, and to every other address the link
@@ -226,7 +231,11 @@ class DeviceConnection:
         the device is connected; large messages allowed (an image)."""
         if not self.live:
             code = "link_stale" if self.status == "stale" else "device_disconnected"
-            raise Unavailable(f"{self.name} is {self.status}: {self.last_error}", code=code)
+            raise Unavailable(
+                f"{self.name} is {self.status}: {self.last_error}",
+                code=code,
+                words=link_words(self.name, self.status),
+            )
         return await self._open(
             self.record.url, path, self._secret(), query=query, max_size=MAX_STREAMED
         )
@@ -238,10 +247,15 @@ class DeviceConnection:
                 "running on it continues",
                 code="link_changed",
                 status=409,
+                words=words("link.changed", device=self.name),
             )
         if not self.live:
             code = "link_stale" if self.status == "stale" else "device_disconnected"
-            raise Unavailable(f"{self.name} is {self.status}: {self.last_error}", code=code)
+            raise Unavailable(
+                f"{self.name} is {self.status}: {self.last_error}",
+                code=code,
+                words=link_words(self.name, self.status),
+            )
 
     # Status ----------------------------------------------------------------------------------
 
@@ -358,7 +372,11 @@ class DeviceConnection:
         """A new tool setup on the live session; the links and the UI get the new info."""
         if not self.live or self._http is None:
             code = "link_stale" if self.status == "stale" else "device_disconnected"
-            raise Unavailable(f"{self.name} is {self.status}: {self.last_error}", code=code)
+            raise Unavailable(
+                f"{self.name} is {self.status}: {self.last_error}",
+                code=code,
+                words=link_words(self.name, self.status),
+            )
         try:
             info = await send_tool_setup(self._http, setup)
         except httpx.HTTPError as exc:

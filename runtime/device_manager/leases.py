@@ -16,6 +16,7 @@ from pydantic import BaseModel, Field
 from runtime.interfaces.common import PlainText, Strict
 from runtime.kit.constant_time import same_secret
 from runtime.kit.errors import Conflict, OpenPendantError
+from runtime.kit.words import words
 
 log = logging.getLogger(__name__)
 
@@ -116,7 +117,8 @@ class LeaseBook:
         if lease is not None and lease.token != token:
             raise LeaseRefused(
                 f"{device} is controlled by {lease.holder!r} for another "
-                f"{lease.expires - now:.0f} s unless they release it"
+                f"{lease.expires - now:.0f} s unless they release it",
+                words=words("lease.held", device=device, holder=lease.holder),
             )
         if lease is None:
             token = secrets.token_urlsafe(16)
@@ -133,9 +135,16 @@ class LeaseBook:
         """The holder's token is valid: the lease is renewed by the use. Otherwise refused."""
         lease = self._live(device, time.time())
         if lease is None:
-            raise LeaseRefused(f"take control of {device} first", code="lease_required")
+            raise LeaseRefused(
+                f"take control of {device} first",
+                code="lease_required",
+                words=words("lease.required", device=device),
+            )
         if token is None or not same_secret(lease.token, token):
-            raise LeaseRefused(f"{device} is controlled by {lease.holder!r}")
+            raise LeaseRefused(
+                f"{device} is controlled by {lease.holder!r}",
+                words=words("lease.held", device=device, holder=lease.holder),
+            )
         return self.acquire(device, lease.holder, token)
 
     def release(self, device: str, token: str | None) -> None:
@@ -143,7 +152,11 @@ class LeaseBook:
         if lease is None:
             return
         if token is None or not same_secret(lease.token, token):
-            raise Conflict(f"{device} is controlled by {lease.holder!r}", code="lease_held")
+            raise Conflict(
+                f"{device} is controlled by {lease.holder!r}",
+                code="lease_held",
+                words=words("lease.held", device=device, holder=lease.holder),
+            )
         del self._leases[device]
         self._save()
 

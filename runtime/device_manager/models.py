@@ -12,6 +12,11 @@ from runtime.interfaces.common import Strict
 LOCAL_NAME_PATTERN = r"^[a-z][a-z0-9_]{0,31}$"
 
 ConnectionStatus = Literal["connecting", "connected", "stale", "disconnected"]
+# How this runtime sees a device on the network (runtime/device_manager/announcements.py).
+Mark = Literal["added", "paired", "elsewhere", "new"]
+# Why a device is another's: it says another runtime started it, or it announces a uuid this
+# runtime holds a pairing key for without that key (another device with its identity).
+Elsewhere = Literal["other_runtime", "other_key"]
 
 
 class DetectedDevice(BaseModel):
@@ -28,6 +33,10 @@ class DetectedDevice(BaseModel):
     last_seen: float
     # Other addresses announcing the same uuid: an impostor, or the device's own old record.
     also_at: list[str] = Field(default_factory=list)
+    # Added here (its uuid is one of this runtime's devices), paired with this runtime (it
+    # holds the key the device announces), another's (why: `elsewhere`), or none of these.
+    mark: Mark = "new"
+    elsewhere: Elsewhere | None = None
 
 
 class AddressClaim(BaseModel):

@@ -15,7 +15,7 @@ from typing import Any
 import httpx
 
 from plugins.registry import registry
-from runtime.device_manager.announcements import Announcements
+from runtime.device_manager.announcements import MAX_ANNOUNCEMENTS, Announcements, mark
 from runtime.device_manager.connection import (
     DeviceConnection,
     describe,
@@ -35,7 +35,7 @@ from runtime.device_manager.models import (
 from runtime.device_manager.tools import stored_tool, tool_variable
 from runtime.interfaces.robot import RobotInfo, ToolSetup
 from runtime.interfaces.variables import DeviceRecord
-from runtime.kit.device_auth import disproof, keep_secret, known_secret
+from runtime.kit.device_auth import disproof, keep_secret, key_id, known_secret, runtime_tag
 from runtime.kit.discovery import Detected, checked_uuid, clean_text
 from runtime.kit.errors import (
     Conflict,
@@ -47,6 +47,7 @@ from runtime.kit.errors import (
 )
 from runtime.kit.settings import LinkSettings
 from runtime.kit.websocket import Fanout
+from runtime.kit.words import link_words
 from runtime.variable_storage.client import StorageClient
 
 log = logging.getLogger(__name__)
@@ -70,7 +71,12 @@ class DeviceRegistry:
         self.events = Fanout()  # lists and leases only, for services
         self.links = LinkServer(self)
         self.timing = timing or LinkSettings()
-        self.announced = Announcements(self._added_urls)
+        self.announced = Announcements(self._added_urls, self.key_of)
+        # Per uuid, the id of the pairing key kept for it (None: none), read once: the list
+        # asks for every announcement each time it changes. A device this runtime starts
+        # keeps its key before it announces itself; add() forgets what it changes.
+        self._key_ids: dict[str, str | None] = {}
+        self._runtime_tag: str | None = None
         self._unknown_kinds: set[str] = set()
         self.connections: dict[str, DeviceConnection] = {}
         self.claims: dict[str, AddressClaim] = {}  # local name -> another address it was seen at
@@ -111,6 +117,21 @@ class DeviceRegistry:
 
     def secret_of(self, uuid: str) -> str | None:
         return known_secret(self.data_dir, uuid) if self.data_dir is not None else None
+
+    def key_of(self, uuid: str) -> str | None:
+        if uuid not in self._key_ids:
+            if len(self._key_ids) >= 4 * MAX_ANNOUNCEMENTS:  # made-up uuids without end
+                self._key_ids.clear()
+            secret = self.secret_of(uuid)
+            self._key_ids[uuid] = key_id(secret) if secret else None
+        return self._key_ids[uuid]
+
+    def runtime_tag(self) -> str | None:
+        """This runtime's tag, as the devices it starts announce it (its launcher makes the
+        id it comes from, perhaps after this service started)."""
+        if self._runtime_tag is None and self.data_dir is not None:
+            self._runtime_tag = runtime_tag(self.data_dir)
+        return self._runtime_tag
 
     async def _follow_if_proven(
         self, conn: DeviceConnection, url: str, claim: AddressClaim
@@ -254,6 +275,7 @@ class DeviceRegistry:
                 )
             if request.pairing is not None and self.data_dir is not None:
                 keep_secret(self.data_dir, record.uuid, request.pairing)
+                self._key_ids.pop(record.uuid, None)
             # Persist first: if storage refuses, nothing has changed.
             await self.storage.put(
                 RECORD_PREFIX + record.local_name,
@@ -445,21 +467,27 @@ class DeviceRegistry:
     def detected_list(self) -> list[DetectedDevice]:
         added_as = {c.record.uuid: name for name, c in self.connections.items()}
         urls = self.announced.urls_by_uuid()
-        return [
-            DetectedDevice(
-                uuid=d.uuid,
-                name=d.name,
-                kind=d.kind,
-                model=d.model,
-                api=d.api,
-                address=f"{d.host}:{d.port}",
-                url=d.url,
-                added_as=added_as.get(d.uuid),
-                last_seen=d.last_seen,
-                also_at=[url for url in urls.get(d.uuid, []) if url != d.url],
+        own = self.runtime_tag()
+        listed = []
+        for d in sorted(self.detected.values(), key=lambda d: (d.kind, d.name, d.uuid)):
+            seen, why = mark(d, d.uuid in added_as, self.key_of(d.uuid), own)
+            listed.append(
+                DetectedDevice(
+                    uuid=d.uuid,
+                    name=d.name,
+                    kind=d.kind,
+                    model=d.model,
+                    api=d.api,
+                    address=f"{d.host}:{d.port}",
+                    url=d.url,
+                    added_as=added_as.get(d.uuid),
+                    last_seen=d.last_seen,
+                    also_at=[url for url in urls.get(d.uuid, []) if url != d.url],
+                    mark=seen,
+                    elsewhere=why,
+                )
             )
-            for d in sorted(self.detected.values(), key=lambda d: (d.kind, d.name, d.uuid))
-        ]
+        return listed
 
     def state_text(self, local_name: str) -> str:
         conn = self._get(local_name)
@@ -468,6 +496,7 @@ class DeviceRegistry:
                 f"{local_name} is {conn.status}"
                 + (f": {conn.last_error}" if conn.last_error else ""),
                 code="link_stale" if conn.status == "stale" else "device_disconnected",
+                words=link_words(local_name, conn.status),
             )
         return conn.last_state
 

@@ -1,7 +1,8 @@
 """A camera's frame stream: `WS /frames/ws`, each frame a text message (JSON: its seqno, when
 it was taken, its size and encoding) then a binary one (the encoded image); the next frame is
 taken only after the consumer acknowledges the last with any text message, so a slow consumer
-gets the newest frame, never a queue of old ones."""
+gets the newest frame, never a queue of old ones. A frame the camera cannot take ends the
+stream with the reason, as an error message the viewer shows."""
 
 from __future__ import annotations
 
@@ -14,6 +15,8 @@ from starlette.websockets import WebSocketDisconnect
 
 from runtime.drivers.command_log import CommandLog
 from runtime.interfaces.camera import CameraDriver, CaptureRequest, Encoding
+from runtime.kit.errors import OpenPendantError
+from runtime.kit.websocket import send_error
 
 
 def frames_router(driver: CameraDriver, log: CommandLog) -> APIRouter:
@@ -25,7 +28,12 @@ def frames_router(driver: CameraDriver, log: CommandLog) -> APIRouter:
         await ws.accept()
         with contextlib.suppress(WebSocketDisconnect, RuntimeError, OSError):
             while True:
-                image = await driver.capture(request)
+                try:
+                    image = await driver.capture(request)
+                except OpenPendantError as exc:
+                    await send_error(ws, exc)
+                    await ws.close(code=1011)
+                    return
                 await ws.send_text(json.dumps(image.model_dump(exclude={"data"})))
                 await ws.send_bytes(base64.b64decode(image.data))
                 await ws.receive_text()  # the consumer has drawn it

@@ -22,6 +22,7 @@ from runtime.drivers.routes import interface_router
 from runtime.drivers.state_stream import StateStream
 from runtime.interfaces.device import DeviceDriver
 from runtime.kit.app import create_app
+from runtime.kit.device_auth import key_id
 from runtime.kit.discovery import DEFAULT_TTL, Advertisement, Advertiser, Interfaces
 from runtime.kit.serve import listening_socket, run_app
 from runtime.kit.tasks import cancel_for_sure
@@ -133,7 +134,9 @@ def serve_driver(
     routers: Sequence[APIRouter] = (),
     ttl: int = DEFAULT_TTL,
     secret: str,
+    runtime: str = "",
 ) -> None:
+    """`runtime`: the tag of the runtime that started the device (announced), if one did."""
     sock = listening_socket(host, port)
     actual_port = int(sock.getsockname()[1])
     ident = driver.identity
@@ -144,6 +147,8 @@ def serve_driver(
         name=ident.name,
         host=advertised_host(host),
         port=actual_port,
+        key=key_id(secret),
+        runtime=runtime,
         ttl=ttl,
     )
     app = build_driver_app(

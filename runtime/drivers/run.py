@@ -23,7 +23,7 @@ from plugins.api import Driver, resolve
 from plugins.registry import registry
 from runtime.drivers.host import serve_driver
 from runtime.kit.app import describe_validation_errors
-from runtime.kit.device_auth import device_secret
+from runtime.kit.device_auth import device_secret, runtime_tag
 from runtime.kit.errors import OpenPendantError
 from runtime.kit.logs import setup_logging
 from runtime.kit.settings import SETTINGS_ENV, load_settings, settings_from_env
@@ -150,5 +150,7 @@ def run_driver(name: str, argv: list[str] | None = None) -> int:
         ttl=settings.discovery.ttl,
         routers=routers,
         secret=secret,
+        # Started by a runtime's launcher: announced as that runtime's (its data directory).
+        runtime=(runtime_tag(settings.data_dir) or "") if launched else "",
     )
     return 0

@@ -11,6 +11,7 @@ import numpy.typing as npt
 
 from runtime.interfaces.robot import JointTrajectory, RobotInfo
 from runtime.kit.errors import RobotError
+from runtime.kit.words import words
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -68,6 +69,7 @@ class JointLimitChecker:
                 f"{what} {q[i]:.4f} rad of joint {self._joint(i)} is outside its limits "
                 f"[{self.lower[i]:.4f}, {self.upper[i]:.4f}]",
                 code="position_limit",
+                words=words("robot.position_limit", joint=self._joint(i)),
             )
         return q
 

@@ -30,6 +30,7 @@ from runtime.interfaces.robot import (
     VelocityCommand,
 )
 from runtime.kit.errors import InvalidValue, RobotError
+from runtime.kit.words import words
 
 
 @dataclass(frozen=True)
@@ -90,9 +91,15 @@ class RobotDriver(DeviceDriver, Robot):
     async def enable(self) -> RobotState:
         flags = self.status().flags
         if flags.estop:
-            raise RobotError("the E-stop is engaged; release it first", code="estop")
+            raise RobotError(
+                "the E-stop is engaged; release it first", code="estop", words=words("robot.estop")
+            )
         if flags.error:
-            raise RobotError("the robot has an error; reset errors first", code="robot_fault")
+            raise RobotError(
+                "the robot has an error; reset errors first",
+                code="robot_fault",
+                words=words("robot.reset_first"),
+            )
         await self._enable()
         return self.state()
 
@@ -195,7 +202,9 @@ class RobotDriver(DeviceDriver, Robot):
 
     def _require_no_estop(self) -> None:
         if self.status().flags.estop:
-            raise RobotError("the E-stop is engaged; release it first", code="estop")
+            raise RobotError(
+                "the E-stop is engaged; release it first", code="estop", words=words("robot.estop")
+            )
 
     def _require_freedrive(self) -> None:
         if "freedrive" not in self.info.capabilities:
@@ -207,11 +216,17 @@ class RobotDriver(DeviceDriver, Robot):
         state = self.status()
         flags = state.flags
         if flags.estop:
-            raise RobotError("the E-stop is engaged", code="estop")
+            raise RobotError("the E-stop is engaged", code="estop", words=words("robot.estop"))
         if flags.error:
-            raise RobotError(f"the robot has an error: {state.error_message}", code="robot_fault")
+            raise RobotError(
+                f"the robot has an error: {state.error_message}",
+                code="robot_fault",
+                words=words("robot.fault", error=state.error_message),
+            )
         if not flags.enabled:
-            raise RobotError("the robot is not enabled", code="not_enabled")
+            raise RobotError(
+                "the robot is not enabled", code="not_enabled", words=words("robot.not_enabled")
+            )
         return state
 
     def _require_mode(self, mode: CommandMode) -> RobotStatus:
@@ -220,6 +235,7 @@ class RobotDriver(DeviceDriver, Robot):
             raise RobotError(
                 f"command needs mode {mode.value}; the robot is in {state.command_mode.value}",
                 code="wrong_mode",
+                words=words("robot.wrong_mode", needed=mode.value, mode=state.command_mode.value),
             )
         return state
 

@@ -59,6 +59,19 @@ class Action(ABC):
         """The next command, or None to send nothing this cycle."""
 
 
+def override(asked: float, state: RobotState) -> float:
+    """The fraction of the jog speed a press runs at: what it asked, never more than the
+    robot's speed override as it is now (a client's own figure does not raise it, and an
+    override lowered by anyone slows a press already held)."""
+    return min(asked, state.speed_ratio)
+
+
+def scaled_cap(tcp_cap: float | None, fraction: float) -> float | None:
+    """The TCP speed cap at an override: 10 % of the manual mode's 250 mm/s is 25 mm/s, as
+    for a program's moves, whose trajectories the override slows."""
+    return None if tcp_cap is None else tcp_cap * fraction
+
+
 class RampedJog(Action):
     """A continuous jog whose speed ramps up after the press and down after the release,
     so every joint changes speed together and the TCP keeps to its path."""
@@ -108,16 +121,21 @@ class JointVelocityJog(RampedJog):
         controller: VelocityController,
         velocity: FloatArray,
         tcp_cap: float | None,
+        speed: float = 1.0,
     ) -> None:
+        """`velocity` and `tcp_cap` at 100 %; `speed` the fraction of them asked."""
         super().__init__(press)
         self.controller = controller
         self.velocity = velocity
         self.tcp_cap = tcp_cap
+        self.speed = speed
 
     def tick(self, state: RobotState, now: float) -> VelocityCommand:
         q = np.array(state.joint_position_command)
-        wanted = self.velocity * self.level(now)
-        step = self.controller.from_joint_velocity(q, wanted, self.tcp_cap, self.last(state))
+        fraction = override(self.speed, state)
+        wanted = self.velocity * self.level(now) * fraction
+        cap = scaled_cap(self.tcp_cap, fraction)
+        step = self.controller.from_joint_velocity(q, wanted, cap, self.last(state))
         return self.command(step.velocity, now)
 
 
@@ -135,13 +153,16 @@ class TwistJog(RampedJog):
         twist: FloatArray,
         frame: str,
         tcp_cap: float | None,
+        speed: float = 1.0,
     ) -> None:
+        """`twist` and `tcp_cap` at 100 %; `speed` the fraction of them asked."""
         super().__init__(press)
         self.controller = controller
         self.kinematics = kinematics
         self.local_twist = twist
         self.frame = frame
         self.tcp_cap = tcp_cap
+        self.speed = speed
         self.start: pin.SE3 | None = None
         self.twist = twist
 
@@ -176,8 +197,10 @@ class TwistJog(RampedJog):
         q = np.array(state.joint_position_command)
         if self.start is None:
             self._begin(q)
-        twist = self.twist * self.level(now) + self.correction(self.kinematics.tcp(q))
-        step = self.controller.from_twist(q, twist, self.tcp_cap, self.last(state))
+        fraction = override(self.speed, state)
+        twist = self.twist * self.level(now) * fraction + self.correction(self.kinematics.tcp(q))
+        cap = scaled_cap(self.tcp_cap, fraction)
+        step = self.controller.from_twist(q, twist, cap, self.last(state))
         return self.command(step.velocity, now)
 
 
@@ -225,8 +248,10 @@ class FreedriveHold(Action):
 
 class MouseJog(Action):
     """Jogging with a 3D mouse: its deflection is the hold-to-run. The robot halts, and the
-    binding ends, when the mouse disconnects, or stops reporting while deflected (a mouse
-    reports continuously while deflected, so silence means stuck or gone)."""
+    binding ends, when the mouse stops reporting while deflected (a mouse reports
+    continuously while deflected, so silence means stuck). A mouse that goes away (unplugged,
+    its driver restarting) halts the robot and the binding waits for it: it drives again
+    only after its cap was seen at rest, so nothing resumes without a new deflection."""
 
     mode = CommandMode.velocity_command
 
@@ -244,7 +269,9 @@ class MouseJog(Action):
         tcp_cap: float | None,
         window: float,
         on_button: Callable[[int], None],
+        speed: float = 1.0,
     ) -> None:
+        """`speeds` (full deflection) and `tcp_cap` at 100 %; `speed` the fraction asked."""
         super().__init__(press)
         self.controller = controller
         self.kinematics = kinematics
@@ -254,6 +281,7 @@ class MouseJog(Action):
         self.joints = joints
         self.speeds = speeds
         self.tcp_cap = tcp_cap
+        self.speed = speed
         self.window = window
         self.on_button = on_button
         self.previous: FloatArray | None = None
@@ -264,6 +292,10 @@ class MouseJog(Action):
         self.last_tick: float | None = None
         self.tick_dt = 0.0
         self.level = np.zeros(6)  # the deflection as followed: it changes in RAMP at most
+        self.away = False  # the mouse is gone; the robot was halted
+        self.after_halt = False  # the driver is halted: a new deflection needs its mode again
+        self.armed = False  # its cap was seen at rest since it was bound or came back
+        self.waits_for_rest = False  # deflected, but not armed: it drives nothing
 
     def follow(self, axes: FloatArray, dt: float) -> FloatArray:
         """The deflection, changing from rest to full (or back) in RAMP at the quickest: a
@@ -310,10 +342,31 @@ class MouseJog(Action):
         self.outcome = ("halted", reason)
         return Halt(f"{self.press}:halt")
 
+    def _gone(self) -> Halt | None:
+        """The mouse went away: the robot is halted once, and everything followed so far is
+        forgotten (it comes back to a robot at rest)."""
+        if self.away:
+            return None
+        self.away, self.armed, self.waits_for_rest = True, False, False
+        self.previous, self.course, self.last_tick, self.last_report = None, None, None, None
+        self.level = np.zeros(6)
+        self.idle = True  # halted: nothing to hold until it is moved again
+        self.after_halt = True
+        return Halt(f"{self.press}:halt")
+
+    def held(self) -> tuple[str, str]:
+        """Why the binding drives nothing now: a code and the words for people, or two ""."""
+        if self.away:
+            return "mouse_away", "the 3D mouse is disconnected: halted until it is back"
+        if self.waits_for_rest:
+            return "mouse_not_at_rest", "let go of the 3D mouse: it drives once it was at rest"
+        return "", ""
+
     def tick(self, state: RobotState, now: float) -> Streamed | None:
         device = self.feed.state
         if device is None or not device.connected:
-            return self._halt("the 3D mouse is disconnected")
+            return self._gone()
+        self.away = False
         if self.last_report is None or device.seqno != self.last_report[0]:
             self.last_report = (device.seqno, now)
         axes = np.array(device.axes)
@@ -324,23 +377,32 @@ class MouseJog(Action):
         for button in sorted(set(device.buttons) - self.buttons):
             self.on_button(button)
         self.buttons = set(device.buttons)
+        # Bound, or back, with the cap pushed (a hand on it, or stuck): it drives only once
+        # it has been let go, never on from where it was.
+        self.armed = self.armed or not deflected
+        self.waits_for_rest = deflected and not self.armed
+        if self.waits_for_rest:
+            axes, deflected = np.zeros(6), False
         q = np.array(state.joint_position_command)
         previous = np.array(state.joint_velocity) if self.previous is None else self.previous
         axes = self.follow(axes, self.dt(now))
+        fraction = override(self.speed, state)
+        cap = scaled_cap(self.tcp_cap, fraction)
+        speeds = self.speeds * fraction
         if self.cartesian:
-            twist = axes * self.speeds
+            twist = axes * speeds
             current = self.kinematics.tcp(q)
             if self.frame == "tool":
                 rotation = current.rotation
                 twist = np.concatenate((rotation @ twist[:3], rotation @ twist[3:]))
             twist = self.keep_course(current, twist)
-            step = self.controller.from_twist(q, twist, self.tcp_cap, previous)
+            step = self.controller.from_twist(q, twist, cap, previous)
         else:
             self.course = None
             wanted = np.zeros(q.size)
             for axis, joint in enumerate(self.joints):
-                wanted[joint] = axes[axis] * self.speeds[axis]
-            step = self.controller.from_joint_velocity(q, wanted, self.tcp_cap, previous)
+                wanted[joint] = axes[axis] * speeds[axis]
+            step = self.controller.from_joint_velocity(q, wanted, cap, previous)
         still = not np.any(np.abs(step.velocity) > 1e-6)
         if still and not deflected:
             if self.idle:

@@ -33,4 +33,5 @@ class PathCheck:
                 report.message or "the path is not clear",
                 code=report.code or "collision",
                 details={"collision": collision.model_dump()} if collision else None,
+                words=report.words,
             )

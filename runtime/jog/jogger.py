@@ -13,15 +13,16 @@ from typing import Any
 
 import numpy as np
 
-from runtime.clients.robot import RobotClient
+from runtime.clients.robot import Halt, RobotClient
 from runtime.interfaces.robot import (
     CommandMode,
     OperationalMode,
     ProtectiveStopRequest,
     VelocityCommand,
 )
-from runtime.jog.actions import Action, RampedJog
+from runtime.jog.actions import Action, MouseJog, RampedJog
 from runtime.kit.errors import OpenPendantError, RobotError
+from runtime.kit.words import Words, words, words_of
 from runtime.links.hub import LINK_FAULTS
 from runtime.robotics.avoidance import SAFETY
 from runtime.robotics.kinematics import Kinematics
@@ -39,11 +40,13 @@ class Ended:
     state: str  # "done", "stopped", "halted", "refused"
     reason: str  # short and stable: a code the UI may act on
     message: str = ""  # for people; the reason when empty
+    words: Words | None = None  # the message as the UI says it in its language
 
 
 Listener = Callable[[Ended], None]
-# A press whose motion the robot's limits or the avoidance hold back: (press, why or "").
-HeldListener = Callable[[str, str], None]
+# A press whose motion the robot's limits or the avoidance hold back: (press, why or "",
+# its words, a code: "held_back", or the 3D mouse's "mouse_away" or "mouse_not_at_rest").
+HeldListener = Callable[[str, str, Words | None, str], None]
 HELD_SPEED = 1e-3  # rad/s: a fully ramped-up jog commanding less than this is held back
 HELD_CLEARANCE = SAFETY + 0.01  # m: nearer than this, the avoidance is what holds it
 
@@ -84,7 +87,9 @@ class Jogger:
         state = self.link.current()
         if state.operational_mode is OperationalMode.auto:
             raise RobotError(
-                "jogging needs manual mode; the robot is in automatic", code="not_manual"
+                "jogging needs manual mode; the robot is in automatic",
+                code="not_manual",
+                words=words("robot.not_manual"),
             )
         if state.operational_mode is OperationalMode.manual_full_speed:
             return None
@@ -101,10 +106,16 @@ class Jogger:
         if not flags.ready:
             # The same codes the driver uses, whichever of the two notices first.
             if flags.estop:
-                raise RobotError("the E-stop is engaged", code="estop")
+                raise RobotError("the E-stop is engaged", code="estop", words=words("robot.estop"))
             if flags.error:
-                raise RobotError(f"the robot has an error: {state.error_message}", code="error")
-            raise RobotError("the robot is not enabled", code="not_enabled")
+                raise RobotError(
+                    f"the robot has an error: {state.error_message}",
+                    code="error",
+                    words=words("robot.fault", error=state.error_message),
+                )
+            raise RobotError(
+                "the robot is not enabled", code="not_enabled", words=words("robot.not_enabled")
+            )
         previous = self.action
         self.action = None
         self._held = ""
@@ -126,7 +137,7 @@ class Jogger:
             raise
         self._wake.set()
 
-    async def stop(self, press: str, reason: str, *, halt: bool) -> None:
+    async def stop(self, press: str, reason: str, *, halt: bool, said: Words | None = None) -> None:
         """End a press: on release the robot decelerates under its limits; on a lost deadman
         or a stop request it is halted, and nothing resumes without a new press."""
         action = self.action
@@ -139,7 +150,7 @@ class Jogger:
         self.action = None
         if not halt:
             await self.link.halt(tag=f"{action.press}:release")
-        self._end(action, "halted" if halt else "stopped", reason)
+        self._end(action, "halted" if halt else "stopped", reason, said=said)
 
     async def halt_all(self, reason: str) -> None:
         action = self.action
@@ -172,14 +183,21 @@ class Jogger:
         with contextlib.suppress(OpenPendantError):
             await self.link.protective_stop(ProtectiveStopRequest(reason=reason))
 
-    def _end(self, action: Action, state: str, reason: str, message: str = "") -> None:
+    def _end(
+        self,
+        action: Action,
+        state: str,
+        reason: str,
+        message: str = "",
+        said: Words | None = None,
+    ) -> None:
         if self.listener is not None:
-            self.listener(Ended(action.press, state, reason, message or reason))
+            self.listener(Ended(action.press, state, reason, message or reason, said))
 
     def _report_held(self, action: Action, now: float) -> None:
         """Say why a press moves nothing though held (once per change of reason): the
         operator must not be left with "Moving" while the robot stands still."""
-        held = ""
+        held, said, code = "", None, "held_back"
         if (
             isinstance(action, RampedJog)
             and action.released is None
@@ -187,22 +205,28 @@ class Jogger:
             and action.previous is not None
             and float(np.max(np.abs(action.previous))) < HELD_SPEED
         ):
-            held = self.held_reason()
+            held, said = self.held_reason()
+        elif isinstance(action, MouseJog):
+            code, held = action.held()
         if held != self._held:
             self._held = held
             if self.on_held is not None:
-                self.on_held(action.press, held)
+                self.on_held(action.press, held, said, code)
 
-    def held_reason(self) -> str:
+    def held_reason(self) -> tuple[str, Words]:
         for constraint in self.controller.constraints:
             contact = getattr(constraint, "nearest", None)
             if contact is not None and contact.proximity.distance < HELD_CLEARANCE:
                 p = contact.proximity
+                distance, clear = round(p.distance * 1000), round(SAFETY * 1000)
                 return (
-                    f"held back: {p.body} is {p.distance * 1000:.0f} mm from {p.other} "
-                    f"(the robot keeps {SAFETY * 1000:.0f} mm clear)"
+                    f"held back: {p.body} is {distance} mm from {p.other} "
+                    f"(the robot keeps {clear} mm clear)",
+                    words(
+                        "jog.held_near", part=p.body, distance=distance, other=p.other, clear=clear
+                    ),
                 )
-        return "held back by a joint limit or a singularity"
+        return "held back by a joint limit or a singularity", words("jog.held_limit")
 
     def _refused(self, error: dict[str, Any]) -> None:
         """A command was refused (by the driver or the link): the press is over. Its earlier
@@ -221,13 +245,19 @@ class Jogger:
                 )
                 self._halts.add(halt)
                 halt.add_done_callback(self._halts.discard)
-            self._end(action, "halted" if fault else "refused", code, message)
+            said = words_of(error.get("words"))
+            self._end(action, "halted" if fault else "refused", code, message, said)
 
     async def _tick(self, action: Action) -> None:
         state = self.link.current(action.generation)
         now = time.monotonic()
         command = action.tick(state, now)
         if command is not None:
+            if isinstance(action, MouseJog) and action.after_halt and not isinstance(command, Halt):
+                # Its own halt (the mouse went away) left the driver halted; the mouse is back
+                # and moved anew from rest: a new press, in the mode it needs.
+                action.after_halt = False
+                await self.link.ensure_mode(action.mode, action.generation)
             action.streamed = True  # before the send: one that fails may have gone out
             await self.link.stream(command, action.generation)
         self._report_held(action, now)
@@ -254,7 +284,7 @@ class Jogger:
                     self.action = None
                     log.warning("jog on %s ended: %s", self.link.name, exc.message)
                     await self._protective_stop(action, exc.message)
-                    self._end(action, "halted", exc.code, exc.message)
+                    self._end(action, "halted", exc.code, exc.message, exc.words)
             except OpenPendantError as exc:
                 if self.action is action:
                     self.action = None
@@ -263,11 +293,11 @@ class Jogger:
                         # it never resumes when the link returns.
                         log.warning("jog on %s ended: %s", self.link.name, exc.message)
                         await self._halt_ended(action, "link")
-                        self._end(action, "halted", exc.code, exc.message)
+                        self._end(action, "halted", exc.code, exc.message, exc.words)
                     else:
                         if action.streamed:
                             await self._halt_ended(action, "refused")
-                        self._end(action, "refused", exc.code, exc.message)
+                        self._end(action, "refused", exc.code, exc.message, exc.words)
             except Exception:
                 log.exception("jog cycle failed; halting %s", self.link.name)
                 self.action = None

@@ -24,6 +24,8 @@ from runtime.jog.actions import (
     MouseJog,
     PlannedMoveAction,
     TwistJog,
+    override,
+    scaled_cap,
 )
 from runtime.jog.clearance import PathCheck
 from runtime.jog.directory import Directory
@@ -44,6 +46,7 @@ from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue, OpenPendantError, RobotError
 from runtime.kit.settings import MotionSettings
 from runtime.kit.websocket import Fanout
+from runtime.kit.words import Words, words
 from runtime.robotics.joint_move import plan_joint_move
 from runtime.robotics.path_monitor import PathMonitor
 from runtime.variable_storage.client import StorageClient
@@ -74,11 +77,11 @@ class Held:
 
 
 def mouse_speeds(binding: MouseBinding) -> FloatArray:
-    """Full deflection on each axis: m/s and rad/s (Cartesian), rad/s (joints)."""
+    """Full deflection on each axis at 100 %: m/s and rad/s (Cartesian), rad/s (joints)."""
     linear, angular = (
         (LINEAR_SPEED, ANGULAR_SPEED) if binding.mode == "cartesian" else (JOINT_SPEED, JOINT_SPEED)
     )
-    return np.array([linear] * 3 + [angular] * 3) * binding.speed
+    return np.array([linear] * 3 + [angular] * 3)
 
 
 class JogSession:
@@ -153,6 +156,7 @@ class JogSession:
                 tcp_cap=jogger.tcp_cap(),
                 window=self.deadman,
                 on_button=lambda b: self._mouse_button(request, b),
+                speed=request.speed,
             )
             self.ended = deque((p for p in self.ended if p != press), maxlen=1000)
             self.touched.add(request.robot)
@@ -168,11 +172,19 @@ class JogSession:
                     "state": "refused",
                     "reason": exc.code,
                     "message": exc.message,
+                    "words": exc.words.body() if exc.words else None,
                 }
             )
             return
         if press in self.held:
-            self.send({"type": "status", "press": press, "robot": request.robot, "state": "moving"})
+            self._mouse_status(press, request.robot, action)
+
+    def _mouse_status(self, press: str, robot: str, action: MouseJog) -> None:
+        """Bound: moving, or held while the mouse is away or its cap not yet let go (its
+        first cycle may have said so already; this must not say "moving" after it)."""
+        reason, why = action.held()
+        state = {"state": "held", "reason": reason, "message": why} if why else {"state": "moving"}
+        self.send({"type": "status", "press": press, "robot": robot, **state})
 
     async def _rebind(self, press: str, request: MouseBinding) -> bool:
         """A binding sent again while the mouse drives a robot: the same robot takes the new
@@ -197,6 +209,7 @@ class JogSession:
         action.frame = request.frame
         action.joints = request.joints
         action.speeds = mouse_speeds(request)
+        action.speed = request.speed
         self.send(
             {
                 "type": "mouse_frame",
@@ -205,7 +218,7 @@ class JogSession:
                 "mode": request.mode,
             }
         )
-        self.send({"type": "status", "press": press, "robot": request.robot, "state": "moving"})
+        self._mouse_status(press, request.robot, action)
         return True
 
     def _mouse_button(self, request: MouseBinding, button: int) -> None:
@@ -274,6 +287,7 @@ class JogSession:
                     "state": "refused",
                     "reason": exc.code,
                     "message": exc.message,
+                    "words": exc.words.body() if exc.words else None,
                 }
             )
             return
@@ -310,25 +324,29 @@ class JogSession:
                 q,
             )
             await self.paths.joint_line(request.robot, goal)
-            return self._plan(request.press, jogger, q, goal, request.speed, cap)
+            return self._plan(request.press, jogger, q, goal, override(request.speed, state), cap)
         if request.step is not None:
             goal = self._step_goal(request, jogger, q)
             await self.paths.joint_line(request.robot, goal)
-            return self._plan(request.press, jogger, q, goal, request.speed, cap)
+            return self._plan(request.press, jogger, q, goal, override(request.speed, state), cap)
         if request.kind == "joint":
             assert isinstance(request.axis, int)
             if not 0 <= request.axis < info.dof:
                 raise InvalidValue(f"the robot has joints 0 to {info.dof - 1}")
             velocity = np.zeros(info.dof)
-            velocity[request.axis] = request.direction * JOINT_SPEED * request.speed
-            return JointVelocityJog(request.press, jogger.controller, velocity, cap)
+            velocity[request.axis] = request.direction * JOINT_SPEED
+            return JointVelocityJog(request.press, jogger.controller, velocity, cap, request.speed)
         twist = np.zeros(6)
         index = CARTESIAN_AXES.index(str(request.axis))
-        twist[index] = (
-            request.direction * request.speed * (LINEAR_SPEED if index < 3 else ANGULAR_SPEED)
-        )
+        twist[index] = request.direction * (LINEAR_SPEED if index < 3 else ANGULAR_SPEED)
         return TwistJog(
-            request.press, jogger.controller, jogger.kinematics, twist, request.frame, cap
+            request.press,
+            jogger.controller,
+            jogger.kinematics,
+            twist,
+            request.frame,
+            cap,
+            request.speed,
         )
 
     @staticmethod
@@ -362,7 +380,9 @@ class JogSession:
         speed: float,
         cap: float | None,
     ) -> PlannedMoveAction:
-        move = plan_joint_move(jogger.kinematics, jogger.link.info, q, goal, speed, cap)
+        move = plan_joint_move(
+            jogger.kinematics, jogger.link.info, q, goal, speed, scaled_cap(cap, speed)
+        )
         # The path checked (the straight joint line) as it is streamed, every 8 ms.
         times = np.append(np.arange(0.0, move.duration, MONITOR_SAMPLE), move.duration)
         planned = np.array([move.sample(float(t))[0] for t in times])
@@ -394,17 +414,21 @@ class JogSession:
                 silent,
                 extra={"press": press, "silent_ms": silent},
             )
-            self._spawn(self._stop(held.robot, press, f"no heartbeat for {window} ms", halt=True))
+            said = words("jog.deadman", ms=window)
+            reason = f"no heartbeat for {window} ms"
+            self._spawn(self._stop(held.robot, press, reason, halt=True, said=said))
 
     async def _release(self, press: str) -> None:
         held = self.held.get(press)
         if held is not None and held.timer is not None:
             await self._stop(held.robot, press, "released", halt=False)
 
-    async def _stop(self, robot: str, press: str, reason: str, *, halt: bool) -> None:
+    async def _stop(
+        self, robot: str, press: str, reason: str, *, halt: bool, said: Words | None = None
+    ) -> None:
         jogger = self.directory.joggers.get(robot)
         if jogger is not None:
-            await jogger.stop(press, reason, halt=halt)
+            await jogger.stop(press, reason, halt=halt, said=said)
         self._forget(press)
 
     async def _halt(self, robot: str | None) -> None:
@@ -414,13 +438,16 @@ class JogSession:
         for press in list(self.held):
             self._forget(press)
 
-    def _held_back(self, press: str, why: str) -> None:
+    def _held_back(
+        self, press: str, why: str, said: Words | None, reason: str = "held_back"
+    ) -> None:
         held = self.held.get(press)
         if held is None:
             return
         status = {"type": "status", "press": press, "robot": held.robot}
         if why:
-            self.send({**status, "state": "held", "reason": "held_back", "message": why})
+            shown = {"state": "held", "reason": reason, "message": why}
+            self.send({**status, **shown, "words": said.body() if said else None})
         else:
             self.send({**status, "state": "moving"})
 
@@ -436,6 +463,7 @@ class JogSession:
                 "state": ended.state,
                 "reason": ended.reason,
                 "message": ended.message,
+                "words": ended.words.body() if ended.words else None,
             }
         )
 

@@ -35,6 +35,7 @@ PROOF_PATH = "/pair/proof"
 MAX_PROOF = 4096  # bytes of a proof's answer
 WINDOW = 60.0  # s either side of the device's clock
 FOLDER = "device-secrets"
+RUNTIME_ID = "runtime-id"  # the installation's id in its data directory (the launcher's)
 SAFE_UUID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:-]{0,63}\Z")
 
 
@@ -71,6 +72,26 @@ def device_secret(data_dir: Path, uuid: str) -> str:
 
 def _mac(secret: str, text: str) -> str:
     return hmac.new(secret.encode(), text.encode(), hashlib.sha256).hexdigest()
+
+
+def key_id(secret: str) -> str:
+    """The public name of a pairing key, announced by its device: a runtime that holds a key
+    for the device's uuid sees whether it is this one. The same for every holder of the key
+    and, a MAC of a fixed text under it, nothing of the key (a guess of a weak key can be
+    checked against it offline, as against any signed request on the wire). Anyone may copy
+    it: it marks, the challenge proves."""
+    return _mac(secret, "openpendant key id")[:16]
+
+
+def runtime_tag(data_dir: Path) -> str | None:
+    """The public name of the runtime whose data directory this is, announced by the devices
+    it starts so that other runtimes list them as its own; None before the launcher made its
+    id. A hash: the id itself names its devices' uuids."""
+    try:
+        made = (data_dir / RUNTIME_ID).read_text().strip()
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    return hashlib.sha256(f"openpendant runtime/{made}".encode()).hexdigest()[:16] if made else None
 
 
 def sign(secret: str, method: str, path: str, now: float | None = None) -> str:

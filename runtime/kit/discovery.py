@@ -8,14 +8,14 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import hashlib
 import logging
 import re
-import secrets
 import socket
 import time
 import unicodedata
 from collections.abc import Awaitable, Callable, Coroutine
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 from typing import Any, Literal
 
@@ -49,6 +49,15 @@ RESOLVE_ATTEMPTS = 3
 SWEEP = 0.25  # s between checks that detected devices still answer
 DNS_TXT, DNS_SRV, DNS_IN, DNS_QUERY = 16, 33, 1, 0x0000  # RFC 1035 / 2782 numbers
 UUID_PATTERN = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._:-]{0,63}\Z")
+# A pairing key's id or a runtime's tag, as announced (runtime/kit/device_auth.py).
+PUBLIC_ID = re.compile(r"^[0-9a-f]{16}\Z")
+LABEL_BYTES = 63  # RFC 1035 §2.3.4: a DNS label's limit
+# python-zeroconf writes every "." of a name as a label boundary, with no escaping: a dot in
+# an instance name would reach every browser as two labels. RFC 6763 §4.1.1 allows dots
+# there, so one is announced as U+2024 ONE DOT LEADER, which looks the same.
+DOT = "\u2024"
+NAME_CHECK = 0.25  # s: how long a new announcer waits for a live holder of its name to answer
+NAME_COPIES = 9  # "-2" … "-9" tried for a name that is taken
 # Control, format (bidi overrides, zero-width), surrogate, private-use and separator
 # characters: none belongs in a name shown on a pendant.
 _HIDDEN = {"Cc", "Cf", "Cs", "Co", "Zl", "Zp"}
@@ -108,6 +117,16 @@ def checked_uuid(raw: object) -> str:
     return text
 
 
+def instance_label(name: str, suffix: str, fallback: str) -> str:
+    """An instance name as RFC 6763 §4.1.1 has it: the user's name in UTF-8 (any script,
+    spaces, dots, punctuation), no control or format characters, at most 63 bytes with
+    `suffix`, cut where a character ends."""
+    text = unicodedata.normalize("NFC", clean_text(name, LABEL_BYTES)).strip() or fallback
+    tail = f" {suffix}".replace(".", DOT)
+    head = text.replace(".", DOT).encode()[: LABEL_BYTES - len(tail.encode())]
+    return head.decode("utf-8", "ignore").rstrip() + tail
+
+
 @dataclass(frozen=True)
 class Advertisement:
     uuid: str
@@ -116,38 +135,68 @@ class Advertisement:
     name: str
     host: str
     port: int
+    # The id of the device's pairing key (device_auth.key_id; "" for none): announced, and
+    # with the uuid it makes the names, so that a device restarted keeps them (browsers
+    # replace its old records instead of listing both) and two devices that claim one uuid
+    # with different keys (a cloned board, an impostor) do not share them, where the
+    # goodbye of either would end the other's announcement in every browser.
+    key: str
+    # The tag of the runtime that started the device (device_auth.runtime_tag), if one did.
+    runtime: str = ""
     api: str = API_VERSION
     # s: how long browsers keep the records when no goodbye comes (a device that lost
     # power). RFC 6762's 75 minutes is far too long for a pendant's list of devices.
     ttl: int = DEFAULT_TTL
-    # Makes this announcement's names its own: two devices that claim one uuid (a cloned
-    # board, an impostor) would otherwise share them, and the goodbye of either would end
-    # the other's announcement in every browser.
-    tag: str = field(default_factory=lambda: secrets.token_hex(2))
+    # RFC 6762 §9: 2, 3, … when another live announcer holds the name (the same uuid and key
+    # on two processes at once): the newcomer takes the next.
+    copy: int = 1
+
+    @property
+    def tag(self) -> str:
+        made = hashlib.blake2s(f"{self.uuid}\n{self.key}".encode(), digest_size=4).hexdigest()
+        return made if self.copy == 1 else f"{made}-{self.copy}"
 
     def instance_name(self) -> str:
-        label = re.sub(r"[^A-Za-z0-9 _-]", "", self.name)[:40] or self.kind
-        return f"{label} [{self.uuid[:8]} {self.tag}].{SERVICE_TYPE}"
+        label = instance_label(self.name, f"[{self.uuid[:8]} {self.tag}]", self.kind)
+        return f"{label}.{SERVICE_TYPE}"
 
     def service_info(self) -> AsyncServiceInfo:
+        properties = {
+            "uuid": self.uuid,
+            "kind": self.kind,
+            "model": self.model,
+            "name": self.name,
+            "api": self.api,
+        }
+        properties |= {k: v for k, v in (("key", self.key), ("runtime", self.runtime)) if v}
+        host = re.sub(r"[^A-Za-z0-9-]", "-", self.uuid[:12])
         return AsyncServiceInfo(
             SERVICE_TYPE,
             self.instance_name(),
             addresses=[socket.inet_aton(self.host)],
             port=self.port,
-            properties={
-                "uuid": self.uuid,
-                "kind": self.kind,
-                "model": self.model,
-                "name": self.name,
-                "api": self.api,
-            },
+            properties=properties,
             # Its own host name too: two announcers of one uuid on one host name would have
             # their addresses merged in every browser's cache (one's port, the other's IP).
-            server=f"openpendant-{self.uuid[:12]}-{self.tag}.local.",
+            server=f"openpendant-{host}-{self.tag}.local.",
             host_ttl=self.ttl,
             other_ttl=self.ttl,
         )
+
+
+async def name_taken(zc: Zeroconf, name: str, wait: float = NAME_CHECK) -> bool:
+    """Whether another live announcer answers for `name` within `wait` s (a responder
+    answers a question for its own service record at once)."""
+    query = DNSOutgoing(DNS_QUERY)
+    query.add_question(DNSQuestion(name, DNS_SRV, DNS_IN))
+    zc.async_send(query)
+    deadline = time.monotonic() + wait
+    while newest_record(zc.cache, current_time_millis(), name) is None:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            return False
+        await zc.async_wait(left * 1000.0)  # wakes on every update of the cache
+    return True
 
 
 class Advertiser:
@@ -164,10 +213,14 @@ class Advertiser:
         if not KIND_PATTERN.match(ad.kind):
             raise ValueError(f"malformed device kind {ad.kind!r}")
         self._zc = make_zeroconf(self._interfaces)
-        self._info = ad.service_info()
-        # Instance names carry the device uuid, so probing for conflicts only costs time
-        # (about 1.5 s) against the ≤ 1 s discovery target. The returned task repeats the
+        await self._zc.zeroconf.async_wait_for_start()
+        # The names are the device's own (its uuid and key), so zeroconf's probing (about
+        # 1.5 s, against the ≤ 1 s discovery target) is not needed: one question whether
+        # the same device runs elsewhere already. The returned task repeats the
         # announcement (the first is out already).
+        while ad.copy < NAME_COPIES and await name_taken(self._zc.zeroconf, ad.instance_name()):
+            ad = replace(ad, copy=ad.copy + 1)
+        self._info = ad.service_info()
         self._announcing = await self._zc.async_register_service(
             self._info, cooperating_responders=True
         )
@@ -203,6 +256,8 @@ class Detected:
     port: int
     service_name: str
     last_seen: float = field(default_factory=time.time)
+    key: str = ""  # the id of its pairing key, as announced ("": none announced)
+    runtime: str = ""  # the tag of the runtime that started it, as announced
 
     @property
     def url(self) -> str:
@@ -230,7 +285,15 @@ def parse_info(info: AsyncServiceInfo) -> Detected | None:
         host=addresses[0],
         port=int(info.port),
         service_name=info.name,
+        key=public_id(props.get(b"key")),
+        runtime=public_id(props.get(b"runtime")),
     )
+
+
+def public_id(raw: bytes | None) -> str:
+    """A key id or a runtime tag as announced; "" when there is none or it is malformed."""
+    text = clean_text(raw, 32)  # a longer one is refused, not cut
+    return text if PUBLIC_ID.match(text) else ""
 
 
 def newest_record(cache: DNSCache, now: float, name: str) -> tuple[float, float] | None:

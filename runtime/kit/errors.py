@@ -1,8 +1,11 @@
-"""One error type, mapped to an HTTP status and a JSON body {"error": {"code", "message"}}."""
+"""One error type, mapped to an HTTP status and a JSON body {"error": {"code", "message"}};
+with `words`, the message as a code and params a UI says in its own language."""
 
 from __future__ import annotations
 
 from typing import Any
+
+from runtime.kit.words import Words, words_of
 
 
 class OpenPendantError(Exception):
@@ -18,9 +21,11 @@ class OpenPendantError(Exception):
         code: str | None = None,
         status: int | None = None,
         details: dict[str, Any] | None = None,
+        words: Words | None = None,
     ) -> None:
         super().__init__(message)
         self.message = message
+        self.words = words
         if code is not None:
             self.code = code
         if status is not None:
@@ -31,6 +36,8 @@ class OpenPendantError(Exception):
         error: dict[str, Any] = {"code": self.code, "message": self.message}
         if self.details:
             error["details"] = self.details
+        if self.words is not None:
+            error["words"] = self.words.body()
         return {"error": error}
 
     @classmethod
@@ -45,6 +52,7 @@ class OpenPendantError(Exception):
                 code=str(err.get("code", "error")),
                 status=status,
                 details=err.get("details") if isinstance(err.get("details"), dict) else None,
+                words=words_of(err.get("words")),
             )
         return kind(f"unexpected response (HTTP {status})", code="bad_response", status=status)
 

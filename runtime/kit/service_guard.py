@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+from typing import Any
 from urllib.parse import parse_qs
 
 from starlette.responses import JSONResponse
@@ -17,6 +18,7 @@ from runtime.auth.standing import SignIns
 from runtime.kit import tickets
 from runtime.kit.internal import HEADER, internal_token, is_internal
 from runtime.kit.sign_in_watch import ENDED, EndsWithSignIn
+from runtime.kit.words import Words
 
 OPEN_PATHS = frozenset({"/health"})
 # s between checks of an open jog socket's sign-in: it closes well within 2 s of its end.
@@ -39,14 +41,22 @@ async def deny(
 
 
 async def refuse(
-    scope: Scope, receive: Receive, send: Send, status: int, code: str, message: str
+    scope: Scope,
+    receive: Receive,
+    send: Send,
+    status: int,
+    code: str,
+    message: str,
+    words: Words | None = None,
 ) -> None:
     if scope["type"] == "websocket":
         # Closed before it is accepted: nothing the socket would have carried is acted on.
         await send({"type": "websocket.close", "code": 1008, "reason": code})
         return
-    body = {"error": {"code": code, "message": message}}
-    await JSONResponse(body, status_code=status)(scope, receive, send)
+    error: dict[str, Any] = {"code": code, "message": message}
+    if words is not None:
+        error["words"] = words.body()
+    await JSONResponse({"error": error}, status_code=status)(scope, receive, send)
 
 
 def _header(scope: Scope, name: str) -> str | None:

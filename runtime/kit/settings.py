@@ -47,8 +47,10 @@ class LinkSettings(BaseModel):
     driver_timeout: float = Field(default=0.3, ge=0.05, le=5.0)
     # A robot's speed override when its link comes up (added, back after a loss, the runtime
     # started again) and when it first comes into focus on a pendant: lowered to this if it
-    # was higher, so nobody's first hold runs at full speed. Raising it needs control.
-    first_speed_ratio: float = Field(default=0.25, gt=0.0, le=1.0)
+    # was higher, so nobody's first hold runs at full speed. Raising it needs control. 10 %,
+    # as FANUC's override after a cold start: a one-second hold then moves any TCP at most
+    # 25 mm (the manual cap's 250 mm/s scaled); at 25 % the UR5's J1 moved it 80 mm.
+    first_speed_ratio: float = Field(default=0.10, gt=0.0, le=1.0)
 
 
 class AuthSettings(BaseModel):

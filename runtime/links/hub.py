@@ -24,6 +24,7 @@ from websockets.asyncio.client import ClientConnection
 
 from runtime.kit.errors import OpenPendantError, Unavailable
 from runtime.kit.internal import internal_headers
+from runtime.kit.words import link_words, words
 from runtime.links.freshness import Freshness, state_stamp
 
 log = logging.getLogger(__name__)
@@ -103,19 +104,25 @@ class LinkHub:
     def state_text(self, view: DeviceView, generation: int | None = None) -> str:
         """The newest state if it can be trusted now, else the reason raised."""
         if not self.connected.is_set():
-            raise Unavailable("the link to the device manager is down", code="device_disconnected")
+            raise Unavailable(
+                "the link to the device manager is down",
+                code="device_disconnected",
+                words=words("link.manager_down"),
+            )
         if generation is not None and generation != view.generation:
             raise OpenPendantError(
                 f"the link to {view.name} was lost and made again; what ran on it has ended",
                 code="link_changed",
                 status=409,
+                words=words("link.changed", device=view.name),
             )
         if view.status != "connected" or view.text is None:
             code = "link_stale" if view.status == "stale" else "device_disconnected"
             if view.status == "removed":
                 code = "device_not_found"
             detail = f": {view.error}" if view.error else ""
-            raise Unavailable(f"{view.name} is {view.status}{detail}", code=code)
+            said = link_words(view.name, view.status) if code != "device_not_found" else None
+            raise Unavailable(f"{view.name} is {view.status}{detail}", code=code, words=said)
         # Only a robot's state changes every cycle; other devices repeat theirs at rest.
         age = view.freshness.age() if view.kind == "robot" else view.freshness.silence()
         if age > self.stale_after:
@@ -124,7 +131,11 @@ class LinkHub:
                 if math.isinf(age)
                 else f"its newest state is {age * 1000:.0f} ms old"
             )
-            raise Unavailable(f"the link to {view.name} is stale: {shown}", code="link_stale")
+            raise Unavailable(
+                f"the link to {view.name} is stale: {shown}",
+                code="link_stale",
+                words=words("link.stale", device=view.name),
+            )
         return view.text
 
     # Commands --------------------------------------------------------------------------------
@@ -184,13 +195,19 @@ class LinkHub:
         if ws is None:
             if quiet:
                 return
-            raise Unavailable("the link to the device manager is down", code="device_disconnected")
+            raise Unavailable(
+                "the link to the device manager is down",
+                code="device_disconnected",
+                words=words("link.manager_down"),
+            )
         try:
             await ws.send(json.dumps(message))
         except websockets.WebSocketException as exc:
             if not quiet:
                 raise Unavailable(
-                    "the link to the device manager is down", code="device_disconnected"
+                    "the link to the device manager is down",
+                    code="device_disconnected",
+                    words=words("link.manager_down"),
                 ) from exc
 
     # The socket ------------------------------------------------------------------------------

@@ -20,6 +20,7 @@ from runtime.interfaces.robot import (
     TrajectoryWaypoint,
 )
 from runtime.kit.errors import OpenPendantError, RobotError
+from runtime.kit.words import words
 from runtime.robotics.path_monitor import PathDeviation, PathMonitor
 from runtime.robotics.timing import TimedPath
 
@@ -54,9 +55,13 @@ def trajectory(timed: TimedPath) -> JointTrajectory:
 def check_faults(state: RobotState) -> None:
     """Raise when the robot can no longer move: E-stop, or a fault."""
     if state.flags.estop:
-        raise RobotError("E-stop: the move is stopped", code="estop")
+        raise RobotError("E-stop: the move is stopped", code="estop", words=words("robot.estop"))
     if state.flags.error:
-        raise RobotError(f"robot fault: {state.error_message}", code="robot_fault")
+        raise RobotError(
+            f"robot fault: {state.error_message}",
+            code="robot_fault",
+            words=words("robot.fault", error=state.error_message),
+        )
 
 
 class Execution:

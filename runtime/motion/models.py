@@ -9,6 +9,7 @@ from pydantic import BaseModel, Field, model_validator
 
 from runtime.interfaces.common import JointVector, Pose, Strict
 from runtime.interfaces.variables import VARIABLE_NAME
+from runtime.kit.words import Words
 
 Ratio = Field(default=0.5, gt=0, le=1)
 
@@ -84,6 +85,7 @@ class PlanReport(BaseModel):
     ok: bool
     code: str = ""
     message: str = ""
+    words: Words | None = None  # the message as a UI says it in its language
     duration: float = 0.0
     planned_around: bool = False
     collision: CollisionReport | None = None
@@ -106,6 +108,7 @@ class MoveStatus(BaseModel):
     state: MoveState
     code: str = ""  # why it failed, for programs: e.g. "blocked", "cancelled", "estop"
     message: str = ""
+    words: Words | None = None  # the message as a UI says it in its language
     progress: float = 0.0
     plan: PlanReport | None = None
     caller: str | None = None  # who asked for it (X-Caller), e.g. a program run

@@ -11,6 +11,7 @@ import pinocchio as pin
 
 from runtime.interfaces.limits import FloatArray, JointLimitChecker
 from runtime.kit.errors import InvalidValue, OpenPendantError
+from runtime.kit.words import words
 from runtime.motion.models import CollisionReport, MoveKind, MoveRequest, PlanReport, Target
 from runtime.robotics.checker import Collision, PathChecker
 from runtime.robotics.joint_move import plan_joint_move
@@ -70,7 +71,7 @@ class MovePlanner:
         try:
             return self._plan(request, start, points, checker)
         except OpenPendantError as exc:
-            return Plan(PlanReport(ok=False, code=exc.code, message=exc.message))
+            return Plan(PlanReport(ok=False, code=exc.code, message=exc.message, words=exc.words))
 
     def _plan(
         self, request: MoveRequest, start: FloatArray, points: list[Point], checker: PathChecker
@@ -249,6 +250,7 @@ class MovePlanner:
             ok=False,
             code="collision",
             message=f"the move is refused: {collision.describe()}",
+            words=words("motion.collision", part=collision.robot_part, other=collision.other),
             collision=CollisionReport(
                 robot_part=collision.robot_part,
                 other=collision.other,

@@ -21,6 +21,7 @@ from runtime.interfaces.variables import JointWaypoint, PoseWaypoint
 from runtime.kit.app import create_app
 from runtime.kit.errors import Conflict, NotFound, OpenPendantError
 from runtime.kit.settings import MotionSettings, RuntimeSettings
+from runtime.kit.words import words
 from runtime.motion.executor import Execution
 from runtime.motion.models import (
     MoveKind,
@@ -144,8 +145,12 @@ class Moves:
         status.plan = plan.report
         if not plan.report.ok or plan.timed is None:
             status.state, status.message = MoveState.failed, plan.report.message
+            status.words = plan.report.words
             raise Refused(
-                plan.report.message, code=plan.report.code, details=plan.report.model_dump()
+                plan.report.message,
+                code=plan.report.code,
+                details=plan.report.model_dump(),
+                words=plan.report.words,
             )
         link = self.robots.known_link(robot)
         # The planned TCP path for the monitor: a few ms of forward kinematics, off the loop.
@@ -188,7 +193,11 @@ class Moves:
 
     def _check_free(self, robot: str) -> None:
         if robot in self.running:
-            raise Conflict(f"{robot} is already moving; cancel that move first", code="busy")
+            raise Conflict(
+                f"{robot} is already moving; cancel that move first",
+                code="busy",
+                words=words("motion.busy", robot=robot),
+            )
 
     def _launch(self, status: MoveStatus, execution: Execution | ReactiveExecution) -> MoveStatus:
         if status.state is not MoveState.planning:  # stopped or cancelled while planned
@@ -240,7 +249,7 @@ class Moves:
         except OpenPendantError as exc:
             cancelled = exc.code == "cancelled"
             status.state = MoveState.cancelled if cancelled else MoveState.failed
-            status.code, status.message = exc.code, exc.message
+            status.code, status.message, status.words = exc.code, exc.message, exc.words
         except Exception as exc:  # a move must always end with a status
             status.state, status.message = MoveState.failed, f"internal error: {exc}"
             raise

@@ -25,6 +25,7 @@ from blockly_blocks.generator import Generated, generate
 from blockly_blocks.workspace import WorkspaceError, allow_deep_json, dump_json, parse_json
 from runtime.interfaces.variables import StoredProgram
 from runtime.kit.errors import InvalidValue, OpenPendantError
+from runtime.kit.words import words
 from runtime.program.models import ProblemInfo
 from sandbox.policy import ProgramCompileError, compile_program
 
@@ -39,7 +40,8 @@ TIME_LIMIT = 60.0
 
 def workspace_error(exc: WorkspaceError) -> InvalidValue:
     details = {"block": exc.block} if exc.block else None
-    return InvalidValue(exc.message, code="invalid_workspace", details=details)
+    said = exc.words or words("program.unreadable", reason=exc.message)
+    return InvalidValue(exc.message, code="invalid_workspace", details=details, words=said)
 
 
 def compile_error(exc: ProgramCompileError) -> InvalidValue:
@@ -47,11 +49,14 @@ def compile_error(exc: ProgramCompileError) -> InvalidValue:
         f"the program breaks the sandbox policy: {exc}",
         code="invalid_program",
         details={"errors": exc.errors, "line": exc.line},
+        words=words("program.policy", errors=str(exc)),
     )
 
 
 def problem_infos(generated: Generated) -> list[ProblemInfo]:
-    return [ProblemInfo(block=p.block, message=p.message) for p in generated.problems]
+    return [
+        ProblemInfo(block=p.block, message=p.message, words=p.words) for p in generated.problems
+    ]
 
 
 def read_request(body: bytes) -> dict[str, Any]:
@@ -185,12 +190,14 @@ class Compiler:
                     f"the program took longer than {self.time_limit:.0f} s to check; make it "
                     "smaller",
                     code="too_complex",
+                    words=words("program.too_complex"),
                 ) from None
             except concurrent.futures.process.BrokenProcessPool:
                 self._replace("died")
                 raise InvalidValue(
                     "checking the program took more than its process could give; make it smaller",
                     code="too_complex",
+                    words=words("program.too_complex"),
                 ) from None
         if not ok:
             status, body = value

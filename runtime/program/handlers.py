@@ -14,6 +14,7 @@ from runtime.interfaces.io import SignalWrite
 from runtime.interfaces.robot import DigitalOutputCommand, ToolCommand
 from runtime.kit.app import describe_validation_errors
 from runtime.kit.errors import InvalidValue, NotFound
+from runtime.kit.words import words
 from runtime.motion.client import MoveKind, MoveRequest, Target
 from runtime.program.host import RunHost
 from runtime.program.stored_values import checked_name, put_value
@@ -106,7 +107,11 @@ async def check_waypoint(run: RunHost, args: dict[str, Any]) -> dict[str, str]:
     try:
         variable = await run.storage.get(name)
     except NotFound:
-        raise CallRefused(f"there is no waypoint {name!r}", "unknown_waypoint") from None
+        raise CallRefused(
+            f"there is no waypoint {name!r}",
+            "unknown_waypoint",
+            words("run.no_waypoint", name=name),
+        ) from None
     if variable.type not in WAYPOINT_TYPES:
         raise CallRefused(f"{name} is a {variable.type}, not a waypoint", "not_a_waypoint")
     return {"type": variable.type}

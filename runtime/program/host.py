@@ -23,6 +23,7 @@ from runtime.clients.base import DeviceClient
 from runtime.clients.devices import Devices
 from runtime.clients.robot import RobotClient
 from runtime.kit.errors import OpenPendantError
+from runtime.kit.words import words
 from runtime.motion.client import MotionClient, MoveRequest, MoveState
 from runtime.variable_storage.client import StorageClient
 from sandbox.supervisor import CallRefused
@@ -86,24 +87,39 @@ class RunHost:
         self.refuse_if_stopped()
         found = handlers().get(fn)
         if found is None:
-            raise CallRefused(f"unknown program function {fn[:40]!r}", "unknown_function")
+            raise CallRefused(
+                f"unknown program function {fn[:40]!r}",
+                "unknown_function",
+                words("run.unknown_function", name=fn[:40]),
+            )
         try:
             handler: Handler = resolve(found) if isinstance(found, str) else found
         except Exception as exc:  # a plugin that cannot be loaded fails its block, not the run
             log.warning("the handler of %s cannot be loaded: %s", fn, exc)
-            raise CallRefused(f"{fn} is not available: {exc}", "plugin_failed") from None
+            raise CallRefused(
+                f"{fn} is not available: {exc}",
+                "plugin_failed",
+                words("run.function_failed", name=fn, error=str(exc)),
+            ) from None
         try:
             result = await handler(self, args)
         except CallRefused:
             raise
         except OpenPendantError as exc:
-            raise CallRefused(exc.message, exc.code) from None
+            raise CallRefused(exc.message, exc.code, exc.words) from None
         except (KeyError, TypeError, ValueError) as exc:
-            raise CallRefused(f"malformed request to {fn}: {exc}", "bad_call") from None
+            raise CallRefused(
+                f"malformed request to {fn}: {exc}",
+                "bad_call",
+                words("run.function_failed", name=fn, error=str(exc)),
+            ) from None
         except Exception as exc:  # a handler's own bug fails its block; the run gets an answer
             log.exception("the handler of %s failed", fn)
+            error = f"{type(exc).__name__}: {exc}"
             raise CallRefused(
-                f"{fn} failed: {type(exc).__name__}: {exc}", "handler_failed"
+                f"{fn} failed: {error}",
+                "handler_failed",
+                words("run.function_failed", name=fn, error=error),
             ) from None
         finally:
             if self.halted:
@@ -117,7 +133,7 @@ class RunHost:
     def refuse_if_stopped(self) -> None:
         """Checked again after each await that looks a device up: a stop may have come."""
         if self.halted:
-            raise CallRefused("the program was stopped", "stopped")
+            raise CallRefused("the program was stopped", "stopped", words("run.stopped"))
 
     async def halt(self) -> None:
         """Stop wins: each robot halts at once over its link; the motion service drops the
@@ -178,7 +194,9 @@ class RunHost:
             robots = await self.devices.robot_names()
             if len(robots) != 1:
                 raise CallRefused(
-                    "choose the robot with a 'use robot' block first", "no_robot_selected"
+                    "choose the robot with a 'use robot' block first",
+                    "no_robot_selected",
+                    words("run.no_robot"),
                 )
             self.robot = robots[0]
         return self.robot
@@ -236,7 +254,7 @@ class RunHost:
             status = await self.motion.status(status.id, MOVE_POLL)
         if status.state is not MoveState.finished:
             message = status.message or f"the move was {status.state.value}"
-            raise CallRefused(message, status.code or status.state.value)
+            raise CallRefused(message, status.code or status.state.value, status.words)
 
     # Leases and claims ----------------------------------------------------------------------
 

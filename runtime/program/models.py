@@ -9,6 +9,7 @@ from pydantic import BaseModel, Field
 
 from runtime.interfaces.common import Strict
 from runtime.kit.errors import InvalidValue
+from runtime.kit.words import Words, words
 
 NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,63}\Z")
 PREFIX = "program."
@@ -21,6 +22,7 @@ def check_program_name(name: str) -> str:
             f"invalid program name {name[:80]!r}: start with a letter; letters, digits, "
             "'_' and '-' only; at most 64 characters",
             code="invalid_name",
+            words=words("program.bad_name", name=name[:80]),
         )
     return name
 
@@ -46,6 +48,7 @@ class ProblemInfo(BaseModel):
 
     block: str
     message: str
+    words: Words | None = None  # the message as a UI says it in its language
 
 
 class Saved(BaseModel):
@@ -78,6 +81,7 @@ class OutputEntry(BaseModel):
     stream: str
     block: str | None
     ts: float
+    words: Words | None = None  # an error line as a UI says it in its language
 
 
 class ErrorInfo(BaseModel):
@@ -86,6 +90,7 @@ class ErrorInfo(BaseModel):
     line: int | None = None
     block: str | None = None
     code: str | None = None
+    words: Words | None = None  # the message as a UI says it in its language
 
 
 class RunStatus(BaseModel):

@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from runtime.kit.words import words
 from runtime.program.models import ErrorInfo, RunStatus
 
 log = logging.getLogger(__name__)
@@ -50,7 +51,12 @@ class RunRecords:
             status.update(
                 state="error",
                 ended=time.time(),
-                error=ErrorInfo(message=CRASHED, kind="crash", code="service_crashed").model_dump(),
+                error=ErrorInfo(
+                    message=CRASHED,
+                    kind="crash",
+                    code="service_crashed",
+                    words=words("run.crashed"),
+                ).model_dump(),
             )
             found.append((name, dict(entry.get("leases", {}))))
             entry["leases"] = {}

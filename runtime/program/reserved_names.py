@@ -8,6 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from plugins.registry import registry
+from runtime.kit.words import words
 from sandbox.supervisor import CallRefused
 
 
@@ -71,4 +72,5 @@ def refuse_reserved(name: str) -> None:
             f"{name} is reserved: names under {namespace.prefix} are {namespace.holds}, which "
             f"a program may read but not change; {namespace.changed_by} or through the API",
             "reserved_name",
+            words("storage.reserved", name=name, prefix=namespace.prefix),
         )

@@ -12,10 +12,11 @@ import time
 from runtime.clients.devices import Devices
 from runtime.kit.errors import Conflict, NotFound, OpenPendantError
 from runtime.kit.websocket import Fanout
+from runtime.kit.words import Words, words
 from runtime.motion.client import MotionClient
 from runtime.program.host import RunHost
 from runtime.program.library import ProgramLibrary
-from runtime.program.models import ErrorInfo, OutputEntry, RunRequest, RunStatus
+from runtime.program.models import ErrorInfo, OutputEntry, ProblemInfo, RunRequest, RunStatus
 from runtime.program.records import RunRecords
 from runtime.variable_storage.client import StorageClient
 from sandbox.supervisor import ProgramRun, RunLimits, WorkerPool
@@ -60,16 +61,22 @@ class Runs:
     async def start(self, name: str, request: RunRequest) -> RunStatus:
         current = self.runs.get(name)
         if current is not None and not current.run.ended_state:
-            raise Conflict(f"{name} is running; stop it first", code="busy")
+            raise Conflict(
+                f"{name} is running; stop it first",
+                code="busy",
+                words=words("program.busy", program=name),
+            )
         await self._room_for_a_run()
         python, problems = await self.library.runnable(name)
         if problems:
             first = problems[0].message
             more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+            said = _problems_words(name, problems)
             raise Conflict(
                 f"{name} cannot run until it is complete: {first}{more}",
                 code="program_has_problems",
                 details={"problems": [p.model_dump() for p in problems]},
+                words=said,
             )
         host = RunHost(
             f"program {name}",
@@ -115,6 +122,7 @@ class Runs:
             raise Conflict(
                 f"{live} programs are running, as many as may run at once here; stop one first",
                 code="too_many_runs",
+                words=words("program.too_many_runs", count=live),
             )
 
     async def _finish(self, active: Active) -> None:
@@ -217,7 +225,12 @@ class Runs:
         if run.error is not None:
             e = run.error
             error = ErrorInfo(
-                message=e.message, kind=e.kind, line=e.line, block=e.block, code=e.code
+                message=e.message,
+                kind=e.kind,
+                line=e.line,
+                block=e.block,
+                code=e.code,
+                words=e.words,
             )
         return RunStatus(
             program=name,
@@ -227,7 +240,9 @@ class Runs:
             pause_reason=run.pause_reason,
             message=run.message,
             output=[
-                OutputEntry(seq=o.seq, text=o.text, stream=o.stream, block=o.block, ts=o.ts)
+                OutputEntry(
+                    seq=o.seq, text=o.text, stream=o.stream, block=o.block, ts=o.ts, words=o.words
+                )
                 for o in run.output
                 if o.seq > after
             ],
@@ -247,3 +262,13 @@ class Runs:
             status = self.status(name)
             status.output = status.output[-PUSHED_OUTPUT:]
             self.fanout.publish(status.model_dump_json(), key=name)
+
+
+def _problems_words(program: str, problems: list[ProblemInfo]) -> Words | None:
+    first = problems[0].words
+    if first is None:
+        return None
+    if len(problems) == 1:
+        return words("program.has_problems", program=program, problem=first)
+    more = len(problems) - 1
+    return words("program.has_problems_more", program=program, problem=first, more=more)

@@ -16,6 +16,7 @@ from typing import Any
 
 from runtime.interfaces.variables import NAME_PATTERN
 from runtime.kit.errors import Conflict, NotFound
+from runtime.kit.words import words
 from runtime.program.reserved_names import refuse_reserved
 from runtime.variable_storage.client import StorageClient
 from sandbox.supervisor import CallRefused
@@ -31,6 +32,7 @@ def checked_name(name: Any) -> str:
             f"{str(name)[:40]!r} is not a variable name: start with a letter; letters, digits, "
             "'_', '.', '-' only; at most 128 characters",
             "invalid_name",
+            words("storage.bad_name", name=str(name)[:40]),
         )
     return name
 
@@ -54,12 +56,17 @@ async def put_value(storage: StorageClient, program: str, name: Any, kind: str, 
     name = checked_name(name)
     refuse_reserved(name)
     if kind not in PROGRAM_TYPES:
-        raise CallRefused(f"a program cannot store {name!r}: it is the user's", "reserved_name")
+        raise CallRefused(
+            f"a program cannot store {name!r}: it is the user's",
+            "reserved_name",
+            words("storage.users", name=name),
+        )
     size = encoded_size(value)
     if size > MAX_VALUE_BYTES:
         raise CallRefused(
             f"the value for {name} is {size} bytes; a stored value may have {MAX_VALUE_BYTES}",
             "too_large",
+            words("storage.too_large", name=name, size=size, limit=MAX_VALUE_BYTES),
         )
     try:
         existing = await storage.get(name)
@@ -67,7 +74,9 @@ async def put_value(storage: StorageClient, program: str, name: Any, kind: str, 
         existing = None
     if existing is not None and existing.type not in PROGRAM_TYPES:
         raise CallRefused(
-            f"{name} is a {existing.type}; a program cannot overwrite it", "reserved_name"
+            f"{name} is a {existing.type}; a program cannot overwrite it",
+            "reserved_name",
+            words("storage.users", name=name),
         )
     tags = sorted({*(existing.tags if existing else []), owner_tag(program)})
     try:
@@ -83,4 +92,10 @@ async def put_value(storage: StorageClient, program: str, name: Any, kind: str, 
             f"history keeps included; a program may keep {MAX_PROGRAM_BYTES}. Store fewer, "
             "smaller or less often changed values",
             "storage_full",
+            words(
+                "storage.full",
+                program=program,
+                bytes=int(exc.details.get("bytes", 0)),
+                budget=MAX_PROGRAM_BYTES,
+            ),
         ) from None

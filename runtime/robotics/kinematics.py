@@ -11,6 +11,7 @@ import pinocchio as pin
 from runtime.interfaces.common import Pose
 from runtime.interfaces.robot import RobotInfo
 from runtime.kit.errors import InvalidValue
+from runtime.kit.words import words
 from runtime.paths import resolve_package_uri
 
 FloatArray = npt.NDArray[np.float64]
@@ -160,7 +161,10 @@ class Kinematics:
                 if len(found) == 3:
                     break
         if not found:
-            raise Unreachable("no joint position reaches that pose within the joint limits")
+            raise Unreachable(
+                "no joint position reaches that pose within the joint limits",
+                words=words("motion.unreachable"),
+            )
         return min(found, key=lambda q: float(np.sum((q - seed_q) ** 2)))
 
     def solutions(

@@ -11,6 +11,7 @@ import pinocchio as pin
 
 from runtime.interfaces.limits import FloatArray
 from runtime.kit.errors import InvalidValue
+from runtime.kit.words import words
 from runtime.robotics.kinematics import Kinematics, Unreachable
 
 LINEAR_STEP = 0.001  # m between IK samples along a TCP path
@@ -117,6 +118,7 @@ def sample_tcp_path(
                 f"the target {where} mm ({away} mm from the base) is out of reach: no joint "
                 "position puts the tool there within the joint limits",
                 code="unreachable",
+                words=words("motion.out_of_reach", where=str(where)),
             ) from exc
     positions = np.array([p.translation for p in poses])
     quats = [pin.Quaternion(p.rotation) for p in poses]
@@ -144,12 +146,16 @@ def sample_tcp_path(
             except Unreachable as exc:
                 where = np.round(target.translation * 1000).astype(int).tolist()
                 raise PathError(
-                    f"the line leaves the workspace near {where} mm", code="unreachable"
+                    f"the line leaves the workspace near {where} mm",
+                    code="unreachable",
+                    words=words("motion.leaves_workspace", where=str(where)),
                 ) from exc
             if np.max(np.abs(nxt - q)) > MAX_JOINT_JUMP or _singular(kinematics, nxt):
                 where = np.round(target.translation * 1000).astype(int).tolist()
                 raise PathError(
-                    f"the line passes through a singularity near {where} mm", code="singularity"
+                    f"the line passes through a singularity near {where} mm",
+                    code="singularity",
+                    words=words("motion.singularity", where=str(where)),
                 )
             q = nxt
             rows.append(q)

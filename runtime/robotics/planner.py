@@ -17,6 +17,7 @@ from ompl import util as ou
 
 from runtime.interfaces.limits import FloatArray
 from runtime.kit.errors import InvalidValue
+from runtime.kit.words import words
 from runtime.robotics.checker import Collision, PathChecker
 from runtime.robotics.screen import Screen
 from runtime.robotics.shortcut import shortcut
@@ -56,7 +57,16 @@ def plan_around(
     for where, q in (("the robot now", start), ("the target", goal)):
         hit = checker.configuration(q)
         if hit is not None:
-            raise NoPath(f"no path: at {where}, {hit.describe()}", code="collision")
+            now = q is start
+            raise NoPath(
+                f"no path: at {where}, {hit.describe()}",
+                code="collision",
+                words=words(
+                    "motion.collision_now" if now else "motion.collision_at_target",
+                    part=hit.robot_part,
+                    other=hit.other,
+                ),
+            )
     screen = Screen(checker.world, checker.robot, checker.margin, [start, goal], SEARCH_RESOLUTION)
     for widen, share in ATTEMPTS:
         low, high = lower, upper

@@ -16,11 +16,13 @@ MAX_NAME = 128
 
 
 class ProgramError(Exception):
-    """The runtime refused or failed what the program asked for."""
+    """The runtime refused or failed what the program asked for; `words` as the runtime sent
+    them (a code and params a UI says in its language), passed back with the error."""
 
-    def __init__(self, message: str, code: str = "error") -> None:
+    def __init__(self, message: str, code: str = "error", words: Any = None) -> None:
         super().__init__(message)
         self.code = code
+        self.words = words
 
 
 class Host(Protocol):

@@ -1,5 +1,6 @@
 """Signing in on a tablet by touch: the first start's set-up of the administrator, an
-operator refused the administrator's page, hostile text shown as text, signing out."""
+operator refused the administrator's page, hostile text shown as text, signing out, and a
+tablet whose session ended elsewhere saying why on its sign-in screen."""
 
 from __future__ import annotations
 
@@ -7,6 +8,9 @@ from pathlib import Path
 
 from playwright.sync_api import Browser, Page, expect
 
+from runtime.auth.roles import Role
+from runtime.auth.setup import auth_path
+from runtime.auth.store import AuthStore
 from runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
 from tests.browser.conftest import TABLET, PageErrors, open_context
 
@@ -162,6 +166,49 @@ def test_an_administrator_changes_a_users_role_and_pin_by_touch(
         page.get_by_test_id("save-user").tap()
         expect(row).not_to_contain_text("PIN")
         assert listed()[operator] == ("programmer", False)
+        assert all("401" in e or "403" in e for e in errors.errors), errors.errors
+    finally:
+        context.close()
+
+
+def test_a_tablet_signed_out_elsewhere_says_why_on_its_sign_in_screen(
+    runtime: Runtime, browser: Browser
+) -> None:
+    """Issue 32: a tablet dropped to the sign-in screen with no word of why. Its live sockets
+    close when the session ends (within a second or two), and the screen says what ended it:
+    here the same session signed out in another window, then a new role."""
+    store = AuthStore(auth_path(runtime.data_dir))
+    try:
+        store.create_user("night-shift", "night shift password", Role.operator)
+    finally:
+        store.close()
+    context = open_context(browser, TABLET)
+    try:
+        page = context.new_page()
+        errors = PageErrors(page)
+        page.goto(f"{runtime.url}/#/jog")
+        sign_in_by_touch(page, "night-shift", "night shift password")
+        expect(page.get_by_test_id("nav-jog")).to_be_visible()
+        cookie = next(c["value"] for c in context.cookies() if c["name"] == "op_session")
+        csrf = page.evaluate("fetch('/api/auth/me').then((r) => r.json()).then((me) => me.csrf)")
+        elsewhere = {"Cookie": f"op_session={cookie}", "x-csrf-token": csrf}
+        ended = runtime.api("POST", "/auth/logout", role=None, headers=elsewhere)
+        assert ended.status_code == 204
+        expect(page.get_by_test_id("sign-in-ended")).to_contain_text(
+            "this session was signed out", timeout=10_000
+        )
+        sign_in_by_touch(page, "night-shift", "night shift password")
+        expect(page.get_by_test_id("nav-jog")).to_be_visible()
+        expect(page.get_by_test_id("sign-in-ended")).to_have_count(0)
+        store = AuthStore(auth_path(runtime.data_dir))
+        try:
+            store.set_role("night-shift", Role.viewer)  # by an administrator, elsewhere
+        finally:
+            store.close()
+        expect(page.get_by_test_id("sign-in-ended")).to_contain_text(
+            "an administrator changed your role", timeout=10_000
+        )
+        # A socket opening again after the end is refused (a handshake refused reads 403).
         assert all("401" in e or "403" in e for e in errors.errors), errors.errors
     finally:
         context.close()

@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import re
+import secrets
 import time
 from pathlib import Path
 
 import httpx
 import pytest
-from playwright.sync_api import BrowserContext, expect
+from playwright.sync_api import BrowserContext, Locator, expect
 
-from runtime.bench.harness.processes import Runtime, SimRobotProc
+from runtime.bench.harness.processes import DriverProc, Runtime, SimRobotProc
 from runtime.kit.device_auth import DeviceAuth, known_secret
 from tests.browser.conftest import PageErrors, add_robot, fits_the_screen, sign_in
 
@@ -139,6 +140,65 @@ def test_another_device_claiming_an_added_robot_is_shown_and_not_followed(
         runtime.api("DELETE", "/devices/robot")
 
 
+def test_each_detected_device_is_marked_and_another_s_is_not_added_at_one_tap(
+    runtime: Runtime, tablet: BrowserContext, tmp_path: Path, artifacts: Path
+) -> None:
+    """Issue 32: every device on the network looked the same, whoever it belonged to."""
+    name = f"marks-{secrets.token_hex(3)}"  # others' tests on this loopback: uuids of its own
+    # Started with the runtime's data directory, as on its computer: it has the robot's key.
+    paired = SimRobotProc(runtime.home, f"{name}-paired")
+    new = SimRobotProc(tmp_path / "board", f"{name}-new")
+    clone: SimRobotProc | None = None
+    try:
+        paired.wait_ready()
+        new.wait_ready()
+        page = tablet.new_page()
+        errors = PageErrors(page)
+        page.goto(f"{runtime.url}/#/devices")
+
+        def card(uuid: str) -> Locator:
+            return page.locator(f'[data-testid="detected-device"][data-uuid="{uuid}"]')
+
+        for sim, marked, says in (
+            (paired, "paired", "Paired with this runtime"),
+            (new, "new", "adding it needs its pairing code"),
+        ):
+            expect(card(sim.uuid)).to_have_attribute("data-mark", marked, timeout=15_000)
+            expect(card(sim.uuid).get_by_test_id("detected-mark")).to_contain_text(says)
+            one_tap = card(sim.uuid).get_by_test_id("add-device")
+            expect(one_tap).to_have_text("Add")
+            expect(one_tap).to_have_class(re.compile(r"\bprimary\b"))
+
+        # Gone; another device announces its uuid without its key.
+        paired.stop()
+        clone = SimRobotProc(tmp_path / "clone", f"{name}-paired", extra=["--uuid", paired.uuid])
+        clone.wait_ready()
+        other = card(paired.uuid)
+        expect(other).to_have_attribute("data-mark", "elsewhere", timeout=15_000)
+        mark = other.get_by_test_id("detected-mark")
+        expect(mark).to_contain_text("but not its pairing key")
+        add = other.get_by_test_id("add-device")
+        expect(add).to_have_text("Add anyway…")
+        expect(add).not_to_have_class(re.compile(r"\bprimary\b"))
+        box = mark.bounding_box()
+        assert box is not None and box["height"] >= 44  # read at arm's length
+        page.screenshot(path=artifacts / "marks.png")
+
+        page.get_by_test_id("nav-system").tap()
+        page.get_by_test_id("language-de").tap()
+        page.get_by_test_id("nav-devices").tap()
+        expect(mark).to_contain_text("ohne dessen Kopplungsschlüssel")
+        expect(add).to_have_text("Trotzdem hinzufügen…")
+        expect(card(new.uuid).get_by_test_id("detected-mark")).to_contain_text(
+            "Nicht mit dieser Runtime gekoppelt"
+        )
+        assert errors.errors == []
+    finally:
+        for proc in (paired, new, clone):
+            if proc is not None:
+                proc.stop()
+
+
 def test_phone_layout_has_big_targets_and_no_sideways_scroll(
     runtime: Runtime, phone: BrowserContext, artifacts: Path, tmp_path: Path
 ) -> None:
@@ -195,3 +255,32 @@ def test_losing_the_runtime_is_shown(tablet: BrowserContext, tmp_path: Path) -> 
         expect(link).to_contain_text("No connection to the runtime", timeout=10_000)
     finally:
         runtime.stop()
+
+
+def test_a_camera_whose_cell_names_no_robot_says_so_on_the_devices_and_vision_panels(
+    runtime: Runtime, tablet: BrowserContext, artifacts: Path
+) -> None:
+    """Issue 32: `sim-camera --cell NAME` naming no robot drew an empty table without a
+    warning. Its link is fine; once the robot had its time to come up (none here), its card
+    and its picture on the Vision panel say what is wrong, and so does its state."""
+    small = ("--width", "64", "--height", "48")
+    options = ("--cell", "no-such-robot", "--cell-wait", "0", *small)
+    camera = DriverProc(runtime.home, "sim-camera", "lost-cam", *options)
+    try:
+        url = camera.wait_ready()
+        added = runtime.api("POST", "/devices", json={"url": url, "local_name": "lost_cam"})
+        assert added.status_code in (200, 201), added.text
+        page = tablet.new_page()
+        page.goto(f"{runtime.url}/#/devices")
+        card = page.locator("[data-testid=device-card][data-name=lost_cam]")
+        said = card.get_by_test_id("device-error")
+        expect(said).to_contain_text("no simulated robot named 'no-such-robot'", timeout=15_000)
+        page.screenshot(path=artifacts / "camera-without-its-robot.png")
+        assert "'no-such-robot'" in runtime.api("GET", "/devices/lost_cam/state").json()["error"]
+        page.get_by_test_id("nav-vision").tap()
+        expect(page.get_by_test_id("camera-problem")).to_contain_text(
+            "no simulated robot named 'no-such-robot'", timeout=15_000
+        )
+    finally:
+        runtime.api("DELETE", "/devices/lost_cam")
+        camera.stop()

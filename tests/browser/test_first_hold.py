@@ -1,8 +1,8 @@
 """A newcomer's first hold (issue 32): a robot just added comes up at the site's first speed
-override (25 %), and a one-second hold of J1 + on the Jog panel (the UR5 at home, its TCP
-0.5 m from the axis) moves the TCP about 80 mm; at 100 % the same hold moved it 220 mm (the
-manual mode's 250 mm/s cap). A runtime of its own, with the product's default (every other
-test runs its robots at 100 %)."""
+override (10 %), and a one-second hold of J1 + on the Jog panel (the UR5 at home, its TCP
+0.5 m from the axis) moves the TCP at most 35 mm (about 25 mm: the manual mode's 250 mm/s
+cap, scaled); at 25 % the same hold moved it 80 mm, at 100 % 220 mm. A runtime of its own,
+with the product's default (every other test runs its robots at 100 %)."""
 
 from __future__ import annotations
 
@@ -56,18 +56,18 @@ def test_a_new_robots_first_hold_is_at_the_first_speed(
     errors = PageErrors(page)
     page.goto(f"{runtime.url}/#/jog")
     take_control_and_enable(page)
-    expect(page.get_by_test_id("speed")).to_have_value("25")
+    expect(page.get_by_test_id("speed")).to_have_value("10")
     before = robot_joints(runtime)
     finger = Finger(page)
     finger.down(page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus]"))
     try:
         time.sleep(1.0)  # the hold itself: a newcomer's one second
+        held = robot_joints(runtime)  # where one second took it, whenever the release lands
     finally:
         finger.up()
     wait_for(lambda: robot_at_rest(runtime), 5, what="stopped on release")
-    after = robot_joints(runtime)
-    moved = float(np.linalg.norm(UR5.tcp(after).translation - UR5.tcp(before).translation))
-    assert 0.005 < moved <= 0.1, f"the TCP moved {moved * 1000:.1f} mm"
+    moved = float(np.linalg.norm(UR5.tcp(held).translation - UR5.tcp(before).translation))
+    assert 0.005 < moved <= 0.035, f"the TCP moved {moved * 1000:.1f} mm in the first second"
     page.get_by_test_id("control").tap()
     assert errors.errors == []
 
@@ -87,13 +87,13 @@ def test_a_robot_left_fast_elsewhere_is_slowed_where_it_first_comes_into_focus(
         page = tablet.new_page()
         errors = PageErrors(page)
         page.goto(f"{runtime.url}/#/jog")
-        expect(page.get_by_test_id("speed")).to_have_value("25", timeout=10_000)
+        expect(page.get_by_test_id("speed")).to_have_value("10", timeout=10_000)
         wait_for(
             lambda: (
-                abs(runtime.api("GET", "/devices/robot/state").json()["speed_ratio"] - 0.25) < 1e-9
+                abs(runtime.api("GET", "/devices/robot/state").json()["speed_ratio"] - 0.10) < 1e-9
             ),
             5,
-            what="the robot at 25 %",
+            what="the robot at 10 %",
         )
         assert errors.errors == []
     finally:

@@ -13,7 +13,7 @@ from pathlib import Path
 import httpx
 import numpy as np
 import pytest
-from playwright.sync_api import BrowserContext, expect
+from playwright.sync_api import BrowserContext, Locator, expect
 
 from device_drivers.ur_rtde.emulator import control as emulator_control
 from runtime.bench.harness.processes import STILL, DriverProc, Runtime, SimRobotProc, wait_for
@@ -352,6 +352,12 @@ def test_without_control_the_pad_does_nothing(
     plus = page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus] button")
     expect(plus).to_be_disabled()
     assert fits_the_screen(page)
+    # A touch on a disabled button says why where the finger is (issue 32).
+    touched = page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus]")
+    touched.tap()
+    said = page.get_by_test_id("refusal-reason")
+    expect(said).to_contain_text("Take control to jog this robot")
+    assert beside(said, touched)
 
 
 def test_the_gripper_is_activated_closed_on_a_part_and_opened_from_the_jog_panel(
@@ -442,3 +448,44 @@ def test_a_ur_says_what_enable_and_reset_do_on_it(
         runtime.api("DELETE", "/devices/ur")
         driver.stop()
         emulator_control.stop(emulator)
+
+
+def beside(said: Locator, control: Locator) -> bool:
+    """The bubble is over the control it speaks for (within a finger's reach of it)."""
+    bubble, box = said.bounding_box(), control.bounding_box()
+    assert bubble is not None and box is not None
+    overlaps = bubble["x"] < box["x"] + box["width"] and box["x"] < bubble["x"] + bubble["width"]
+    return overlaps and abs(bubble["y"] + bubble["height"] - box["y"]) < box["height"] + 60
+
+
+def test_a_refused_move_to_says_why_at_the_button_held(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    """Issue 32: a held Move to the robot refused only cleared its progress, the reason in a
+    status line elsewhere. The button held says it."""
+    wait_for(
+        lambda: runtime.api("GET", "/devices/robot/lease").json()["holder"] is None,
+        20,
+        what="the earlier pendants' control released",
+    )
+    beyond = [0.0, -1.57, 1.57, -1.57, -1.57, 9.0]  # the wrist turned past its limit
+    value = {"type": "joint_waypoint", "value": {"joints": beyond, "robot": robot}}
+    assert runtime.api("PUT", "/variables/beyond_the_wrist", json=value).status_code == 200
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/jog")
+    take_control_and_enable(page)
+    waypoint = page.locator("[data-testid=waypoint][data-name=beyond_the_wrist]")
+    move_to = waypoint.get_by_test_id("move-to")
+    before = robot_joints(runtime)
+    finger = Finger(page)
+    finger.down(move_to)
+    try:
+        said = page.get_by_test_id("refusal-reason")
+        expect(said).to_contain_text("Refused")
+        assert beside(said, move_to)
+    finally:
+        finger.up()
+    assert np.abs(robot_joints(runtime) - before).max() < 1e-3
+    page.get_by_test_id("control").tap()
+    assert errors.errors == []

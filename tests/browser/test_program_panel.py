@@ -415,3 +415,56 @@ def test_the_io_blocks_offer_an_io_blocks_signals_by_name(
         runtime.api("DELETE", "/programs/lamp")
         runtime.api("DELETE", "/devices/cell_io")
         device.stop()
+
+
+def test_problems_refusals_and_run_errors_read_in_the_language_chosen(
+    runtime: Runtime, cell: dict[str, Any], tablet: BrowserContext
+) -> None:
+    """Issue 32: in German, what the runtime said stayed English. Now its words are the UI's:
+    a pre-run problem, a run's refused call and a refusal of control, each in German."""
+    unfinished = make.block("controls_repeat_ext")
+    saved = runtime.api(
+        "PUT", "/programs/unfinished", json={"workspace": make.workspace(unfinished)}
+    )
+    assert saved.status_code == 200, saved.text
+    assert saved.json()["problems"][0]["words"]["code"] == "program.input_empty"
+    python = {"python": "store('frames.x', 1)\n"}
+    assert runtime.api("PUT", "/programs/frames_writer", json=python).status_code == 200
+    held: str | None = None
+    try:
+        page = tablet.new_page()
+        errors = PageErrors(page)
+        page.goto(f"{runtime.url}/#/system")
+        page.get_by_test_id("language-de").tap()
+        page.get_by_test_id("nav-program").tap()
+        page.get_by_test_id("program-select").select_option("unfinished")
+        expect(page.get_by_test_id("problem-item")).to_have_text(
+            "⚠ Block „repeat ext“: die Anzahl der Wiederholungen fehlt"
+        )
+        expect(page.get_by_test_id("run")).to_be_disabled()
+
+        # A call the runtime refuses while the program runs: the error in the output.
+        page.get_by_test_id("program-select").select_option("frames_writer")
+        page.get_by_test_id("run").tap()
+        expect(page.get_by_test_id("run-error")).to_have_text(
+            "frames.x ist reserviert: Namen unter frames. darf ein Programm lesen, aber nicht"
+            " ändern (Zeile 1)",
+            timeout=15_000,
+        )
+
+        # Control of the robot, refused: someone else holds it.
+        taken = runtime.api("POST", "/devices/robot/lease", json={"holder": "Pendant am Band"})
+        assert taken.status_code == 200, taken.text
+        held = taken.json()["token"]
+        page.get_by_test_id("nav-jog").tap()
+        expect(page.get_by_test_id("lease")).to_contain_text("Pendant am Band")
+        page.get_by_test_id("control").tap()
+        expect(page.get_by_test_id("jog-message")).to_have_text(
+            "robot wird von „Pendant am Band“ gesteuert"
+        )
+        assert all("409" in e for e in errors.errors), errors.errors  # the refusal itself
+    finally:
+        if held is not None:
+            runtime.api("DELETE", "/devices/robot/lease", headers={"X-Lease-Token": held})
+        runtime.api("DELETE", "/programs/unfinished")
+        runtime.api("DELETE", "/programs/frames_writer")

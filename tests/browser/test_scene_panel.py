@@ -1,20 +1,31 @@
 """The Scene panel by touch: preview the path to a waypoint (clear), add a box and place it
 on that path (the preview turns red and names the box), nudge it, delete it (clear again);
-the closest distance shows; the 3D view draws the box and the colliding path."""
+the closest distance shows; the 3D view draws the box and the colliding path, and every robot
+of the cell where the motion service has it (the one not in focus faint)."""
 
 from __future__ import annotations
 
+import math
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-from playwright.sync_api import BrowserContext, expect
+from playwright.sync_api import BrowserContext, Locator, expect
 
-from runtime.bench.harness.processes import Runtime, wait_for
-from runtime.robotics.kinematics import Kinematics
+from runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
+from runtime.interfaces.common import Pose
+from runtime.interfaces.robot import RobotInfo
+from runtime.robotics.kinematics import Kinematics, pose_to_se3
 from runtime.robotics.robot_info import load_robot_info
-from tests.browser.conftest import PageErrors, add_robot, fits_the_screen
+from tests.browser.conftest import (
+    PageErrors,
+    add_robot,
+    fits_the_screen,
+    robot_joints,
+    robot_state,
+)
 from tests.support.png import decode
 
 INFO = load_robot_info("ur5")
@@ -121,3 +132,139 @@ def test_the_scene_panel_fits_a_phone(runtime: Runtime, robot: str, phone: Brows
     page.goto(f"{runtime.url}/#/scene")
     expect(page.get_by_test_id("add-box")).to_be_visible()
     assert fits_the_screen(page)
+
+
+# The Panda stands 1.5 m beside the UR5, turned a quarter turn.
+PANDA_BASE = {
+    "position": [1.5, 0.3, 0.0],
+    "orientation": [0.0, 0.0, math.sqrt(0.5), math.sqrt(0.5)],
+}
+
+
+@pytest.fixture
+def panda(runtime: Runtime, robot: str, tmp_path: Path) -> Iterator[str]:
+    """A second robot of the cell, on its own base."""
+    frame = {"type": "frame", "value": {"pose": PANDA_BASE}}
+    assert runtime.api("PUT", "/variables/frames.panda", json=frame).is_success
+    sim = SimRobotProc(tmp_path, name="scene-panda", model="panda")
+    sim.wait_ready()
+    try:
+        wait_for(lambda: runtime.is_detected(sim.uuid), 10, what="the Panda detected")
+        paired = {"uuid": sim.uuid, "local_name": "panda", "pairing": sim.secret}
+        added = runtime.api("POST", "/devices", json=paired)
+        assert added.status_code == 201, added.text
+        wait_for(
+            lambda: runtime.api("GET", "/devices/panda").json()["status"] == "connected",
+            10,
+            what="the Panda connected",
+        )
+        yield "panda"
+    finally:
+        runtime.api("DELETE", "/devices/panda")
+        runtime.api("DELETE", "/variables/frames.panda")
+        sim.stop()
+
+
+class DrawnCell:
+    """What the 3D view says it draws of each robot (its read-only test hook)."""
+
+    def __init__(self, view: Locator, runtime: Runtime) -> None:
+        self.view = view
+        self.runtime = runtime
+        self.last: Any = None
+        self.kinematics: dict[str, Kinematics] = {}
+
+    def placed(self, name: str) -> tuple[np.ndarray[Any, Any], np.ndarray[Any, Any]]:
+        """Where the motion service has the robot's base and flange (world frame, metres)."""
+        scene = self.runtime.api("GET", "/motion/scene").json()
+        base = pose_to_se3(Pose.model_validate(scene["robots"][name]["base"]))
+        if name not in self.kinematics:
+            info = self.runtime.api("GET", f"/jog/robots/{name}").json()["info"]
+            self.kinematics[name] = Kinematics(RobotInfo.model_validate(info))
+        flange = base * self.kinematics[name].flange(robot_joints(self.runtime, name))
+        return base.translation, flange.translation
+
+    def drawn(self) -> dict[str, dict[str, Any]]:
+        robots = self.view.evaluate("e => e.getRootNode().host.drawnRobots()")
+        self.last = robots
+        return {r["name"]: r for r in robots}
+
+    def shows(self, dimmed: dict[str, bool]) -> bool:
+        """Exactly these robots, each on its base at its joints, faint as `dimmed` says."""
+        drawn = self.drawn()
+        if set(drawn) != set(dimmed):
+            return False
+        for name, faint in dimmed.items():
+            base, flange = self.placed(name)
+            robot = drawn[name]
+            if robot["dimmed"] != faint or len(robot["flange"]) != 3:
+                return False
+            if not np.allclose(robot["base"], base, atol=0.002):
+                return False
+            if not np.allclose(robot["flange"], flange, atol=0.002):
+                return False
+        return True
+
+    def wait(self, dimmed: dict[str, bool], what: str) -> None:
+        try:
+            wait_for(lambda: self.shows(dimmed), 20, interval=0.2, what=what)
+        except TimeoutError as exc:
+            raise AssertionError(f"{exc}; drawn: {self.last}") from exc
+
+
+def move_joints(runtime: Runtime, name: str, joints: list[float]) -> None:
+    token = runtime.api("POST", f"/devices/{name}/lease", json={"holder": "setup"}).json()["token"]
+    headers = {"X-Lease-Token": token}
+    try:
+        assert runtime.api("POST", f"/jog/robots/{name}/enable", headers=headers).status_code == 200
+        wait_for(lambda: robot_state(runtime, name)["flags"]["ready"], 10, what=f"{name} ready")
+        moved = runtime.api(
+            "POST",
+            f"/motion/robots/{name}/moves",
+            params={"wait": 30},
+            json={"kind": "joint", "target": {"joints": joints}, "speed": 1.0},
+            headers=headers,
+        )
+        assert moved.json().get("state") == "finished", moved.text
+    finally:
+        runtime.api("DELETE", f"/devices/{name}/lease", headers=headers)
+
+
+def test_the_3d_view_draws_every_robot_of_the_cell_the_one_not_in_focus_faint(
+    runtime: Runtime, robot: str, panda: str, tablet: BrowserContext, artifacts: Path
+) -> None:
+    """Issue 32: the view drew only the robot in focus while the Scene panel said it stood
+    inside the other."""
+    page = tablet.new_page()
+    errors = PageErrors(page)
+    page.goto(f"{runtime.url}/#/scene")
+    page.locator("[data-testid=status-robot][data-name=robot]").tap()
+    view = page.get_by_test_id("robot-view")
+    expect(view).to_have_attribute("data-robot", "robot", timeout=20_000)
+    expect(view).to_have_attribute("data-status", "ready", timeout=60_000)
+    cell = DrawnCell(view, runtime)
+    cell.wait({"robot": False, "panda": True}, "both robots drawn on their bases, the Panda faint")
+    page.wait_for_timeout(500)  # a software frame is drawn at most every 200 ms
+    view.screenshot(path=artifacts / "1-ur5-in-focus.png")
+
+    # The Panda moves (not in focus): its drawing follows its joints.
+    before = np.array(cell.drawn()["panda"]["flange"])
+    target = robot_joints(runtime, panda) + np.array([0.6, 0.0, 0.0, 0.3, 0.0, 0.0, 0.0])
+    move_joints(runtime, panda, target.tolist())
+    cell.wait({"robot": False, "panda": True}, "the faint Panda drawn where it moved")
+    assert np.linalg.norm(np.array(cell.drawn()["panda"]["flange"]) - before) > 0.05
+
+    # The Panda in focus: it is drawn as it is, the UR5 faint.
+    page.locator("[data-testid=status-robot][data-name=panda]").tap()
+    expect(view).to_have_attribute("data-robot", "panda", timeout=20_000)
+    expect(view).to_have_attribute("data-status", "ready", timeout=60_000)
+    cell.wait({"robot": True, "panda": False}, "the UR5 faint and the Panda not")
+    page.wait_for_timeout(500)
+    view.screenshot(path=artifacts / "2-panda-in-focus.png")
+
+    # Mounted elsewhere (here by another client): drawn on its new base at once.
+    frame = {"type": "frame", "value": {"pose": {"position": [1.2, -0.4, 0.1]}}}
+    assert runtime.api("PUT", "/variables/frames.panda", json=frame).is_success
+    cell.wait({"robot": True, "panda": False}, "the Panda drawn on its new base")
+    assert np.allclose(cell.drawn()["panda"]["base"], [1.2, -0.4, 0.1], atol=0.002)
+    assert errors.errors == []

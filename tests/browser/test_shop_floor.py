@@ -5,6 +5,8 @@ page and moves nothing."""
 
 from __future__ import annotations
 
+import os
+import signal
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -517,3 +519,67 @@ def test_waypoints_say_where_they_go_filter_by_tag_and_show_the_move_under_way(
     for waypoint in (name, "place_on_tray"):
         runtime.api("DELETE", f"/variables/{waypoint}")
     assert errors.errors == []
+
+
+def test_a_restarting_mouse_driver_keeps_the_3d_mouse_on_and_a_robot_restart_says_why_it_is_off(
+    runtime: Runtime, robot: str, tablet: BrowserContext, tmp_path: Path
+) -> None:
+    """Issue 32: the mouse's own driver going away halts the robot but keeps the switch on,
+    said on the card; back, the mouse drives again (from rest, by a new deflection). The
+    robot's driver restarting is a lost link: the switch goes off, and the card says why.
+    Last in the module: the runtime's own robot is killed (the launcher restarts it)."""
+    recording = mouse_recording(
+        tmp_path / "lift.jsonl",
+        [(0.6, [0, 0, -300, 0, 0, 0], 0), (0.3, [0, 0, 0, 0, 0, 0], 0)],
+        end="stuck",  # silent at rest: nothing to halt
+    )
+    mouse = SpaceMouseProc(tmp_path, "restarting-mouse", recording)
+    mouse.wait_ready()
+    try:
+        wait_for(lambda: runtime.is_detected(mouse.uuid), 10, what="mouse detected")
+        paired = {"uuid": mouse.uuid, "local_name": "mouse", "pairing": mouse.secret}
+        added = runtime.api("POST", "/devices", json=paired)
+        assert added.status_code == 201, added.text
+        page = tablet.new_page()
+        page.goto(f"{runtime.url}/#/jog")
+        take_control_and_enable(page)
+        page.get_by_test_id("mode-base").tap()
+        toggle = page.get_by_test_id("mouse-toggle")
+        note = page.get_by_test_id("mouse-note")
+        deadman = page.get_by_test_id("deadman")
+        expect(toggle).to_be_enabled(timeout=10_000)
+        toggle.tap()
+        expect(deadman).to_have_text("3D mouse on — at rest")
+
+        mouse.stop()  # the mouse's driver restarts: first gone ...
+        expect(deadman).to_contain_text("Halted", timeout=10_000)
+        expect(toggle).to_have_text("3D mouse on — tap to turn off")
+        expect(note).to_contain_text("Waiting for the 3D mouse")
+        mouse = SpaceMouseProc(tmp_path, "restarting-mouse", recording)  # ... then back
+        mouse.wait_ready()
+        expect(deadman).to_have_text("3D mouse on — at rest", timeout=30_000)
+        expect(toggle).to_have_text("3D mouse on — tap to turn off")
+        expect(note).to_have_count(0)
+        before = robot_state(runtime)["tcp_pose"]["position"]
+        assert httpx.post(f"{mouse.url}/replay/start", timeout=5).status_code == 204
+        expect(deadman).to_have_text("Moving with the 3D mouse")
+        expect(deadman).to_have_text("3D mouse on — at rest", timeout=5000)
+        wait_for(lambda: robot_at_rest(runtime), 5, what="the robot stopped")
+        moved = np.array(robot_state(runtime)["tcp_pose"]["position"]) - np.array(before)
+        assert moved[2] > 0.005, moved  # the binding made again drives the robot
+
+        # The robot's driver restarts: a lost link ends the binding, and the card says so.
+        driver = runtime.api("GET", "/devices/robot").json()["url"]
+        os.kill(int(httpx.get(f"{driver}/health", timeout=5).json()["pid"]), signal.SIGKILL)
+        expect(toggle).to_have_text("Use 3D mouse", timeout=10_000)
+        expect(note).to_contain_text("3D mouse off:")
+        wait_for(
+            lambda: runtime.api("GET", "/devices/robot").json()["status"] == "connected",
+            60,
+            what="the robot back",
+        )
+        page.get_by_test_id("control").tap()
+        expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
+    finally:
+        runtime.api("DELETE", "/devices/mouse")
+        mouse.stop()

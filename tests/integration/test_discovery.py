@@ -1,10 +1,11 @@
 """Discovery and device identity under stress, on loopback: goodbyes and lost goodbyes, a
 burst of 500 announcements, hostile announcements and /info answers, removing and
-re-pointing an added device."""
+re-pointing an added device, whose each device is (added here, paired, another's)."""
 
 from __future__ import annotations
 
 import json
+import secrets
 import subprocess
 import sys
 import time
@@ -17,7 +18,14 @@ import pytest
 from websockets.sync.client import connect
 from zeroconf import ServiceInfo, Zeroconf
 
-from runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
+from runtime.bench.harness.processes import (
+    Proc,
+    Runtime,
+    SimRobotProc,
+    child_env,
+    stop_all,
+    wait_for,
+)
 from runtime.kit.discovery import SERVICE_TYPE
 from tests.support.fake_device import FakeDevice
 
@@ -294,6 +302,68 @@ def test_a_device_back_at_another_address_is_followed_only_if_it_proves_who_it_i
             if proc is not None:
                 proc.stop()
         runtime.api("DELETE", "/devices/returning")
+
+
+def test_the_list_marks_what_is_added_here_paired_with_this_runtime_or_another_s(
+    runtime: Runtime, tmp_path: Path
+) -> None:
+    """Issue 32: a neighbouring runtime's simulated UR5 was listed exactly like this cell's,
+    and a device announcing the uuid of one this runtime is paired with, without its key,
+    like the device itself."""
+    name = f"marked-{secrets.token_hex(3)}"  # others' tests on this loopback: a uuid of its own
+    neighbour = Runtime(tmp_path / "neighbour")  # its own simulated UR5, started by it
+    board = SimRobotProc(tmp_path / "board", name)  # started by hand: paired with nobody yet
+    started: list[Proc] = [neighbour, board]
+
+    def mark(where: Runtime, uuid: str) -> tuple[str, str | None] | None:
+        listed = detected(where).get(uuid)
+        return (listed["mark"], listed["elsewhere"]) if listed else None
+
+    def marked(where: Runtime, uuid: str, wanted: tuple[str, str | None]) -> None:
+        wait_for(lambda: mark(where, uuid) == wanted, 10, what=f"{uuid} marked {wanted}")
+
+    try:
+        neighbour.wait_ready()
+        board.wait_ready()
+        theirs = neighbour.own_device()["uuid"]
+        marked(runtime, theirs, ("elsewhere", "other_runtime"))
+        assert mark(neighbour, theirs) == ("paired", None)  # its own: it holds the key
+        marked(runtime, board.uuid, ("new", None))
+        marked(neighbour, board.uuid, ("new", None))
+
+        pairing = {"url": board.url, "local_name": "marked", "pairing": board.secret}
+        assert runtime.api("POST", "/devices", json=pairing).status_code == 201
+        assert mark(runtime, board.uuid) == ("added", None)
+        assert mark(neighbour, board.uuid) == ("new", None)
+        assert runtime.api("DELETE", "/devices/marked").status_code == 200
+        assert mark(runtime, board.uuid) == ("paired", None)  # its key is kept
+
+        # The device a second time (its uuid and key) is announced under names of its own
+        # (RFC 6762 §9); another device with its uuid, not its key, does not speak for it.
+        twin = SimRobotProc(tmp_path / "board", name, extra=["--uuid", board.uuid])
+        clone = SimRobotProc(tmp_path / "clone", name, extra=["--uuid", board.uuid])
+        started += [twin, clone]
+        twin.wait_ready()
+        clone.wait_ready()
+        everywhere = sorted([board.url, twin.url, clone.url])
+        wait_for(
+            lambda: (
+                (d := detected(runtime).get(board.uuid))
+                and sorted([d["url"], *d["also_at"]]) == everywhere
+                and d
+            ),
+            10,
+            what="three announcements of one uuid",
+        )
+        listed = detected(runtime)[board.uuid]
+        assert listed["url"] in (board.url, twin.url) and listed["mark"] == "paired", listed
+        board.stop()
+        twin.stop()
+        marked(runtime, board.uuid, ("elsewhere", "other_key"))
+        assert detected(runtime)[board.uuid]["url"] == clone.url
+    finally:
+        stop_all(started)
+        runtime.api("DELETE", "/devices/marked")
 
 
 def test_malformed_link_socket_messages_are_refused_and_the_socket_stays(

@@ -1,4 +1,4 @@
-"""A robot's speed override starts at the site's first speed (`link.first_speed_ratio`, 25 %
+"""A robot's speed override starts at the site's first speed (`link.first_speed_ratio`, 10 %
 by default) whenever its link comes up: when it is added, when its link comes back after a
 loss, and when the runtime starts again (issue 32: a newcomer's first one-second hold at
 100 % moved the TCP 127 mm). Lowering it is anyone's; raising it needs control, as before."""
@@ -21,7 +21,7 @@ from runtime.bench.harness.processes import (
     wait_for,
 )
 
-FIRST = 0.25  # the site's default
+FIRST = 0.10  # the site's default
 
 
 def with_defaults(home: Path) -> Runtime:
@@ -70,7 +70,7 @@ def test_a_robot_comes_up_at_the_first_speed_added_back_and_after_a_restart(
         pairing = {"url": robot.url, "local_name": "robot", "pairing": robot.secret}
         added = runtime.api("POST", "/devices", json=pairing)
         assert added.status_code == 201, added.text
-        at_first_speed(runtime, "25 % once added")
+        at_first_speed(runtime, "10 % once added")
         # Raising it needs control; lowering it does not.
         refused = runtime.api("PUT", "/jog/robots/robot/speed", json={"ratio": 1.0})
         assert refused.status_code == 409, refused.text
@@ -88,7 +88,7 @@ def test_a_robot_comes_up_at_the_first_speed_added_back_and_after_a_restart(
             )
         finally:
             os.kill(robot.pid, signal.SIGCONT)
-        at_first_speed(runtime, "25 % once the link is back")
+        at_first_speed(runtime, "10 % once the link is back")
         raised(runtime)
     finally:
         runtime.stop()
@@ -97,6 +97,6 @@ def test_a_robot_comes_up_at_the_first_speed_added_back_and_after_a_restart(
     again = with_defaults(home)
     try:
         again.wait_ready()
-        at_first_speed(again, "25 % after the runtime's restart")
+        at_first_speed(again, "10 % after the runtime's restart")
     finally:
         again.stop()

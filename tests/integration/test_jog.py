@@ -442,10 +442,17 @@ def test_an_unplugged_mouse_stops_the_robot_and_buttons_teach(
     try:
         before = tcp(cell.robot.q())
         press = bind_mouse(jog, "mouse2", frame="tool", speed=0.5, buttons={"0": "teach"})
+        after_seq = cell.robot.last_command_seq()
         httpx.post(f"{mouse.url}/replay/start", timeout=5)
-        halted = jog.status(press, ("halted",), timeout=10)
-        assert "disconnected" in halted["reason"]
+        # Unplugged: the robot halts; the binding waits for the mouse (issue 32).
+        away = jog.status(press, ("held", "halted"), timeout=10)
+        assert (away["state"], away["reason"]) == ("held", "mouse_away"), away
+        assert "disconnected" in away["message"]
         cell.robot.wait_stopped(3)
+        assert any(
+            e["type"] == "halt" and e["tag"] == f"{press}:halt"
+            for e in cell.robot.commands(after_seq)
+        )
         taught = [m for m in jog.messages if m.get("type") == "taught"]
         assert len(taught) == 1
         waypoint = cell.runtime.api("GET", f"/variables/{taught[0]['name']}").json()

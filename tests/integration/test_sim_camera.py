@@ -17,7 +17,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 from websockets.sync.client import connect
 
-from runtime.bench.harness.processes import DriverProc
+from runtime.bench.harness.processes import DriverProc, wait_for
 
 # Nothing here waits on a deadline: it runs alongside the real-time tests (tests/suite.py).
 pytestmark = pytest.mark.concurrent
@@ -129,3 +129,33 @@ def test_frames_stream_at_the_consumers_pace_never_queued(camera: DriverProc) ->
     # The second frame was taken after the acknowledgement.
     assert second["seqno"] > about["seqno"]
     assert second["ts"] >= back - 0.05
+
+
+def test_a_cell_that_names_no_robot_is_said_in_its_state_frames_and_captures(
+    tmp_path: Path,
+) -> None:
+    """Issue 32: `--cell NAME` naming no robot drew an empty table without a warning. Once
+    the robot had its time to come up (`--cell-wait`; here none), the camera's state says
+    so, a capture is refused with the reason, and its frame stream ends with it."""
+    options = ("--cell", "no-such-robot", "--cell-wait", "0", "--width", "64", "--height", "48")
+    proc = DriverProc(tmp_path, "sim-camera", "cam", *options)
+    try:
+        proc.wait_ready()
+        with proc.client() as http:
+
+            def started() -> dict[str, Any] | None:
+                state: dict[str, Any] = http.get("/state").json()
+                return state if state["error"] != "starting" else None
+
+            error = wait_for(started, 30, what="the camera started")["error"]
+            assert "no simulated robot named 'no-such-robot'" in error and "--cell" in error
+            refused = http.post("/capture", json={"encoding": "png"})
+        assert refused.status_code == 409, refused.text
+        assert refused.json()["error"]["code"] == "no_cell"
+        assert "'no-such-robot'" in refused.json()["error"]["message"]
+        url = proc.url.replace("http://", "ws://") + "/frames/ws?encoding=png"
+        with connect(url, additional_headers=proc.signed("/frames/ws")) as ws:
+            said = json.loads(ws.recv(timeout=30))
+        assert said["type"] == "error" and said["error"]["code"] == "no_cell", said
+    finally:
+        proc.stop()

@@ -28,6 +28,7 @@ async def announce(count: int, interface: str) -> None:
             name=f"burst {i}",
             host=interface,
             port=20000 + i,
+            key="",
         )
         for i in range(count)
     ]

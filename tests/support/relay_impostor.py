@@ -71,6 +71,7 @@ def build(host: str, upstream: str, port: int, identity: dict[str, Any]) -> Star
             name=str(identity["name"]),
             host=host,
             port=port,
+            key="",  # it holds no key: it passes the device's proofs on
         )
         await advertiser.start(ad)
         ready = {"event": "ready", "url": f"http://{host}:{port}", "uuid": ad.uuid}

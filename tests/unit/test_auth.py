@@ -284,3 +284,46 @@ def test_device_signatures_are_bound_to_method_path_and_time_and_good_once() -> 
     nan = "nan." + signed.split(".", 2)[2]
     for junk in (None, "", "x.y", "1000.0.nonce." + "0" * 64, "a" * 500, nan, signed + "\u00e9"):
         assert not verifier.check(junk, "POST", "/jog_joint", now=1000.0)
+
+
+@pytest.mark.parametrize(
+    ("end", "why"),
+    [
+        ("elsewhere", "signed_out"),
+        ("idle", "expired"),
+        ("role", "role_changed"),
+        ("password", "password_changed"),
+        ("removed", "user_removed"),
+    ],
+)
+def test_a_tablet_whose_session_ended_is_told_why(
+    gateway: TestClient, store: AuthStore, clock: Clock, end: str, why: str
+) -> None:
+    """Issue 32: a tablet dropped to the sign-in screen with no word of why. The refusal
+    says it (the sign-in screen words it), as long as the cookie could still be shown."""
+    store.create_user("ada", "admin password!", Role.admin)
+    store.create_user("op", "operator password", Role.operator)
+    signed = gateway.post("/api/auth/login", json={"user": "op", "password": "operator password"})
+    other = TestClient(gateway.app, base_url=UI, cookies=dict(gateway.cookies))
+    if end == "elsewhere":  # the same session signed out in another window
+        other.post("/api/auth/logout", headers={"x-csrf-token": signed.json()["csrf"]})
+    elif end == "idle":
+        clock.now += 601
+    elif end == "role":
+        store.set_role("op", Role.viewer)
+    elif end == "password":
+        store.set_password("op", "a new operator password")
+    else:
+        store.delete_user("op")
+    refused = gateway.get("/api/devices")
+    assert refused.status_code == 401
+    error = refused.json()["error"]
+    assert error["code"] == "session_ended"
+    assert error["words"] == {
+        "code": "access.session_ended",
+        "params": {"why": {"code": f"session.{why}", "params": {}}},
+    }
+    clock.now += 3601  # long after: a cookie that old is no session anyone remembers
+    gateway.get("/api/auth/status")
+    store.close_session("unrelated")  # any ending prunes what is older than a session lives
+    assert gateway.get("/api/devices").json()["error"]["code"] == "unauthenticated"

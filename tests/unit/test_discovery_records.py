@@ -1,5 +1,6 @@
-"""Advertisements as seen by the browser: hostile or malformed TXT records; which names are
-asked to confirm themselves, and when one is gone (issue 31)."""
+"""Advertisements as seen by the browser: hostile or malformed TXT records; instance names
+stable across restarts and in UTF-8 (issue 32); which names are asked to confirm themselves,
+and when one is gone (issue 31)."""
 
 from __future__ import annotations
 
@@ -11,10 +12,13 @@ import pytest
 from zeroconf import current_time_millis
 from zeroconf._cache import DNSCache
 from zeroconf._dns import DNSPointer, DNSService
+from zeroconf._protocol.incoming import DNSIncoming
+from zeroconf._protocol.outgoing import DNSOutgoing
 from zeroconf.asyncio import AsyncServiceInfo
 
 from runtime.kit import confirmations
 from runtime.kit.confirmations import Confirmations, NewestRecord, Step
+from runtime.kit.device_auth import key_id
 from runtime.kit.discovery import (
     DNS_IN,
     DNS_SRV,
@@ -25,6 +29,8 @@ from runtime.kit.discovery import (
     newest_record,
     parse_info,
 )
+
+KEY = key_id("the device's pairing secret")
 
 
 def info(properties: dict[bytes, bytes], port: int = 8000) -> AsyncServiceInfo:
@@ -39,7 +45,14 @@ def info(properties: dict[bytes, bytes], port: int = 8000) -> AsyncServiceInfo:
 
 def test_advertisement_round_trip() -> None:
     ad = Advertisement(
-        uuid="1234-abcd", kind="robot", model="ur5", name="cell ur5", host="127.0.0.1", port=4321
+        uuid="1234-abcd",
+        kind="robot",
+        model="ur5",
+        name="cell ur5",
+        host="127.0.0.1",
+        port=4321,
+        key=KEY,
+        runtime="0123456789abcdef",
     )
     found = parse_info(ad.service_info())
     assert found is not None
@@ -50,6 +63,16 @@ def test_advertisement_round_trip() -> None:
         "cell ur5",
         "http://127.0.0.1:4321",
     )
+    assert (found.key, found.runtime) == (KEY, "0123456789abcdef")
+    assert "secret" not in str(ad.service_info().properties)  # its key's id, never the key
+
+
+def test_a_malformed_key_id_or_runtime_tag_is_read_as_none() -> None:
+    for bad in (KEY + "0", KEY[:-1], KEY.upper(), "g" * 16, "\u202e" + KEY[1:]):
+        found = parse_info(
+            info({b"uuid": b"u", b"kind": b"robot", b"key": bad.encode(), b"runtime": bad.encode()})
+        )
+        assert found is not None and (found.key, found.runtime) == ("", ""), bad
 
 
 def test_malformed_kind_missing_uuid_or_port_is_ignored() -> None:
@@ -92,23 +115,64 @@ def test_uuids_are_refused_not_cut() -> None:
         checked_uuid("x" * 5_000_000)
 
 
+def advertised(name: str, uuid: str = "aaaaaaaa-1", key: str = KEY, port: int = 1) -> Advertisement:
+    return Advertisement(
+        uuid=uuid, kind="robot", model="m", name=name, host="127.0.0.1", port=port, key=key
+    )
+
+
+def label(ad: Advertisement) -> str:
+    name = ad.instance_name()
+    assert name.endswith("." + SERVICE_TYPE)
+    return name[: -len(SERVICE_TYPE) - 1]
+
+
 def test_instance_names_are_safe_and_unique_per_device() -> None:
-    a = Advertisement(
-        uuid="aaaaaaaa-1", kind="robot", model="m", name="<bad> name!", host="127.0.0.1", port=1
-    )
-    b = Advertisement(
-        uuid="bbbbbbbb-1", kind="robot", model="m", name="<bad> name!", host="127.0.0.1", port=1
-    )
+    a = advertised("bad\x00 name\u202e\n!")
+    b = advertised("bad\x00 name\u202e\n!", uuid="bbbbbbbb-1")
     assert a.instance_name() != b.instance_name()
-    assert "<" not in a.instance_name()
-    # Another announcement with the same identity (a cloned board, an impostor) has a name of
-    # its own: its goodbye ends only its own records.
-    clone = Advertisement(
-        uuid="aaaaaaaa-1", kind="robot", model="m", name="<bad> name!", host="127.0.0.1", port=1
-    )
+    assert label(a).startswith("bad name! [aaaaaaaa ")  # no control or format characters
+    # Another announcement of the same uuid with another key (a cloned board, an impostor)
+    # has names of its own: its goodbye ends only its own records.
+    clone = advertised("bad\x00 name\u202e\n!", key=key_id("another secret"))
     assert clone.instance_name() != a.instance_name()
     assert clone.service_info().server != a.service_info().server  # its addresses its own
-    assert a.instance_name() == a.instance_name()
+
+
+def test_the_same_device_restarted_has_the_same_names() -> None:
+    """Issue 32: a random tag changed them at every start; browsers listed the device's
+    new name beside its old records until they lapsed."""
+    before, after = advertised("cell ur5", port=40001), advertised("cell ur5", port=40777)
+    assert before.instance_name() == after.instance_name()
+    assert before.service_info().server == after.service_info().server
+
+
+def test_a_utf8_name_with_spaces_and_dots_survives_in_one_label() -> None:
+    """RFC 6763 §4.1.1: any UTF-8 text. The old names dropped all but ASCII letters and
+    digits ("Zelle Sd 21"); zeroconf writes a dot as a label boundary, so it is sent as the
+    one dot leader that looks the same."""
+    ad = advertised("Zelle Süd 2.1")
+    assert label(ad).startswith("Zelle Süd 2\u20241 [aaaaaaaa ")
+    out = DNSOutgoing(0x8400)
+    out.add_answer_at_time(DNSPointer(SERVICE_TYPE, DNS_PTR, DNS_IN, 120, ad.instance_name()), 0)
+    wire = out.packets()[0]
+    raw = label(ad).encode()
+    assert bytes([len(raw)]) + raw in wire  # one label, its length first
+    (answer,) = DNSIncoming(wire).answers()
+    assert isinstance(answer, DNSPointer) and answer.alias == ad.instance_name()
+    found = parse_info(ad.service_info())
+    assert found is not None and found.name == "Zelle Süd 2.1"  # the name itself, as given
+
+
+def test_a_long_utf8_name_is_cut_where_a_character_ends() -> None:
+    for extra in range(12):  # the cut falls inside a 2-, 3- and 4-byte character in turn
+        name = "x" * extra + "Schweißzelle Süd № 7 — Förderband € 😀 Ende der Linie"
+        text = label(advertised(name))
+        raw = text.encode()
+        assert 63 - 5 < len(raw) <= 63, (extra, len(raw))  # cut no more than needed
+        raw.decode("utf-8")  # strictly: no character cut in two
+        head, _, tail = text.rpartition(" [")
+        assert name.startswith(head) and tail.startswith("aaaaaaaa "), text
 
 
 NAME = "cell ur5 [3f2b8c1e 0a1b]._openpendant._tcp.local."

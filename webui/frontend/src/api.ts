@@ -1,6 +1,7 @@
 // JSON over HTTP to the runtime, with its error body turned into an ApiError.
 
 import { t } from "./i18n";
+import { worded, type Words } from "./i18n/words";
 import { session } from "./session";
 
 export class ApiError extends Error {
@@ -8,6 +9,7 @@ export class ApiError extends Error {
     message: string,
     readonly code: string,
     readonly status: number,
+    readonly words: Words | null = null, // the message as the chosen language says it
   ) {
     super(message);
   }
@@ -47,11 +49,13 @@ async function send<T>(
   const text = await response.text();
   const data: unknown = text ? safeParse(text) : null;
   if (!response.ok) {
-    const error = (data as { error?: { code?: string; message?: string } } | null)?.error;
+    const error = (data as { error?: { code?: string; message?: string; words?: Words } } | null)
+      ?.error;
     throw new ApiError(
       error?.message ?? t("app.request_failed", { status: response.status }),
       error?.code ?? "http_error",
       response.status,
+      error?.words ?? null,
     );
   }
   return data as T;
@@ -65,6 +69,8 @@ function safeParse(text: string): unknown {
   }
 }
 
+/** What went wrong, to show: a refusal of the runtime in the chosen language. */
 export function errorText(err: unknown): string {
+  if (err instanceof ApiError) return worded(err.message, err.words);
   return err instanceof Error ? err.message : String(err);
 }

@@ -1,6 +1,6 @@
 import { LitElement, css, html } from "lit";
 import { t } from "./i18n";
-import { api } from "./api";
+import { ApiError, api } from "./api";
 import { feed } from "./live";
 import { ADMIN_PANELS, panels } from "./panels/registry";
 import { plugins } from "./plugins";
@@ -157,9 +157,13 @@ export class OpApp extends LitElement {
   /** A session this browser already has (its cookie) signs it in without a screen. */
   private async resume(): Promise<void> {
     try {
-      session.set(await api<Me>("GET", "/api/auth/me"));
-    } catch {
-      session.set(null);
+      await session.set(await api<Me>("GET", "/api/auth/me"));
+    } catch (err) {
+      // A cookie whose session ended lately (reloaded, or the tablet woke up): say why.
+      if (err instanceof ApiError && err.code === "session_ended") {
+        session.ended = { message: err.message, words: err.words };
+      }
+      await session.set(null);
     }
     this.checked = true;
     this.requestUpdate();

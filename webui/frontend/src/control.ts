@@ -3,6 +3,7 @@
 
 import { api, ApiError } from "./api";
 import { t } from "./i18n";
+import { type Request, request } from "./rights";
 
 const RENEW_EVERY_MS = 5000;
 
@@ -23,6 +24,13 @@ function holderName(): string {
     localStorage.setItem(HOLDER_KEY, name);
   }
   return name;
+}
+
+/** What a control that takes (or gives back) control of a device asks the runtime. */
+export function leaseRequest(device: string, giveBack = false): Request {
+  return giveBack
+    ? request("DELETE", `/api/devices/${encodeURIComponent(device)}/lease`)
+    : request("POST", `/api/devices/${encodeURIComponent(device)}/lease`);
 }
 
 export class Control extends EventTarget {

@@ -1,6 +1,8 @@
 import { changeHeld } from "./activity";
 import { api } from "./api";
-import { socketUrl } from "./socket";
+import type { Words } from "./i18n/words";
+import { session } from "./session";
+import { SIGN_IN_ENDED, socketUrl } from "./socket";
 
 // The jog socket: hold-to-run presses with heartbeats, releases, stops and 3D-mouse
 // bindings. The server halts the robot if heartbeats stop or this socket closes.
@@ -12,13 +14,14 @@ export interface JogStatus {
   state: "moving" | "held" | "stopped" | "halted" | "done" | "refused";
   reason?: string;
   message?: string;
+  words?: Words | null; // the message as the chosen language says it
 }
 
 export type JogMessage =
   | JogStatus
   | { type: "taught"; robot: string; name: string }
   | { type: "mouse_frame"; device: string; frame: string; mode: "joint" | "cartesian" }
-  | { type: "error"; error: { code: string; message: string } };
+  | { type: "error"; error: { code: string; message: string; words?: Words } };
 
 let counter = 0;
 let direct: string | null = null;
@@ -76,7 +79,10 @@ export class JogSocket extends EventTarget {
       if (message.type === "status" && !live) this.stopBeating(message.press);
       this.dispatchEvent(new CustomEvent<JogMessage>("message", { detail: message }));
     };
-    socket.onclose = () => {
+    socket.onclose = (event) => {
+      // The sign-in that opened it ended: the session ends here too, saying why (a ticket's
+      // own refusal leaves the session standing, and the socket opens again).
+      if (event.code === SIGN_IN_ENDED) session.lost();
       this.socket = null;
       this.online = false;
       direct = null; // a restarted runtime may listen on another port: ask again

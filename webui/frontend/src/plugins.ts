@@ -7,6 +7,8 @@ import { api } from "./api";
 import { control } from "./control";
 import { language } from "./i18n";
 import { feed } from "./live";
+import { declare, request } from "./rights";
+import { session } from "./session";
 import type { AddedDevice } from "./types";
 import { length, lengthUnit } from "./units";
 
@@ -64,6 +66,12 @@ export interface PendantHost {
     take(device: string): Promise<void>;
     release(device: string): Promise<void>;
   };
+  /** Whether the role signed in may make the request (by the gateway's table of rights). */
+  may(method: string, path: string): boolean;
+  /** Marks a control as making the request (`path` with /api): disabled, and saying why
+   * when tapped, for a role that may not; call again when it changes. `call` is a POST to
+   * `/api/devices/{device}/call/{method}`, taking control a POST to `…/{device}/lease`. */
+  declare(element: HTMLElement, method: string, path: string): void;
   /** The plugin's words in the language chosen ({name} filled from params). */
   t(key: string, params?: Record<string, string | number>): string;
   language(): string;
@@ -99,6 +107,8 @@ export function hostFor(panel: PanelInfo): PendantHost {
       take: (device) => control.take(device),
       release: (device) => control.release(device),
     },
+    may: (method, path) => session.may(method, path),
+    declare: (element, method, path) => declare(element, [request(method, path)]),
     t: (key, params) => {
       const text = panel.words[language()]?.[key] ?? panel.words.en?.[key] ?? key;
       if (!params) return text;

@@ -1,6 +1,7 @@
 import { LitElement, css, html } from "lit";
 import { ApiError, api, errorText } from "./api";
 import { t } from "./i18n";
+import { worded } from "./i18n/words";
 import { type AuthStatus, type Me, session } from "./session";
 import { shared } from "./styles";
 
@@ -64,6 +65,13 @@ export class OpSignIn extends LitElement {
       .hint {
         color: var(--muted);
         font-size: 15px;
+      }
+      .ended {
+        margin: 0;
+        padding: 12px 14px;
+        border-radius: 10px;
+        border: 2px solid var(--warn);
+        font-size: 17px;
       }
     `,
   ];
@@ -131,7 +139,8 @@ export class OpSignIn extends LitElement {
     const setup = !this.status.set_up;
     return html`<form @submit=${this.submit} data-testid="sign-in">
       <h1>${setup ? t("auth.setup_title") : t("auth.title")}</h1>
-      ${setup ? html`<p class="hint">${t("auth.setup_hint")}</p>` : this.modes()}
+      ${setup ? html`<p class="hint">${t("auth.setup_hint")}</p>` : this.endedNote()}
+      ${setup ? "" : this.modes()}
       <label
         >${t("auth.user")}
         <input name="user" data-testid="sign-in-user" autocomplete="username"
@@ -166,6 +175,14 @@ export class OpSignIn extends LitElement {
         ${setup ? t("auth.create_admin") : t("auth.sign_in")}
       </button>
     </form>`;
+  }
+
+  /** Why this tablet was signed out, when it was (the session expired, ended elsewhere…). */
+  private endedNote() {
+    const ended = session.ended;
+    if (ended === null) return "";
+    const why = worded(ended.message, ended.words) || t("auth.ended_unknown");
+    return html`<p class="ended" role="status" data-testid="sign-in-ended">${why}</p>`;
   }
 
   private modes() {

@@ -5,6 +5,8 @@ import { FocusController, focus } from "./focus";
 import { linkLabel } from "./format";
 import { t } from "./i18n";
 import { FeedController, feed } from "./live";
+import { makes, request } from "./rights";
+import { session } from "./session";
 import { chipState } from "./robot-chip";
 import { shared } from "./styles";
 import type { AddedDevice, RobotState } from "./types";
@@ -213,7 +215,9 @@ export class OpStatusBar extends LitElement {
     if (robot !== this.shownRobot && ratio !== undefined) {
       this.shownRobot = robot;
       if (Math.round(ratio * 100) !== focus.speed) focus.setSpeed(ratio * 100);
-      if (!focusedHere.has(robot)) {
+      // A viewer may not set it (nor jog): the slider shows the robot's own.
+      const speed = `/api/jog/robots/${encodeURIComponent(robot)}/speed`;
+      if (!focusedHere.has(robot) && session.may("PUT", speed)) {
         focusedHere.add(robot);
         void firstSpeed().then((first) => {
           if (focus.robot === robot && first !== null && focus.speed > Math.round(first * 100)) {
@@ -295,6 +299,8 @@ export class OpStatusBar extends LitElement {
       <label class="speed" title=${t("app.speed_title")}>
         <span>${t("app.speed")}</span>
         <input type="range" min="1" max="100" .value=${String(focus.speed)}
+          ${makes(...(inFocus
+            ? [request("PUT", `/api/jog/robots/${encodeURIComponent(inFocus)}/speed`)] : []))}
           data-testid="speed" aria-label=${t("app.speed_override")}
           @input=${(e: Event) => this.setSpeed(Number((e.target as HTMLInputElement).value))} />
         <strong data-testid="speed-value">${focus.speed} %</strong>
@@ -308,6 +314,11 @@ export class OpStatusBar extends LitElement {
             >${t("app.runtime_offline")}</span
           >`}
       <button class="stop" data-testid="safety-stop"
+        ${makes(
+          ...robots.map((r) => request("POST", `/api/jog/robots/${encodeURIComponent(r.local_name)}/halt`)),
+          request("POST", "/api/programs/_stop"),
+          request("POST", "/api/devices/_stop"),
+        )}
         title=${t("app.stop_title")}
         @click=${() => this.stop()}>${t("app.stop")}</button>
     `;

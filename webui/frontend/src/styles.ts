@@ -33,6 +33,16 @@ export const shared = css`
     opacity: 0.45;
     cursor: default;
   }
+  /* A control the role signed in may not use (rights.ts): it still takes the tap that says
+     why, so it is aria-disabled, not disabled. */
+  [aria-disabled="true"]:not([disabled]):not(:disabled) {
+    opacity: 0.45;
+    cursor: not-allowed;
+  }
+  [aria-disabled="true"]:active {
+    transform: none;
+    filter: none;
+  }
   button.primary {
     background: var(--accent);
     border-color: var(--accent);

@@ -11,7 +11,13 @@ export interface DetectedDevice {
   added_as: string | null;
   last_seen: number;
   also_at: string[]; // other addresses announcing this uuid (an impostor, or a stale record)
+  mark: DeviceMark;
+  elsewhere: "other_runtime" | "other_key" | null; // why another's
 }
+
+// How this runtime sees a device on the network: one of its devices, paired with it (it holds
+// the device's key), another's, or none of these (runtime/device_manager/announcements.py).
+export type DeviceMark = "added" | "paired" | "elsewhere" | "new";
 
 export type ConnectionStatus = "connecting" | "connected" | "stale" | "disconnected";
 

@@ -191,6 +191,12 @@ class ConveyorPanel extends HTMLElement {
     card.stop.textContent = host.t("stop");
     card.run.disabled = card.back.disabled = !(connected && holds);
     card.stop.disabled = !connected;
+    // What each button asks the runtime: disabled, and saying why, for a role that may not.
+    const path = `/api/devices/${encodeURIComponent(device.local_name)}`;
+    host.declare(card.take, holds ? "DELETE" : "POST", `${path}/lease`);
+    host.declare(card.run, "POST", `${path}/call/run`);
+    host.declare(card.back, "POST", `${path}/call/run`);
+    host.declare(card.stop, "POST", `${path}/call/stop`);
   }
 }
 

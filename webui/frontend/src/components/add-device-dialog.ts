@@ -2,6 +2,7 @@ import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
 import { LOCAL_NAME, withBold } from "../format";
 import { t } from "../i18n";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { AddedDevice, DetectedDevice } from "../types";
 import "./modal";
@@ -120,7 +121,8 @@ export class OpAddDeviceDialog extends LitElement {
         ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
         <div class="actions">
           <button type="button" @click=${this.close}>${t("devices.cancel")}</button>
-          <button class="primary" type="submit" data-testid="confirm-add" ?disabled=${!valid || this.busy}>
+          <button class="primary" type="submit" data-testid="confirm-add" ?disabled=${!valid || this.busy}
+            ${makes(request("POST", "/api/devices"))}>
             ${this.busy ? t("devices.adding") : t("devices.add")}
           </button>
         </div>

@@ -1,9 +1,9 @@
 import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
-import { control } from "../control";
+import { control, leaseRequest } from "../control";
 import { t } from "../i18n";
 import { FeedController, feed } from "../live";
-import { session } from "../session";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import { roughLength } from "../units";
 
@@ -114,6 +114,10 @@ export class OpGripperCard extends LitElement {
     </span>`;
   }
 
+  private commandRequest(name: string, action: Action) {
+    return makes(request("POST", `/api/devices/${encodeURIComponent(name)}/call/${action}`));
+  }
+
   private gripper(name: string, controlledBy: string | null | undefined) {
     const state = feed.states.get(name) as unknown as GripperState | undefined;
     const mine = control.holds(name);
@@ -130,17 +134,20 @@ export class OpGripperCard extends LitElement {
           ? html`
               ${state?.activated === false
                 ? html`<button data-testid="gripper-activate-${name}" ?disabled=${!ready}
+                    ${this.commandRequest(name, "activate")}
                     @click=${() => this.command(name, "activate")}>${t("gripper.activate")}</button>`
                 : ""}
               <button data-testid="gripper-open-${name}" ?disabled=${!ready || !state?.activated}
+                ${this.commandRequest(name, "open")}
                 @click=${() => this.command(name, "open")}>${t("gripper.open")}</button>
               <button data-testid="gripper-close-${name}" ?disabled=${!ready || !state?.activated}
+                ${this.commandRequest(name, "close")}
                 @click=${() => this.command(name, "close")}>${t("gripper.close")}</button>
-              <button data-testid="gripper-release-${name}"
+              <button data-testid="gripper-release-${name}" ${makes(leaseRequest(name, true))}
                 @click=${() => this.run(name, () => control.release(name))}>${t("jog.control.release")}</button>`
           : html`
               <span class="muted">${controlledBy ? t("jog.control.controlled_by", { holder: controlledBy }) : ""}</span>
-              <button class="primary" data-testid="gripper-control-${name}" ?disabled=${!session.can("operator")}
+              <button class="primary" data-testid="gripper-control-${name}" ${makes(leaseRequest(name))}
                 @click=${() => this.run(name, () => control.take(name))}>${t("jog.control.take")}</button>`}
       </div>
     </div>`;

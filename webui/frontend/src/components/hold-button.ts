@@ -1,4 +1,5 @@
 import { LitElement, css, html } from "lit";
+import { tell } from "../rights";
 import { shared } from "../styles";
 
 // A hold-to-run button. Pointer events, so touch, pen and mouse behave the same. A finger or
@@ -9,10 +10,25 @@ import { shared } from "../styles";
 const HOLD_STILL_MS = 150;
 const SLOP_PX = 10;
 
+let starting: OpHoldButton | null = null;
+
+/** The button whose hold is starting, while its hold-start is handled: whoever acts on it
+ * keeps it, to say there why the hold was refused. */
+export function holdStarting(): OpHoldButton | null {
+  return starting;
+}
+
 export class OpHoldButton extends LitElement {
-  static properties = { label: { type: String }, disabled: { type: Boolean }, active: { state: true } };
+  static properties = {
+    label: { type: String },
+    disabled: { type: Boolean },
+    why: { type: String },
+    active: { state: true },
+  };
   declare label: string;
   declare disabled: boolean;
+  /** Why it is disabled: said where the finger is when a disabled button is touched. */
+  declare why: string;
   declare active: boolean;
 
   static styles = [
@@ -41,7 +57,12 @@ export class OpHoldButton extends LitElement {
     super();
     this.label = "";
     this.disabled = false;
+    this.why = "";
     this.active = false;
+    // On the element itself: the disabled button inside gets no events.
+    this.addEventListener("pointerdown", (e) => {
+      if (this.disabled && this.why && e.isPrimary) tell(this.why, this, e.clientX, e.clientY);
+    });
   }
 
   private pending: { x: number; y: number; since: number; frame: number } | null = null;
@@ -83,7 +104,12 @@ export class OpHoldButton extends LitElement {
 
   private begin() {
     this.active = true;
-    this.dispatchEvent(new CustomEvent("hold-start", { bubbles: true, composed: true }));
+    starting = this;
+    try {
+      this.dispatchEvent(new CustomEvent("hold-start", { bubbles: true, composed: true }));
+    } finally {
+      starting = null;
+    }
   }
 
   end() {
@@ -111,10 +137,7 @@ export class OpHoldButton extends LitElement {
       @lostpointercapture=${() => this.end()}
       @contextmenu=${(e: Event) => e.preventDefault()}
       @keydown=${(e: KeyboardEvent) => {
-        if ((e.key === " " || e.key === "Enter") && !e.repeat && !this.active) {
-          this.active = true;
-          this.dispatchEvent(new CustomEvent("hold-start", { bubbles: true, composed: true }));
-        }
+        if ((e.key === " " || e.key === "Enter") && !e.repeat && !this.active) this.begin();
       }}
       @keyup=${() => this.end()}
       @blur=${() => this.end()}

@@ -1,5 +1,7 @@
 import { LitElement, css, html } from "lit";
+import { leaseRequest } from "../control";
 import { t } from "../i18n";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 
 export type PowerCommand = "enable" | "disable" | "reset_errors";
@@ -59,11 +61,16 @@ export class OpJogHeader extends LitElement {
     this.dispatchEvent(new CustomEvent("power", { detail: { command } }));
   }
 
+  private powers(command: PowerCommand) {
+    return makes(request("POST", `/api/jog/robots/${encodeURIComponent(this.robot)}/${command}`));
+  }
+
   render() {
     const mine = this.mine;
     const controlledBy = this.controlledBy;
     return html`<h2 style="margin:0" data-testid="jog-robot">${this.robot}</h2>
       <button data-testid="control" class=${mine ? "" : "primary"}
+        ${makes(leaseRequest(this.robot, mine))}
         @click=${() => this.dispatchEvent(new CustomEvent("control-toggle"))}>
         ${mine ? t("jog.control.release") : t("jog.control.take")}</button>
       <span class="chip ${mine ? "ok" : controlledBy ? "warn" : ""}" data-testid="lease">
@@ -71,13 +78,14 @@ export class OpJogHeader extends LitElement {
           : controlledBy ? t("jog.control.controlled_by", { holder: controlledBy })
           : t("jog.control.nobody")}</span>
       ${this.enabled
-        ? html`<button data-testid="disable" ?disabled=${!this.canPower}
+        ? html`<button data-testid="disable" ?disabled=${!this.canPower} ${this.powers("disable")}
             @click=${() => this.power("disable")}>${t("jog.disable")}</button>`
-        : html`<button data-testid="enable" ?disabled=${!this.canPower}
+        : html`<button data-testid="enable" ?disabled=${!this.canPower} ${this.powers("enable")}
             @click=${() => this.power("enable")}>
             ${t(this.powersOn ? "jog.power_on_enable" : "jog.enable")}</button>`}
       ${this.error
         ? html`<button data-testid="reset-error" ?disabled=${!this.canPower}
+            ${this.powers("reset_errors")}
             @click=${() => this.power("reset_errors")}>
             ${t(this.unlocks ? "jog.unlock_reset" : "jog.reset_error")}</button>`
         : ""}`;

@@ -1,5 +1,6 @@
 import { LitElement, css, html } from "lit";
 import { t } from "../i18n";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import "./hold-button";
 
@@ -11,9 +12,14 @@ export interface JogAxis {
 
 // Rows of [−] value [+]. Emits jog-hold {axis, direction} and jog-release.
 export class OpJogPad extends LitElement {
-  static properties = { axes: { attribute: false }, disabled: { type: Boolean } };
+  static properties = {
+    axes: { attribute: false },
+    disabled: { type: Boolean },
+    why: { type: String },
+  };
   declare axes: JogAxis[];
   declare disabled: boolean;
+  declare why: string; // why the buttons are disabled, said on a touch
 
   static styles = [
     shared,
@@ -43,6 +49,7 @@ export class OpJogPad extends LitElement {
     super();
     this.axes = [];
     this.disabled = false;
+    this.why = "";
   }
 
   private emit(name: string, axis: string, direction: number) {
@@ -52,23 +59,28 @@ export class OpJogPad extends LitElement {
   }
 
   render() {
+    const jogs = makes(request("WS", "/api/jog/ws"));
     return html`${this.axes.map(
       (a) => html`<div class="row" data-testid="jog-row" data-axis=${a.key}>
         <span class="name">${a.label}</span>
         <op-hold-button
           data-testid="jog-minus"
+          ${jogs}
           label="−"
           aria-label=${t("jog.axis_minus", { axis: a.label })}
           ?disabled=${this.disabled}
+          why=${this.why}
           @hold-start=${() => this.emit("jog-hold", a.key, -1)}
           @hold-end=${() => this.emit("jog-release", a.key, -1)}
         ></op-hold-button>
         <span class="value" data-testid="jog-value">${a.value}</span>
         <op-hold-button
           data-testid="jog-plus"
+          ${jogs}
           label="+"
           aria-label=${t("jog.axis_plus", { axis: a.label })}
           ?disabled=${this.disabled}
+          why=${this.why}
           @hold-start=${() => this.emit("jog-hold", a.key, 1)}
           @hold-end=${() => this.emit("jog-release", a.key, 1)}
         ></op-hold-button>

@@ -1,5 +1,6 @@
 import { LitElement, css, html } from "lit";
 import { t } from "../i18n";
+import { worded } from "../i18n/words";
 import type { JogStatus } from "../jog-socket";
 import { shared } from "../styles";
 import type { InputState } from "../types";
@@ -73,13 +74,22 @@ export class OpJogStatus extends LitElement {
       return html`<div class="deadman chip ${atRest ? "" : "ok"}" data-testid="deadman">
         ${atRest ? t("jog.mouse.at_rest") : t("jog.mouse.moving")}</div>`;
     }
+    // The 3D mouse still on, driving nothing: gone (the robot halted), or not yet let go.
+    if (s.state === "held" && (s.reason === "mouse_away" || s.reason === "mouse_not_at_rest")) {
+      const away = s.reason === "mouse_away";
+      return html`<div class="deadman chip ${away ? "bad" : "warn"}" data-testid="deadman">
+        ${away ? t("jog.mouse.away") : t("jog.mouse.not_at_rest")}</div>`;
+    }
     const text = s.state === "moving" && this.freedrive ? t("jog.freedrive_on")
       : s.state === "moving" && this.movingTo
       ? t("jog.moving_to", { name: this.movingTo })
       : s.state === "moving" ? t("jog.moving")
-      : s.state === "held" ? t("jog.not_moving", { reason: s.message ?? t("jog.held_back") })
-      : s.state === "halted" ? t("jog.halted", { reason: s.reason ?? "" })
-      : s.state === "refused" ? t("jog.refused", { reason: s.message ?? s.reason ?? "" })
+      : s.state === "held"
+      ? t("jog.not_moving", { reason: s.message ? worded(s.message, s.words) : t("jog.held_back") })
+      : s.state === "halted"
+      ? t("jog.halted", { reason: s.words && s.message ? worded(s.message, s.words) : s.reason ?? "" })
+      : s.state === "refused"
+      ? t("jog.refused", { reason: s.message ? worded(s.message, s.words) : s.reason ?? "" })
       : s.state === "done" ? t("jog.arrived") : t("jog.stopped");
     return html`<div class="deadman chip ${cls}" data-testid="deadman">${text}</div>`;
   }

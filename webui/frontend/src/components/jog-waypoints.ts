@@ -1,6 +1,7 @@
 import { LitElement, css, html } from "lit";
 import { t } from "../i18n";
 import type { WaypointDialog } from "../jog/teach";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { MoveProgress, Waypoint } from "./waypoint-list";
 import "./modal";
@@ -14,17 +15,21 @@ import "./waypoint-list";
 // dialog-delete {name} and dialog-close; the panel acts.
 export class OpJogWaypoints extends LitElement {
   static properties = {
+    robot: { type: String },
     waypoints: { attribute: false },
     selected: { type: String },
     canTeach: { type: Boolean },
     canMove: { type: Boolean },
+    why: { type: String },
     progress: { attribute: false },
     dialog: { attribute: false },
   };
+  declare robot: string;
   declare waypoints: Waypoint[];
   declare selected: string; // the waypoint last used
   declare canTeach: boolean; // the robot's state is known
   declare canMove: boolean;
+  declare why: string; // why Move to cannot be held, said on a touch
   declare progress: MoveProgress | null;
   declare dialog: WaypointDialog;
 
@@ -45,10 +50,12 @@ export class OpJogWaypoints extends LitElement {
 
   constructor() {
     super();
+    this.robot = "";
     this.waypoints = [];
     this.selected = "";
     this.canTeach = false;
     this.canMove = false;
+    this.why = "";
     this.progress = null;
     this.dialog = null;
   }
@@ -67,6 +74,10 @@ export class OpJogWaypoints extends LitElement {
     this.emit("dialog-confirm", { name: e.detail.name, tags: e.detail.tags });
   };
 
+  private teachRequest() {
+    return request("POST", `/api/jog/robots/${encodeURIComponent(this.robot)}/teach`);
+  }
+
   private renderDialog() {
     const d = this.dialog;
     if (!d) return "";
@@ -74,13 +85,17 @@ export class OpJogWaypoints extends LitElement {
       const heading = d.type === "joint" ? t("jog.dialog.save_joint")
         : d.frame === "base" ? t("jog.dialog.save_pose_base") : t("jog.dialog.save_pose_world");
       return html`<op-name-dialog heading=${heading}
-        .value=${d.name} .error=${d.error}
+        .value=${d.name} .error=${d.error} .requests=${[this.teachRequest()]}
         confirmLabel=${d.overwrite ? t("jog.dialog.overwrite") : t("jog.dialog.save")}
         @close=${this.close} @confirm=${this.confirm}></op-name-dialog>`;
     }
     if (d.kind === "rename") {
       return html`<op-name-dialog heading=${t("jog.dialog.waypoint", { name: d.from })}
         .value=${d.name} tags=${d.tags.join(", ")} .error=${d.error}
+        .requests=${[
+          request("POST", `/api/variables/${encodeURIComponent(d.from)}/rename`),
+          request("PUT", `/api/variables/${encodeURIComponent(d.name)}`),
+        ]}
         confirmLabel=${t("jog.dialog.save")} @close=${this.close}
         @confirm=${this.confirm}></op-name-dialog>`;
     }
@@ -89,6 +104,7 @@ export class OpJogWaypoints extends LitElement {
       <div class="row" style="justify-content:flex-end">
         <button @click=${() => this.close()}>${t("jog.dialog.cancel")}</button>
         <button class="danger" data-testid="confirm-delete"
+          ${makes(request("DELETE", `/api/variables/${encodeURIComponent(d.name)}`))}
           @click=${() => this.emit("dialog-delete", { name: d.name })}>
           ${t("jog.dialog.confirm_delete")}</button>
       </div>
@@ -98,18 +114,20 @@ export class OpJogWaypoints extends LitElement {
   render() {
     const teach = (type: "joint" | "pose", frame: "base" | "world") =>
       this.emit("teach-now", { type, frame });
+    const teaches = makes(this.teachRequest());
     return html`<section class="card">
         <h2>${t("jog.waypoints")}</h2>
         <div class="row" style="margin-bottom:8px">
-          <button data-testid="teach-joint" ?disabled=${!this.canTeach}
+          <button data-testid="teach-joint" ?disabled=${!this.canTeach} ${teaches}
             @click=${() => teach("joint", "base")}>${t("jog.save_joints")}</button>
-          <button data-testid="teach-pose" ?disabled=${!this.canTeach}
+          <button data-testid="teach-pose" ?disabled=${!this.canTeach} ${teaches}
             @click=${() => teach("pose", "base")}>${t("jog.save_pose_base")}</button>
-          <button ?disabled=${!this.canTeach} @click=${() => teach("pose", "world")}>
+          <button data-testid="teach-pose-world" ?disabled=${!this.canTeach} ${teaches}
+            @click=${() => teach("pose", "world")}>
             ${t("jog.save_pose_world")}</button>
         </div>
-        <op-waypoint-list .waypoints=${this.waypoints} ?disabled=${!this.canMove}
-          .progress=${this.progress} selected=${this.selected}></op-waypoint-list>
+        <op-waypoint-list robot=${this.robot} .waypoints=${this.waypoints} ?disabled=${!this.canMove}
+          why=${this.why} .progress=${this.progress} selected=${this.selected}></op-waypoint-list>
       </section>
       ${this.renderDialog()}`;
   }

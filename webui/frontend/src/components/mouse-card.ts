@@ -1,5 +1,6 @@
 import { LitElement, css, html } from "lit";
 import { t } from "../i18n";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { AddedDevice, InputState } from "../types";
 
@@ -26,6 +27,7 @@ export class OpMouseCard extends LitElement {
     mode: { type: String },
     sensitivity: { type: Number },
     input: { attribute: false },
+    note: { type: String },
   };
   declare mice: AddedDevice[];
   declare device: string;
@@ -34,6 +36,7 @@ export class OpMouseCard extends LitElement {
   declare mode: "joint" | "base" | "tool";
   declare sensitivity: number;
   declare input: InputState | null;
+  declare note: string; // waiting for the mouse, or why it went off by itself
 
   static styles = [
     shared,
@@ -83,6 +86,10 @@ export class OpMouseCard extends LitElement {
         border-radius: 6px;
         background: var(--raised);
       }
+      .note {
+        color: var(--warn);
+        font-weight: 600;
+      }
       .fill {
         position: absolute;
         top: 0;
@@ -102,6 +109,7 @@ export class OpMouseCard extends LitElement {
     this.mode = "joint";
     this.sensitivity = 100;
     this.input = null;
+    this.note = "";
   }
 
   private emit(name: string, detail: unknown): void {
@@ -132,7 +140,10 @@ export class OpMouseCard extends LitElement {
   }
 
   render() {
-    if (!this.mice.length) return html`<p class="muted">${t("jog.mouse.none")}</p>`;
+    const note = this.note
+      ? html`<p class="note" role="status" data-testid="mouse-note">${this.note}</p>`
+      : "";
+    if (!this.mice.length) return html`${note}<p class="muted">${t("jog.mouse.none")}</p>`;
     const device = this.device || this.mice[0].local_name;
     return html`<div class="row">
         <select aria-label=${t("jog.mouse.title")} .value=${device}
@@ -140,6 +151,7 @@ export class OpMouseCard extends LitElement {
           ${this.mice.map((m) => html`<option value=${m.local_name}>${m.local_name}</option>`)}
         </select>
         <button data-testid="mouse-toggle" class=${this.on ? "primary" : ""}
+          ${makes(request("WS", "/api/jog/ws"))}
           ?disabled=${this.disabled && !this.on} @click=${() => this.emit("mouse-toggle", !this.on)}>
           ${this.on ? t("jog.mouse.turn_off") : t("jog.mouse.use")}</button>
         <label class="sensitivity">
@@ -151,6 +163,7 @@ export class OpMouseCard extends LitElement {
           <strong>${this.sensitivity} %</strong>
         </label>
       </div>
+      ${note}
       ${this.readout()}
       <p class="muted">${t("jog.mouse.buttons_hint")}</p>`;
   }

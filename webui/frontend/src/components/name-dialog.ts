@@ -1,5 +1,6 @@
 import { LitElement, css, html } from "lit";
 import { t } from "../i18n";
+import { type Request, makes } from "../rights";
 import { shared } from "../styles";
 import "./modal";
 
@@ -14,6 +15,7 @@ export class OpNameDialog extends LitElement {
     confirmLabel: { type: String },
     error: { type: String },
     busy: { type: Boolean },
+    requests: { attribute: false },
   };
   declare heading: string;
   declare value: string;
@@ -23,6 +25,7 @@ export class OpNameDialog extends LitElement {
   declare confirmLabel: string; // "": the catalogue's "Save"
   declare error: string;
   declare busy: boolean;
+  declare requests: Request[]; // what confirming asks the runtime
 
   static styles = [
     shared,
@@ -48,6 +51,7 @@ export class OpNameDialog extends LitElement {
     this.confirmLabel = "";
     this.error = "";
     this.busy = false;
+    this.requests = [];
   }
 
   firstUpdated(): void {
@@ -96,7 +100,7 @@ export class OpNameDialog extends LitElement {
             ${t("program.name_dialog.cancel")}
           </button>
           <button class="primary" type="submit" data-testid="name-confirm"
-            ?disabled=${!valid || this.busy}>${confirm}</button>
+            ?disabled=${!valid || this.busy} ${makes(...this.requests)}>${confirm}</button>
         </div>
       </form>
     </op-modal>`;

@@ -1,5 +1,6 @@
 import { LitElement, css, html, nothing } from "lit";
 import { t } from "../i18n";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { ProgramSummary } from "../program/types";
 
@@ -93,6 +94,8 @@ export class OpProgramBar extends LitElement {
   }
 
   render() {
+    // A new program's name is asked when it is saved: its path is any program's.
+    const program = `/api/programs/${encodeURIComponent(this.name || "new")}`;
     return html`<select
         data-testid="program-select"
         aria-label=${t("program.program")}
@@ -113,12 +116,16 @@ export class OpProgramBar extends LitElement {
         : nothing}
       <button data-testid="new" @click=${() => this.emit("new")}>${t("program.new")}</button>
       <button data-testid="save" class=${this.dirty || !this.name ? "primary" : ""}
-        ?disabled=${!this.canSave} @click=${() => this.emit("save")}>${t("program.save")}</button>
+        ?disabled=${!this.canSave} @click=${() => this.emit("save")}
+        ${makes(request("PUT", program))}>${t("program.save")}</button>
       <button data-testid="rename" ?disabled=${!this.name || this.live}
+        ${makes(request("POST", `${program}/rename`))}
         @click=${() => this.emit("rename")}>${t("program.rename")}</button>
       <button data-testid="duplicate" ?disabled=${!this.name}
+        ${makes(request("POST", `${program}/duplicate`))}
         @click=${() => this.emit("duplicate")}>${t("program.duplicate")}</button>
       <button data-testid="delete" class="danger" ?disabled=${!this.name || this.live}
+        ${makes(request("DELETE", program))}
         @click=${() => this.emit("delete")}>${t("program.delete")}</button>
       <span class="spacer"></span>
       <button data-testid="undo" aria-label=${t("program.undo")} ?disabled=${!this.undo}

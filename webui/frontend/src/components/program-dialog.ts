@@ -1,5 +1,6 @@
 import { LitElement, css, html, nothing } from "lit";
 import { t } from "../i18n";
+import { type Request, makes, request } from "../rights";
 import { shared } from "../styles";
 import "./modal";
 import "./name-dialog";
@@ -47,6 +48,16 @@ export class OpProgramDialog extends LitElement {
     this.dispatchEvent(new CustomEvent("close"));
   };
 
+  /** What confirming the dialog asks the runtime (a new program's name is typed in it: its
+   * path is any program's). */
+  private requests(): Request[] {
+    const program = `/api/programs/${encodeURIComponent(this.name || "new")}`;
+    if (this.kind === "rename") return [request("POST", `${program}/rename`)];
+    if (this.kind === "duplicate") return [request("POST", `${program}/duplicate`)];
+    if (this.kind === "delete") return [request("DELETE", program)];
+    return [request("PUT", program)];
+  }
+
   render() {
     if (this.kind === "delete") {
       return html`<op-modal heading=${t("program.delete_heading", { name: this.name })}
@@ -56,6 +67,7 @@ export class OpProgramDialog extends LitElement {
         <div class="actions">
           <button @click=${() => this.close()}>${t("program.cancel")}</button>
           <button class="danger" data-testid="delete-confirm" ?disabled=${this.busy}
+            ${makes(...this.requests())}
             @click=${() => this.dispatchEvent(new CustomEvent("program-delete"))}>
             ${t("program.delete")}</button>
         </div>
@@ -72,6 +84,7 @@ export class OpProgramDialog extends LitElement {
       confirmLabel=${this.kind === "duplicate" ? t("program.duplicate") : t("program.save")}
       error=${this.error}
       ?busy=${this.busy}
+      .requests=${this.requests()}
       @confirm=${(e: CustomEvent<{ name: string }>) => this.dispatchEvent(
         new CustomEvent("program-name", { detail: { name: e.detail.name } }))}
       @close=${this.close}

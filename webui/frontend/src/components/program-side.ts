@@ -1,5 +1,6 @@
 import { LitElement, css, html, nothing } from "lit";
 import { type StringKey, t } from "../i18n";
+import { worded } from "../i18n/words";
 import { shared } from "../styles";
 import type { OutlineItem } from "../program/editor";
 import { LIVE_STATES, type OutputEntry, type Problem, type RunStatus } from "../program/types";
@@ -180,17 +181,17 @@ export class OpProgramSide extends LitElement {
       ${lines.map(
         (line) => line && html`<button class="line ${line.stream}" data-block=${line.block ?? ""}
           data-testid=${line.stream === "error" ? "run-error" : "output-line"}
-          @click=${() => this.reveal(line.block)}>${line.text}</button>`,
+          @click=${() => this.reveal(line.block)}>${worded(line.text, line.words)}</button>`,
       )}
       ${status?.error && !lines.some((line) => line?.stream === "error")
         ? html`<button class="line error" data-testid="run-error"
             @click=${() => this.reveal(status.error?.block)}
             >${status.error.line
               ? t("program.error_at_line", {
-                  message: status.error.message,
+                  message: worded(status.error.message, status.error.words),
                   line: status.error.line,
                 })
-              : status.error.message}</button>`
+              : worded(status.error.message, status.error.words)}</button>`
         : nothing}
       ${status && !status.error && status.message && !LIVE_STATES.includes(status.state)
         ? html`<p class="muted">${status.message}</p>`

@@ -1,9 +1,19 @@
 import { LitElement, css, html } from "lit";
 import { api } from "../api";
+import { FocusController, focus } from "../focus";
 import { t } from "../i18n";
-import { feed } from "../live";
+import { FeedController, feed } from "../live";
+import { robotBases } from "../robot-bases";
 import { shared } from "../styles";
-import type { CellPart, Marker, RobotScene, WorldContents } from "../three/scene";
+import { CellModels } from "./cell-models";
+import type {
+  CellPart,
+  DrawnRobotReport,
+  Marker,
+  PoseJson,
+  RobotScene,
+  WorldContents,
+} from "../three/scene";
 
 // How often a simulated cell's parts are asked for: a part carried by the gripper follows
 // the arm about this late.
@@ -13,10 +23,29 @@ export interface RobotModel {
   name: string; // the robot it describes: joints of another robot are never drawn on it
   urdf: string | null;
   packages: Record<string, string>;
-  info: { base_link: string; joints: { name: string }[]; capabilities: string[] };
+  info: {
+    base_link: string;
+    flange_link: string;
+    joints: { name: string }[];
+    capabilities: string[];
+  };
 }
 
-// The live 3D view. three.js and the URDF loader load only when a view is first shown.
+/** A robot's drawing: its URDF, drawn, still loading, or failed with the reason. */
+interface Drawing {
+  urdf: string;
+  state: "loading" | "drawn" | "failed";
+  error: string;
+}
+
+function sameValues(a: number[] | undefined, b: number[]): boolean {
+  return !!a && a.length === b.length && a.every((v, i) => v === b[i]);
+}
+
+// The live 3D view of the whole cell: every added robot on its base in the world, the one in
+// focus drawn as it is and the others faint, each posed from its live joints. The panel gives
+// the focused robot's model and joints; the others' the view asks for and follows itself.
+// three.js and the URDF loader load only when a view is first shown.
 export class OpRobotView extends LitElement {
   static properties = {
     model: { attribute: false },
@@ -27,19 +56,26 @@ export class OpRobotView extends LitElement {
     progress: { state: true },
     drawnParts: { state: true },
   };
-  declare model: RobotModel | null;
-  declare joints: number[] | null;
+  declare model: RobotModel | null; // the robot in focus
+  declare joints: number[] | null; // of the robot in `model`
   declare markers: Marker[];
   declare world: WorldContents | null; // obstacles and a path preview, when shown
-  declare status: "loading" | "ready" | "error";
+  declare status: "loading" | "ready" | "error"; // of the robot in `model`
   declare progress: string;
   declare drawnParts: string; // what the view shows of the cell's parts: "id@x,y,z …"
   private scene: RobotScene | null = null;
+  private creating: Promise<RobotScene | null> | null = null;
+  private life = 0; // one more each time the view leaves the page: what was under way ends
+  private models = new CellModels(() => this.requestUpdate());
+  private drawings = new Map<string, Drawing>();
+  private shownJoints = new Map<string, number[]>();
+  private shownBases = new Map<string, string>();
+  private readyFor: RobotModel | null = null;
   private shownMarkers = "";
   private shownWorld = "";
-  private shownJoints = "";
   private observer = new ResizeObserver(() => this.scene?.resize());
-  private loadedUrdf = "";
+  private stopBases: (() => void) | null = null;
+  private readonly basesChanged = () => this.requestUpdate();
   private partsTimer = 0;
   private partsRound = 0;
   private shownParts = "";
@@ -82,6 +118,8 @@ export class OpRobotView extends LitElement {
 
   constructor() {
     super();
+    new FeedController(this);
+    new FocusController(this);
     this.model = null;
     this.joints = null;
     this.markers = [];
@@ -91,70 +129,180 @@ export class OpRobotView extends LitElement {
     this.drawnParts = "";
   }
 
+  connectedCallback(): void {
+    super.connectedCallback();
+    this.stopBases = robotBases.use();
+    robotBases.addEventListener("change", this.basesChanged);
+  }
+
   disconnectedCallback(): void {
+    this.life++;
     window.clearTimeout(this.partsTimer);
     this.partsRound++;
     this.observer.disconnect();
     this.scene?.dispose();
     this.scene = null;
-    this.loadedUrdf = "";
+    this.creating = null;
+    this.drawings.clear();
+    this.models.stop();
+    this.shownJoints.clear();
+    this.shownBases.clear();
+    this.readyFor = null;
+    robotBases.removeEventListener("change", this.basesChanged);
+    this.stopBases?.();
+    this.stopBases = null;
     super.disconnectedCallback();
   }
 
-  protected async updated(changed: Map<string, unknown>): Promise<void> {
-    if (changed.has("model")) await this.load();
-    if (!this.scene || this.status !== "ready") return;
-    // The panel re-renders with every state; only real changes reach the scene.
-    const joints = JSON.stringify(this.joints);
-    if (changed.has("joints") && this.joints && this.model && joints !== this.shownJoints) {
-      this.shownJoints = joints;
-      this.scene.setJoints(this.model.info.joints.map((j) => j.name), this.joints);
+  /** What the view draws of each robot, where, and whether faint: a read-only hook for
+   * tests. */
+  drawnRobots(): DrawnRobotReport[] {
+    return this.scene?.drawn() ?? [];
+  }
+
+  protected updated(changed: Map<string, unknown>): void {
+    if (changed.has("model") && this.model?.urdf) {
+      const given = this.model;
+      const drawing = this.drawings.get(given.name);
+      // The same model given again after it failed is tried again.
+      if (drawing?.state === "failed" && drawing.urdf === given.urdf) {
+        this.drawings.delete(given.name);
+      }
+      this.models.give(given);
     }
-    const markers = JSON.stringify(this.markers);
-    if (changed.has("markers") && markers !== this.shownMarkers) {
+    this.followCell();
+    this.showStatus();
+    const scene = this.scene;
+    if (!scene) return;
+    scene.setFocus(focus.robot);
+    this.showBases(scene);
+    this.showJoints(scene);
+    if (this.status !== "ready") return;
+    // The panel re-renders with every state; only real changes reach the scene ("" is
+    // nothing shown yet).
+    if (changed.has("markers") || !this.shownMarkers) {
+      const markers = JSON.stringify(this.markers);
+      if (markers !== this.shownMarkers) scene.setMarkers(this.markers);
       this.shownMarkers = markers;
-      this.scene.setMarkers(this.markers);
     }
-    this.showWorld();
+    if (this.world && (changed.has("world") || !this.shownWorld)) {
+      const world = JSON.stringify(this.world);
+      if (world !== this.shownWorld) scene.setWorld(this.world);
+      this.shownWorld = world;
+    }
   }
 
-  private showWorld(): void {
-    const world = JSON.stringify(this.world);
-    if (!this.scene || !this.world || world === this.shownWorld) return;
-    this.shownWorld = world;
-    this.scene.setWorld(this.world);
+  /** Every robot of the cell drawn (again if its URDF changed); those gone taken away. */
+  private followCell(): void {
+    for (const name of this.models.follow()) {
+      this.drawings.delete(name);
+      this.shownJoints.delete(name);
+      this.shownBases.delete(name);
+      this.scene?.removeRobot(name);
+    }
+    for (const [name, model] of this.models.entries()) {
+      if (model.urdf && this.drawings.get(name)?.urdf !== model.urdf) void this.draw(name, model);
+    }
   }
 
-  private async load(): Promise<void> {
-    const model = this.model;
-    if (!model?.urdf || model.urdf === this.loadedUrdf) return;
-    this.loadedUrdf = model.urdf;
-    this.status = "loading";
-    try {
-      const { RobotScene } = await import("../three/scene");
-      const host = this.renderRoot.querySelector(".canvas") as HTMLElement;
-      this.scene?.dispose();
-      this.scene = new RobotScene(host);
-      this.observer.observe(host);
-      await this.scene.load(model.urdf, model.packages, model.info.base_link, (done, total) => {
-        this.progress = t("scene.view.loading", { done, total });
+  private sceneReady(): Promise<RobotScene | null> {
+    if (this.scene) return Promise.resolve(this.scene);
+    const life = this.life;
+    this.creating ??= import("../three/scene")
+      .then(({ RobotScene }) => {
+        if (life !== this.life) return null;
+        const host = this.renderRoot.querySelector(".canvas") as HTMLElement;
+        this.scene = new RobotScene(host);
+        this.scene.setFocus(focus.robot); // before any robot is drawn faint or not
+        this.observer.observe(host);
+        return this.scene;
+      })
+      .catch((err: unknown) => {
+        if (life === this.life) this.creating = null; // tried again with the next robot
+        throw err;
       });
+    return this.creating;
+  }
+
+  private async draw(name: string, model: RobotModel): Promise<void> {
+    const urdf = model.urdf ?? "";
+    const life = this.life;
+    const drawing: Drawing = { urdf, state: "loading", error: "" };
+    this.drawings.set(name, drawing);
+    const current = () => life === this.life && this.drawings.get(name) === drawing;
+    try {
+      const scene = await this.sceneReady();
+      if (!scene || !current()) return;
+      const source = {
+        urdf,
+        packages: model.packages,
+        baseLink: model.info.base_link,
+        flangeLink: model.info.flange_link,
+      };
+      const drawn = await scene.addRobot(name, source, (done, total) => {
+        if (current() && name === this.model?.name) {
+          this.progress = t("scene.view.loading", { done, total });
+        }
+      });
+      if (!drawn || !current()) return;
+      drawing.state = "drawn";
+      this.shownJoints.delete(name);
+      this.shownBases.delete(name);
+    } catch (err) {
+      if (!current()) return;
+      drawing.state = "failed";
+      drawing.error = err instanceof Error ? err.message : String(err);
+    }
+    this.requestUpdate();
+  }
+
+  /** The status of the robot the panel gave. Once drawn, its markers, the world and its
+   * parts are shown afresh. */
+  private showStatus(): void {
+    const model = this.model;
+    if (!model?.urdf) return; // none given (yet): what is shown stays
+    const drawing = this.drawings.get(model.name);
+    if (drawing?.urdf !== model.urdf || drawing.state === "loading") {
+      this.status = "loading";
+      this.readyFor = null;
+    } else if (drawing.state === "failed") {
+      this.status = "error";
+      this.readyFor = null;
+      this.progress = t("scene.view.unavailable", { error: drawing.error });
+    } else if (this.readyFor !== model) {
+      this.readyFor = model;
       this.status = "ready";
       this.progress = "";
-      if (this.joints) this.scene.setJoints(model.info.joints.map((j) => j.name), this.joints);
-      this.scene.setMarkers(this.markers);
-      this.shownJoints = JSON.stringify(this.joints);
-      this.shownMarkers = JSON.stringify(this.markers);
+      this.shownMarkers = "";
       this.shownWorld = "";
-      this.showWorld();
       this.shownParts = "";
       window.clearTimeout(this.partsTimer);
       void this.followParts(++this.partsRound);
-    } catch (err) {
-      this.loadedUrdf = ""; // the same model given again is tried again
-      this.status = "error";
-      const error = err instanceof Error ? err.message : String(err);
-      this.progress = t("scene.view.unavailable", { error });
+    }
+  }
+
+  private showBases(scene: RobotScene): void {
+    for (const [name] of this.models.entries()) {
+      const base: PoseJson | null = robotBases.base(name);
+      const key = JSON.stringify(base);
+      if (this.shownBases.get(name) === key) continue;
+      this.shownBases.set(name, key);
+      scene.setBase(name, base);
+    }
+  }
+
+  /** Each drawn robot at its live joints: the panel's robot at `joints`, the others at their
+   * latest state (a robot whose link is down stays where it was last seen). */
+  private showJoints(scene: RobotScene): void {
+    for (const [name, drawing] of this.drawings) {
+      const model = this.models.get(name);
+      if (drawing.state !== "drawn" || !model) continue;
+      const joints = name === this.model?.name
+        ? this.joints
+        : feed.states.get(name)?.joint_position ?? null;
+      if (!joints || sameValues(this.shownJoints.get(name), joints)) continue;
+      this.shownJoints.set(name, joints);
+      scene.setJoints(name, model.info.joints.map((j) => j.name), joints);
     }
   }
 

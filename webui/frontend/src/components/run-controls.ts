@@ -1,5 +1,7 @@
 import { LitElement, css, html, nothing } from "lit";
 import { type StringKey, t } from "../i18n";
+import { worded } from "../i18n/words";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { RunCommand } from "../program/runner";
 import { LIVE_STATES, type Problem, type RunState, type RunStatus } from "../program/types";
@@ -11,6 +13,7 @@ import { LIVE_STATES, type Problem, type RunState, type RunStatus } from "../pro
 // breakpoint-toggle and reveal {block}; the panel acts.
 export class OpRunControls extends LitElement {
   static properties = {
+    program: { type: String },
     status: { attribute: false },
     runnable: { type: Boolean },
     selected: { attribute: false },
@@ -21,6 +24,7 @@ export class OpRunControls extends LitElement {
     notice: { type: String },
     problems: { attribute: false },
   };
+  declare program: string; // the program shown ("" before its first save)
   declare status: RunStatus | null; // of the program shown, null: never run
   declare runnable: boolean; // Run is enabled
   declare selected: string | null; // the block selected, if a breakpoint can go on it
@@ -116,6 +120,7 @@ export class OpRunControls extends LitElement {
 
   constructor() {
     super();
+    this.program = "";
     this.status = null;
     this.runnable = false;
     this.selected = null;
@@ -135,6 +140,15 @@ export class OpRunControls extends LitElement {
     this.emit("run-command", { action });
   }
 
+  // Run saves a new program first, under a name asked then: its path is any program's.
+  private path(): string {
+    return `/api/programs/${encodeURIComponent(this.program || "new")}`;
+  }
+
+  private commands(action: RunCommand) {
+    return makes(request("POST", `${this.path()}/${action}`));
+  }
+
   render() {
     const status = this.status;
     const state = status?.state ?? "idle";
@@ -142,20 +156,25 @@ export class OpRunControls extends LitElement {
     const robot = this.robot;
     return html`<div class="runpad">
         ${live
-          ? html`<button class="stop wide" data-testid="stop" @click=${() => this.command("stop")}>
+          ? html`<button class="stop wide" data-testid="stop" @click=${() => this.command("stop")}
+              ${this.commands("stop")}>
               ${t("program.stop")}
             </button>`
           : html`<button class="run wide" data-testid="run" ?disabled=${!this.runnable}
+              ${makes(request("POST", `${this.path()}/run`))}
               @click=${() => this.emit("run")}>${t("program.run")}</button>`}
         ${state === "paused"
-          ? html`<button data-testid="resume" @click=${() => this.command("resume")}>
+          ? html`<button data-testid="resume" @click=${() => this.command("resume")}
+              ${this.commands("resume")}>
               ${t("program.resume")}</button>`
           : html`<button data-testid="pause" ?disabled=${state !== "running"}
+              ${this.commands("pause")}
               @click=${() => this.command("pause")}>${t("program.pause")}</button>`}
-        <button data-testid="step" ?disabled=${state !== "paused"}
+        <button data-testid="step" ?disabled=${state !== "paused"} ${this.commands("step")}
           @click=${() => this.command("step")}>${t("program.step")}</button>
         <button data-testid="breakpoint" class="wide ${this.breakpoint ? "on" : ""}"
           ?disabled=${this.selected === null}
+          ${makes(request("PUT", `${this.path()}/breakpoints`))}
           @click=${() => this.selected && this.emit("breakpoint-toggle")}>
           ${this.breakpoint ? t("program.clear_breakpoint") : t("program.breakpoint_on_block")}
         </button>
@@ -174,7 +193,8 @@ export class OpRunControls extends LitElement {
       ${state === "paused" && status?.pause_reason === "confirm"
         ? html`<div class="confirm" role="alert" data-testid="confirm">
             <strong>${status.message || t("program.waits")}</strong>
-            <button class="primary" @click=${() => this.command("resume")}>
+            <button class="primary" data-testid="continue" @click=${() => this.command("resume")}
+              ${this.commands("resume")}>
               ${t("program.continue")}</button>
           </div>`
         : nothing}
@@ -187,7 +207,7 @@ export class OpRunControls extends LitElement {
               : t("program.fix_many", { count: this.problems.length })}</strong>
             ${this.problems.map((p) => html`<button class="problem" data-testid="problem-item"
               data-block=${p.block} @click=${() => this.emit("reveal", { block: p.block })}>
-              ⚠ ${p.message}</button>`)}
+              ⚠ ${worded(p.message, p.words)}</button>`)}
           </div>`
         : nothing}`;
   }

@@ -3,6 +3,7 @@ import { api, errorText } from "../api";
 import { control } from "../control";
 import { type StringKey, t } from "../i18n";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { Pose } from "../types";
 import {
@@ -216,6 +217,7 @@ export class OpToolCard extends LitElement {
         </div>
         <div class="row">
           <button class="primary" data-testid="save-tool" ?disabled=${!mine}
+            ${makes(request("PUT", `/api/devices/${encodeURIComponent(this.robot)}/tool`))}
             @click=${() => this.save()}>${t("scene.tool.save")}</button>
           <span class="muted">${hint}</span>
         </div>

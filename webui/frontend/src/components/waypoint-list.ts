@@ -1,5 +1,6 @@
 import { LitElement, css, html } from "lit";
 import { t } from "../i18n";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import { length, lengthUnit } from "../units";
 import "./hold-button";
@@ -25,14 +26,18 @@ export interface MoveProgress {
 // events; the panel acts.
 export class OpWaypointList extends LitElement {
   static properties = {
+    robot: { type: String },
     waypoints: { attribute: false },
     disabled: { type: Boolean },
+    why: { type: String },
     selected: { type: String },
     progress: { attribute: false },
     filter: { state: true },
   };
+  declare robot: string; // whose waypoints
   declare waypoints: Waypoint[];
   declare disabled: boolean;
+  declare why: string; // why Move to is disabled, said on a touch
   declare selected: string;
   declare progress: MoveProgress | null;
   declare filter: string;
@@ -88,8 +93,10 @@ export class OpWaypointList extends LitElement {
 
   constructor() {
     super();
+    this.robot = "";
     this.waypoints = [];
     this.disabled = false;
+    this.why = "";
     this.selected = "";
     this.progress = null;
     this.filter = "";
@@ -111,6 +118,7 @@ export class OpWaypointList extends LitElement {
     }
     const shown = this.shown();
     const count = t("scene.waypoints.count", { shown: shown.length, total: this.waypoints.length });
+    const teaches = makes(request("POST", `/api/jog/robots/${encodeURIComponent(this.robot)}/teach`));
     return html`<input class="filter" type="search" data-testid="waypoint-filter"
         placeholder=${t("scene.waypoints.filter")}
         aria-label=${t("scene.waypoints.filter_label")}
@@ -145,17 +153,21 @@ export class OpWaypointList extends LitElement {
         <div class="actions">
           <op-hold-button
             data-testid="move-to"
+            ${makes(request("WS", "/api/jog/ws"))}
             ?disabled=${this.disabled}
+            why=${this.why}
             @hold-start=${() => this.emit("waypoint-hold", w.name)}
             @hold-end=${() => this.emit("waypoint-release", w.name)}
             >${t("scene.waypoints.move_to")}</op-hold-button
           >
-          <button data-testid="reteach" ?disabled=${this.disabled}
+          <button data-testid="reteach" ?disabled=${this.disabled} ${teaches}
             @click=${() => this.emit("waypoint-reteach", w.name)}
             >${t("scene.waypoints.reteach")}</button>
-          <button data-testid="rename" @click=${() => this.emit("waypoint-rename", w.name)}>
+          <button data-testid="rename" @click=${() => this.emit("waypoint-rename", w.name)}
+            ${makes(request("POST", `/api/variables/${encodeURIComponent(w.name)}/rename`))}>
             ${t("scene.waypoints.rename")}</button>
           <button class="danger" data-testid="delete"
+            ${makes(request("DELETE", `/api/variables/${encodeURIComponent(w.name)}`))}
             @click=${() => this.emit("waypoint-delete", w.name)}>${t("scene.delete")}</button>
         </div>
       </div>`,

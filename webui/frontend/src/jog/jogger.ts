@@ -8,9 +8,13 @@ import type { ReactiveController, ReactiveControllerHost } from "lit";
 import { api } from "../api";
 import { control } from "../control";
 import { focus } from "../focus";
+import { holdStarting } from "../components/hold-button";
 import { t } from "../i18n";
+import { worded } from "../i18n/words";
 import { JogSocket, type JogMessage, type JogStatus } from "../jog-socket";
 import { feed } from "../live";
+import { tell } from "../rights";
+import { session } from "../session";
 import { type Mode, type Stepping, stepOf } from "./axes";
 
 const SENSITIVITY_KEY = "op.mouseSensitivity";
@@ -29,9 +33,13 @@ export class Jogger implements ReactiveController {
   freedriving = false; // Freedrive is held
   mouse = ""; // the 3D mouse chosen
   mouseOn = false;
+  mouseAway = false; // on, but the mouse is gone: the robot halted until it is back
+  mouseOff = ""; // why the mouse went off by itself (a lost robot link, a stuck cap)
   sensitivity = Number(localStorage.getItem(SENSITIVITY_KEY) ?? "100") || 100;
   private readonly socket = new JogSocket();
   private press = "";
+  // The button a press began on: a refusal, or a halt, is said there (where the finger is).
+  private pressedOn: { press: string; button: HTMLElement } | null = null;
   private boundMouse = "";
   private readonly releaseAll = () => this.socket.releaseAll();
   private readonly onVisibility = () => document.hidden && this.socket.releaseAll();
@@ -56,7 +64,8 @@ export class Jogger implements ReactiveController {
   }
 
   async hostConnected(): Promise<void> {
-    this.socket.connect();
+    // A role that may not jog opens no socket the gateway would refuse (its keys say why).
+    if (session.may("WS", "/api/jog/ws")) this.socket.connect();
     document.addEventListener("visibilitychange", this.onVisibility);
     window.addEventListener("blur", this.releaseAll);
     window.addEventListener("op-stop", this.releaseAll);
@@ -97,7 +106,16 @@ export class Jogger implements ReactiveController {
     this.host.message = "";
     if (control.holds(this.host.robot)) return true;
     this.host.message = t("jog.control.take_first");
+    const button = holdStarting();
+    if (button) tell(this.host.message, button);
     return false;
+  }
+
+  /** A press just sent from the hold button being pressed (if one is). */
+  private pressed(press: string): string {
+    const button = holdStarting();
+    this.pressedOn = button ? { press, button } : null;
+    return press;
   }
 
   /** A jog key held: continuous until release(), or one step. */
@@ -106,7 +124,7 @@ export class Jogger implements ReactiveController {
     const mode = this.host.mode;
     const joint = mode === "joint";
     const step = stepOf(this.host.stepping, mode, axis);
-    this.press = this.socket.press(
+    this.press = this.pressed(this.socket.press(
       {
         type: "jog",
         ...this.base(),
@@ -117,14 +135,16 @@ export class Jogger implements ReactiveController {
         ...(step === undefined ? {} : { step }),
       },
       step === undefined,
-    );
+    ));
   }
 
   /** "Move to" a waypoint held. */
   holdWaypoint(name: string): boolean {
     if (!this.mayMove()) return false;
     this.movingTo = name;
-    this.press = this.socket.press({ type: "move_to", ...this.base(), waypoint: name });
+    this.press = this.pressed(
+      this.socket.press({ type: "move_to", ...this.base(), waypoint: name }),
+    );
     return true;
   }
 
@@ -133,7 +153,7 @@ export class Jogger implements ReactiveController {
     if (!this.mayMove()) return;
     const { robot, token } = this.base();
     this.freedriving = true;
-    this.press = this.socket.press({ type: "freedrive", robot, token });
+    this.press = this.pressed(this.socket.press({ type: "freedrive", robot, token }));
   }
 
   release(): void {
@@ -157,18 +177,39 @@ export class Jogger implements ReactiveController {
     if (message.state === "refused" && message.reason === "lease_held") {
       control.forget(this.host.robot);
     }
-    if (message.press.startsWith("mouse:") && over) {
-      this.mouseOn = false;
-      this.boundMouse = "";
+    const on = this.pressedOn;
+    if (on && message.press === on.press && ["refused", "halted"].includes(message.state)) {
+      this.pressedOn = null;
+      const reason = worded(message.message || message.reason || "", message.words);
+      tell(t(message.state === "refused" ? "jog.refused" : "jog.halted", { reason }), on.button);
     }
+    if (message.press === `mouse:${this.mouse}`) this.mouseSaid(message, over);
     this.host.requestUpdate();
   }
 
   // 3D mouse -------------------------------------------------------------------------------
 
-  /** The 3D mice connected. */
+  /** What the jog service says of the mouse's binding. One that waits for its mouse stays
+   * on; one that ended without the switch being tapped says why on the mouse's card. */
+  private mouseSaid(message: JogStatus, over: boolean): void {
+    this.mouseAway = !over && message.state === "held" && message.reason === "mouse_away";
+    if (!over) return;
+    const why = message.message || message.reason || message.state;
+    if (this.mouseOn) this.mouseOff = worded(why, message.words);
+    this.mouseOn = false;
+    this.boundMouse = "";
+  }
+
+  /** Under the switch: waiting for the mouse, or why it went off by itself. */
+  mouseNote(): string {
+    if (this.mouseOn) return this.mouseAway ? t("jog.mouse.waiting") : "";
+    return this.mouseOff ? t("jog.mouse.off_because", { reason: this.mouseOff }) : "";
+  }
+
+  /** The 3D mice connected, and the one switched on while it is away. */
   mice() {
-    return feed.devices.filter((d) => d.kind === "input" && d.status === "connected");
+    return feed.devices.filter((d) => d.kind === "input"
+      && (d.status === "connected" || (this.mouseOn && d.local_name === this.mouse)));
   }
 
   /** What the mouse should be bound with now, as sent. */
@@ -188,6 +229,8 @@ export class Jogger implements ReactiveController {
   setMouse(on: boolean): void {
     const device = this.mouse || this.mice()[0]?.local_name;
     if (!device) return;
+    this.mouseOff = "";
+    if (!on) this.mouseAway = false;
     if (device !== this.mouse) {
       this.mouse = device;
       this.host.requestUpdate();

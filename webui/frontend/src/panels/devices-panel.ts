@@ -3,6 +3,7 @@ import { api, errorText } from "../api";
 import { suggestLocalName, withBold } from "../format";
 import { type StringKey, t } from "../i18n";
 import { FeedController, feed } from "../live";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { AddedDevice, ConnectionStatus, DetectedDevice } from "../types";
 import "../components/add-device-dialog";
@@ -84,6 +85,26 @@ export class OpDevicesPanel extends LitElement {
         color: var(--warn);
         font-weight: 600;
       }
+      .mark {
+        display: flex;
+        align-items: center;
+        min-height: 44px;
+        margin-top: 10px;
+        padding: 6px 14px;
+        border-radius: 10px;
+        font-size: 16px;
+        font-weight: 600;
+        background: var(--raised);
+        overflow-wrap: anywhere;
+      }
+      .mark.ok {
+        background: var(--ok-bg);
+        color: var(--ok-fg);
+      }
+      .mark.warn {
+        background: var(--warn-bg);
+        color: var(--warn-fg);
+      }
     `,
   ];
 
@@ -129,7 +150,7 @@ export class OpDevicesPanel extends LitElement {
   }
 
   private detectedCard(d: DetectedDevice) {
-    return html`<div class="card" data-testid="detected-device" data-uuid=${d.uuid}>
+    return html`<div class="card" data-testid="detected-device" data-uuid=${d.uuid} data-mark=${d.mark}>
       <div class="head">
         <span class="title" translate=${d.name ? "no" : "yes"}
           >${d.name || t("devices.unnamed")}</span>
@@ -140,17 +161,39 @@ export class OpDevicesPanel extends LitElement {
         ? html`<div class="chip warn" data-testid="detected-also-at">
             ${t("devices.also_at", { urls: d.also_at.join(", ") })}</div>`
         : ""}
+      ${this.detectedMark(d)}
       <div class="row">
         ${d.added_as
           ? html`<span class="chip ok">${t("devices.added_as", { name: d.added_as })}</span>`
           : html`<button
-              class="primary"
+              class=${d.mark === "elsewhere" ? "" : "primary"}
               data-testid="add-device"
+              ${makes(request("POST", "/api/devices"))}
               @click=${() => (this.dialog = { kind: "add", device: d, url: "" })}
             >
-              ${t("devices.add")}
+              ${t(d.mark === "elsewhere" ? "devices.add_anyway" : "devices.add")}
             </button>`}
       </div>
+    </div>`;
+  }
+
+  // Whose the device is, as this runtime sees it: what an Add will do, said before the tap.
+  private detectedMark(d: DetectedDevice) {
+    if (d.mark === "added") return "";
+    const elsewhere = d.mark === "elsewhere";
+    const key: StringKey = elsewhere
+      ? d.elsewhere === "other_key"
+        ? "devices.mark.other_key"
+        : "devices.mark.other_runtime"
+      : d.mark === "paired"
+        ? "devices.mark.paired"
+        : "devices.mark.new";
+    return html`<div
+      class="mark ${elsewhere ? "warn" : d.mark === "paired" ? "ok" : ""}"
+      data-testid="detected-mark"
+      role=${elsewhere ? "note" : "status"}
+    >
+      ${t(key)}
     </div>`;
   }
 
@@ -165,6 +208,7 @@ export class OpDevicesPanel extends LitElement {
       ${d.status !== "connected" && d.last_error
         ? html`<div class="sub error">${d.last_error}</div>`
         : ""}
+      ${this.deviceSays(d)}
       ${this.claimNotice(d)}
       ${d.kind === "robot" && d.status === "connected"
         ? html`<div class="row"><op-robot-live .state=${state}></op-robot-live></div>`
@@ -177,12 +221,22 @@ export class OpDevicesPanel extends LitElement {
         <button
           class="danger"
           data-testid="remove-device"
+          ${makes(request("DELETE", `/api/devices/${encodeURIComponent(d.local_name)}`))}
           @click=${() => (this.dialog = { kind: "remove", device: d })}
         >
           ${t("devices.remove")}
         </button>
       </div>
     </div>`;
+  }
+
+  // What a connected device's own state says is wrong (a camera whose --cell names no
+  // robot): its link is fine, so the status chip alone would say all is well.
+  private deviceSays(d: AddedDevice) {
+    if (d.kind === "robot" || d.status !== "connected") return "";
+    const error = (feed.states.get(d.local_name) as unknown as { error?: unknown } | undefined)?.error;
+    if (typeof error !== "string" || !error) return "";
+    return html`<div class="sub error" data-testid="device-error" role="status">${error}</div>`;
   }
 
   // Who else claimed this device's identity, and from where: shown, never followed silently.
@@ -216,6 +270,7 @@ export class OpDevicesPanel extends LitElement {
       <div class="row">
         <button
           data-testid="repoint-device"
+          ${makes(request("PUT", `/api/devices/${encodeURIComponent(d.local_name)}/address`))}
           @click=${() => (this.dialog = { kind: "repoint", device: d, url: claim.url })}
         >
           ${t("devices.use_address", { url: claim.url })}
@@ -256,7 +311,8 @@ export class OpDevicesPanel extends LitElement {
           <div class="row">
             <span class="spacer"></span>
             <button @click=${close}>${t("devices.cancel")}</button>
-            <button class="danger" data-testid="confirm-repoint" @click=${() => this.repoint(dialog.device, dialog.url)}>
+            <button class="danger" data-testid="confirm-repoint" @click=${() => this.repoint(dialog.device, dialog.url)}
+              ${makes(request("PUT", `/api/devices/${encodeURIComponent(dialog.device.local_name)}/address`))}>
               ${t("devices.halt_and_move")}
             </button>
           </div>
@@ -270,7 +326,8 @@ export class OpDevicesPanel extends LitElement {
           <div class="row">
             <span class="spacer"></span>
             <button @click=${close}>${t("devices.cancel")}</button>
-            <button class="danger" data-testid="confirm-remove" @click=${() => this.removeDevice(dialog.device)}>
+            <button class="danger" data-testid="confirm-remove" @click=${() => this.removeDevice(dialog.device)}
+              ${makes(request("DELETE", `/api/devices/${encodeURIComponent(dialog.device.local_name)}`))}>
               ${t("devices.remove")}
             </button>
           </div>
@@ -326,7 +383,8 @@ export class OpDevicesPanel extends LitElement {
             .value=${this.url}
             @input=${(e: InputEvent) => (this.url = (e.target as HTMLInputElement).value)}
           />
-          <button type="submit">${t("devices.add_ellipsis")}</button>
+          <button type="submit" data-testid="add-by-address" ${makes(request("POST", "/api/devices"))}
+            >${t("devices.add_ellipsis")}</button>
         </form>
       </section>
       ${this.renderDialog()}

@@ -1,9 +1,9 @@
 import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
-import { control } from "../control";
+import { control, leaseRequest } from "../control";
 import { t } from "../i18n";
 import { FeedController, feed } from "../live";
-import { session } from "../session";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { AddedDevice } from "../types";
 
@@ -26,6 +26,13 @@ interface Details {
   info: { info: { signals?: SignalInfo[] } } | null;
 }
 
+/** A signal's name with a line break allowed after each "_", "." and "-" (the words of
+ * `part_present_sensor_2`), and nowhere else while its words fit; a word of one or
+ * two letters stays with the one before it, never on a line of its own. */
+function breakable(name: string) {
+  return name.split(/(?<=[_.-])/).map((word, i) => (i && word.length > 2 ? html`<wbr>${word}` : word));
+}
+
 // Every signal of every I/O block, live from the device feed; outputs switched here only
 // by the pendant that has control of the block (as a robot is jogged only with control).
 export class OpIoPanel extends LitElement {
@@ -45,18 +52,33 @@ export class OpIoPanel extends LitElement {
         grid-template-columns: repeat(auto-fill, minmax(220px, 1fr));
         gap: 10px;
       }
+      /* A name too long to share its line with the value and the controls gets the line to
+         itself (they go under it, on the right) rather than be squeezed to a letter a line;
+         it breaks after its underscores, between its words. */
       .signal {
         display: flex;
+        flex-wrap: wrap;
         align-items: center;
         justify-content: space-between;
-        gap: 10px;
+        gap: 6px 10px;
         min-height: var(--touch);
         padding: 6px 12px;
         border: 1px solid var(--line);
         border-radius: 10px;
       }
       .signal .name {
-        overflow-wrap: anywhere;
+        flex: 1 1 auto;
+        min-width: 0;
+        overflow-wrap: break-word;
+      }
+      .reading {
+        display: flex;
+        flex-wrap: wrap;
+        align-items: center;
+        justify-content: flex-end;
+        gap: 6px 10px;
+        margin-left: auto;
+        min-width: 0;
       }
       .value {
         font-weight: 700;
@@ -168,22 +190,23 @@ export class OpIoPanel extends LitElement {
   private signal(device: string, s: SignalInfo, state: IOState | undefined, mine: boolean) {
     const value = state?.values[s.name];
     const id = `${device}-${s.name}`;
+    const writes = makes(request("POST", `/api/devices/${encodeURIComponent(device)}/call/write`));
     let control_ = html``;
     if (s.kind === "digital_output") {
       control_ = html`<button data-testid="toggle-${id}" aria-pressed=${value === true}
-        ?disabled=${!mine || typeof value !== "boolean"}
+        ?disabled=${!mine || typeof value !== "boolean"} ${writes}
         @click=${() => this.write(device, s.name, !value)}>${value ? t("io.off") : t("io.on")}</button>`;
     } else if (s.kind === "analog_output") {
       control_ = html`<form class="analog" @submit=${(e: Event) => this.setAnalog(e, device, s.name)}>
         <input type="number" step="any" inputmode="decimal" data-testid="value-${id}"
           min=${s.minimum ?? ""} max=${s.maximum ?? ""} ?disabled=${!mine} />
-        <button type="submit" ?disabled=${!mine}>${t("io.set")}</button>
+        <button type="submit" ?disabled=${!mine} ${writes}>${t("io.set")}</button>
       </form>`;
     }
     return html`<div class="signal" data-testid="signal-${id}" title=${s.description}
       data-value=${value === null || value === undefined ? "unknown" : String(value)}>
-      <span class="name" translate="no">${s.name}</span>
-      ${this.shown(s, value)} ${control_}
+      <span class="name" translate="no">${breakable(s.name)}</span>
+      <span class="reading">${this.shown(s, value)} ${control_}</span>
     </div>`;
   }
 
@@ -192,7 +215,6 @@ export class OpIoPanel extends LitElement {
     if (signals === undefined) void this.describe(d.local_name);
     const state = feed.states.get(d.local_name) as unknown as IOState | undefined;
     const mine = control.holds(d.local_name);
-    const mayControl = session.can("operator");
     const holder = d.controlled_by;
     return html`<section class="card" data-testid="io-block" data-name=${d.local_name}>
       <header>
@@ -200,10 +222,11 @@ export class OpIoPanel extends LitElement {
         <span data-testid="io-status-${d.local_name}"
           >${state?.error || (state?.connected ? "" : t("io.disconnected"))}</span>
         ${mine
-          ? html`<button data-testid="io-release-${d.local_name}"
+          ? html`<button data-testid="io-release-${d.local_name}" ${makes(leaseRequest(d.local_name, true))}
               @click=${() => this.act(() => control.release(d.local_name))}>${t("jog.control.release")}</button>`
           : html`<span>${holder ? t("jog.control.controlled_by", { holder }) : ""}</span>
-              <button class="primary" data-testid="io-control-${d.local_name}" ?disabled=${!mayControl}
+              <button class="primary" data-testid="io-control-${d.local_name}"
+                ${makes(leaseRequest(d.local_name))}
                 @click=${() => this.act(() => control.take(d.local_name))}>${t("jog.control.take")}</button>`}
       </header>
       <div class="signals">

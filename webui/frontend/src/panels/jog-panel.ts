@@ -3,8 +3,10 @@ import { api, ApiError, errorText } from "../api";
 import { control } from "../control";
 import { FocusController, focus } from "../focus";
 import { t } from "../i18n";
+import { worded } from "../i18n/words";
 import type { JogMessage } from "../jog-socket";
 import { FeedController, feed } from "../live";
+import { makes, request } from "../rights";
 import { RobotLoader } from "../robot-loader";
 import { shared } from "../styles";
 import type { Marker } from "../three/scene";
@@ -190,7 +192,7 @@ export class OpJogPanel extends LitElement {
       this.mode = message.mode === "joint" ? "joint" : message.frame === "tool" ? "tool" : "base";
       this.readings.reset();
     } else if (message.type === "error") {
-      this.message = message.error.message;
+      this.message = worded(message.error.message, message.error.words);
     }
   }
 
@@ -227,6 +229,7 @@ export class OpJogPanel extends LitElement {
     const device = feed.robots().find((r) => r.local_name === this.robot);
     const mine = control.holds(this.robot);
     const canMove = mine && !!state?.flags.ready;
+    const why = canMove ? "" : t(mine ? "jog.enable_to_jog" : "jog.control.take_to_jog");
     const markers: Marker[] = this.waypoints.map((w) => ({
       name: w.name, position: w.tcp_position, selected: w.name === this.selected }));
     const mice = jog.mice();
@@ -253,8 +256,9 @@ export class OpJogPanel extends LitElement {
           <op-clearance-chip .robot=${this.robot}></op-clearance-chip>
           <op-tcp-readout .pose=${state?.tcp_pose ?? null}></op-tcp-readout>
         </div>
-        <op-jog-waypoints class="waypoints" .waypoints=${this.waypoints} selected=${this.selected}
-          ?canTeach=${!!state} ?canMove=${canMove} .progress=${this.moveProgress(state)}
+        <op-jog-waypoints class="waypoints" robot=${this.robot} .waypoints=${this.waypoints}
+          selected=${this.selected}
+          ?canTeach=${!!state} ?canMove=${canMove} why=${why} .progress=${this.moveProgress(state)}
           .dialog=${this.dialog}
           @teach-now=${(e: CustomEvent<{ type: "joint" | "pose"; frame: "base" | "world" }>) =>
             this.teaching.quickTeach(e.detail.type, e.detail.frame)}
@@ -284,11 +288,12 @@ export class OpJogPanel extends LitElement {
               (this.stepping = e.detail.stepping)}
           ></op-jog-options>
           <op-jog-pad .axes=${this.readings.axes(this.mode, this.model?.info.joints.length ?? 0,
-              state)} ?disabled=${!canMove}
+              state)} ?disabled=${!canMove} why=${why}
             @jog-hold=${(e: CustomEvent) => jog.hold(e.detail.axis, e.detail.direction)}
             @jog-release=${() => jog.release()}></op-jog-pad>
           ${this.model?.info.capabilities.includes("freedrive") ? html`
-            <op-hold-button class="freedrive" data-testid="freedrive" ?disabled=${!canMove}
+            <op-hold-button class="freedrive" data-testid="freedrive" ?disabled=${!canMove} why=${why}
+              ${makes(request("WS", "/api/jog/ws"))}
               @hold-start=${() => jog.holdFreedrive()} @hold-end=${() => jog.release()}
               >${t("jog.freedrive")}</op-hold-button>` : ""}
           ${this.mode === "tool" ? html`<p class="muted" data-testid="tool-note">
@@ -301,6 +306,7 @@ export class OpJogPanel extends LitElement {
             <op-mouse-card .mice=${mice} device=${jog.mouse} ?on=${jog.mouseOn}
               ?disabled=${!canMove} mode=${this.mode} sensitivity=${jog.sensitivity}
               .input=${feed.inputState(jog.mouse || mice[0]?.local_name || "")}
+              note=${jog.mouseNote()}
               @mouse-device=${(e: CustomEvent<string>) => jog.changeMouse(e.detail)}
               @mouse-toggle=${(e: CustomEvent<boolean>) => jog.setMouse(e.detail)}
               @mouse-sensitivity=${(e: CustomEvent<number>) => jog.setSensitivity(e.detail)}

@@ -255,7 +255,7 @@ export class OpProgramPanel extends LitElement {
             : nothing}
         </div>
         <div class="side">
-          <op-run-controls .status=${status} .selected=${selected}
+          <op-run-controls program=${doc.name} .status=${status} .selected=${selected}
             ?runnable=${!(this.busy || this.loading
               || (blocks && (doc.problem !== "" || doc.problems.length > 0)))}
             ?breakpoint=${selected !== null && !!editor?.breakpoints.has(selected)}

@@ -2,8 +2,10 @@ import { LitElement, type TemplateResult, css, html } from "lit";
 import { api, errorText } from "../api";
 import { FocusController, focus } from "../focus";
 import { type StringKey, t } from "../i18n";
+import { worded, type Words } from "../i18n/words";
 import { FeedController, feed } from "../live";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
+import { makes, request } from "../rights";
 import { RobotLoader } from "../robot-loader";
 import { shared } from "../styles";
 import {
@@ -70,6 +72,7 @@ interface PlanReport {
   ok: boolean;
   code: string;
   message: string;
+  words?: Words | null;
   collision: { robot_part: string; other: string; position: number[] } | null;
   tcp_path: [number, number, number][];
 }
@@ -80,6 +83,13 @@ const nudgeStep = (): number => (units.length === "mm" ? 10 : 0.5);
 const sizeField = (metres: number): number =>
   units.length === "mm" ? Math.round(metres * 1000) : lengthToField(metres);
 const AXES = ["x", "y", "z"] as const;
+
+/** A new object's name: its shape and the first number no variable has. */
+function freeName(shape: string, taken: Set<string>): string {
+  let n = 1;
+  while (taken.has(`${shape}_${n}`)) n += 1;
+  return `${shape}_${n}`;
+}
 // Per shape, each size's short name and its field's full label.
 const SIZE_LABELS: Record<string, [StringKey, StringKey][]> = {
   box: [
@@ -315,9 +325,7 @@ export class OpScenePanel extends LitElement {
       this.message = errorText(err);
       return;
     }
-    let n = 1;
-    while (names.has(`${shape}_${n}`)) n += 1;
-    const name = `${shape}_${n}`;
+    const name = freeName(shape, names);
     const object: SceneObject = {
       shape,
       size: shape === "box" ? [0.2, 0.2, 0.2] : [0.05, 0.4],
@@ -419,7 +427,8 @@ export class OpScenePanel extends LitElement {
             }} /></label>`)}
       </div>
       <div class="row">
-        <button class="primary" data-testid="save-mount" @click=${() => this.saveMount()}>
+        <button class="primary" data-testid="save-mount" @click=${() => this.saveMount()}
+          ${makes(request("PUT", `/api/variables/frames.${encodeURIComponent(this.robot)}`))}>
           ${t("scene.mount.save")}</button>
         <span class="muted">${t("scene.mount.hint", { robot: this.robot })}</span>
       </div>`;
@@ -465,7 +474,7 @@ export class OpScenePanel extends LitElement {
         collision: hit ? [hit[0], hit[1], hit[2]] : null,
       };
     }
-    return { base: this.base, obstacles, path };
+    return { obstacles, path };
   }
 
   // Rendering -------------------------------------------------------------------------------
@@ -477,7 +486,7 @@ export class OpScenePanel extends LitElement {
     const p = this.preview;
     if (!p) return chip("none", t("scene.preview.none"));
     if (p.ok) return chip("ok", t("scene.preview.clear"), "ok");
-    return chip(p.code === "collision" ? "collision" : "error", p.message, "bad");
+    return chip(p.code === "collision" ? "collision" : "error", worded(p.message, p.words), "bad");
   }
 
   /** "box", or "box, keep-out". */
@@ -489,6 +498,7 @@ export class OpScenePanel extends LitElement {
   private editor() {
     const d = this.draft;
     if (!d) return html`<p class="muted">${t("scene.editor.hint")}</p>`;
+    const saves = makes(request("PUT", `/api/variables/${encodeURIComponent(this.selected)}`));
     const labels = SIZE_LABELS[d.shape] ?? [];
     const unit = lengthUnit();
     const step = nudgeStep();
@@ -500,10 +510,10 @@ export class OpScenePanel extends LitElement {
           <input type="number" inputmode="decimal" step=${step} data-testid="pos-${axis}"
             .value=${String(sizeField(d.pose.position[i]))}
             @change=${(e: Event) => this.edit((o, v) => (o.pose.position[i] = v), e)} />
-          <button data-testid="nudge-${axis}-minus"
+          <button data-testid="nudge-${axis}-minus" ${saves}
             aria-label=${t("scene.editor.nudge_minus", { axis, step, unit })}
             @click=${() => this.nudge(i, -nudge)}>−</button>
-          <button data-testid="nudge-${axis}-plus"
+          <button data-testid="nudge-${axis}-plus" ${saves}
             aria-label=${t("scene.editor.nudge_plus", { axis, step, unit })}
             @click=${() => this.nudge(i, nudge)}>+</button>`)}
         ${labels.map(([name, label], i) => html`
@@ -518,9 +528,10 @@ export class OpScenePanel extends LitElement {
         @change=${(e: Event) => (this.draft = { ...d, keep_out: (e.target as HTMLInputElement).checked })} />
         ${t("scene.editor.keep_out")}</label>
       <div class="row">
-        <button class="primary" data-testid="apply" @click=${() => this.save(this.selected, d)}
+        <button class="primary" data-testid="apply" @click=${() => this.save(this.selected, d)} ${saves}
           >${t("scene.editor.apply")}</button>
-        <button class="danger" data-testid="delete" @click=${this.deleteSelected}>
+        <button class="danger" data-testid="delete" @click=${this.deleteSelected}
+          ${makes(request("DELETE", `/api/variables/${encodeURIComponent(this.selected)}`))}>
           ${this.confirmDelete ? t("scene.editor.confirm_delete") : t("scene.delete")}</button>
       </div>`;
   }
@@ -531,6 +542,9 @@ export class OpScenePanel extends LitElement {
         <p>${t("scene.no_robot_hint")}</p></div>`;
     }
     const names = Object.keys(this.objects).sort();
+    const taken = new Set(names);
+    const plans = makes(...(this.robot
+      ? [request("POST", `/api/motion/robots/${encodeURIComponent(this.robot)}/plan`)] : []));
     return html`
       ${this.message ? html`<p class="error" role="alert" data-testid="scene-message">${this.message}</p>` : ""}
       <div class="layout">
@@ -554,20 +568,20 @@ export class OpScenePanel extends LitElement {
           <section class="card">
             <h2>${t("scene.preview.heading")}</h2>
             <div class="row">
-              <select aria-label=${t("scene.preview.target")} data-testid="preview-target"
+              <select aria-label=${t("scene.preview.target")} data-testid="preview-target" ${plans}
                 .value=${this.target}
                 @change=${(e: Event) => { this.target = (e.target as HTMLSelectElement).value; void this.runPreview(); }}>
                 <option value="">${t("scene.preview.choose")}</option>
                 ${this.waypoints.map((w) => html`<option value=${w.name}>${w.name}</option>`)}
               </select>
-              <select aria-label=${t("scene.preview.kind")} data-testid="preview-kind"
+              <select aria-label=${t("scene.preview.kind")} data-testid="preview-kind" ${plans}
                 .value=${this.kind}
                 @change=${(e: Event) => { this.kind = (e.target as HTMLSelectElement).value as "joint" | "linear"; void this.runPreview(); }}>
                 <option value="joint">${t("scene.preview.joint")}</option>
                 <option value="linear">${t("scene.preview.linear")}</option>
               </select>
             </div>
-            <label class="check"><input type="checkbox" data-testid="preview-around" .checked=${this.around}
+            <label class="check"><input type="checkbox" data-testid="preview-around" .checked=${this.around} ${plans}
               ?disabled=${this.kind !== "joint"}
               @change=${(e: Event) => { this.around = (e.target as HTMLInputElement).checked; void this.runPreview(); }} />
               ${t("scene.preview.around")}</label>
@@ -577,8 +591,10 @@ export class OpScenePanel extends LitElement {
             <h2>${t("scene.objects.heading")}</h2>
             <div class="row" style="margin-bottom:8px">
               <button data-testid="add-box" @click=${() => this.add("box")}
+                ${makes(request("PUT", `/api/variables/${encodeURIComponent(freeName("box", taken))}`))}
                 >${t("scene.objects.add_box")}</button>
               <button data-testid="add-cylinder" @click=${() => this.add("cylinder")}
+                ${makes(request("PUT", `/api/variables/${encodeURIComponent(freeName("cylinder", taken))}`))}
                 >${t("scene.objects.add_cylinder")}</button>
             </div>
             ${names.length ? "" : html`<p class="muted">${t("scene.objects.none")}</p>`}

@@ -3,6 +3,7 @@ import { api, errorText } from "../api";
 import { HOLDER_MAX, control } from "../control";
 import { LANGUAGES, type Language, type StringKey, language, setLanguage, t } from "../i18n";
 import { type Theme, currentTheme, setTheme } from "../theme";
+import { makes, request } from "../rights";
 import { session } from "../session";
 import { shared } from "../styles";
 import { type PluginInfo, plugins } from "../plugins";
@@ -211,7 +212,7 @@ export class OpSystemPanel extends LitElement {
       // The runtime's logs are for programmers and administrators.
       const [health, logs] = await Promise.all([
         api<Health>("GET", "/api/health"),
-        session.can("programmer")
+        session.may("GET", "/api/logs")
           ? api<LogEntry[]>("GET", `/api/logs?level=${this.logLevel}&limit=100`)
           : Promise.resolve(null),
         plugins.load().catch(() => undefined),
@@ -237,7 +238,8 @@ export class OpSystemPanel extends LitElement {
       <p data-testid="signed-in-as">
         ${t("auth.signed_in_as", { user: me.user, role: t(`auth.role.${me.role}`) })}
       </p>
-      <button data-testid="sign-out" @click=${() => void this.signOut()}>${t("auth.sign_out")}</button>
+      <button data-testid="sign-out" @click=${() => void this.signOut()}
+        ${makes(request("POST", "/api/auth/logout"))}>${t("auth.sign_out")}</button>
     </section>`;
   }
 
@@ -248,11 +250,11 @@ export class OpSystemPanel extends LitElement {
       this.error = errorText(err);
     }
     location.hash = "";
-    session.set(null);
+    void session.set(null);
   }
 
   private log() {
-    if (!session.can("programmer")) return "";
+    if (!session.may("GET", "/api/logs")) return "";
     const levels: ["warning" | "info", StringKey][] = [
       ["warning", "system.log.warnings"],
       ["info", "system.log.everything"],

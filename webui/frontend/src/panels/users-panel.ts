@@ -1,6 +1,7 @@
 import { LitElement, css, html } from "lit";
 import { api, errorText } from "../api";
 import { t } from "../i18n";
+import { makes, request } from "../rights";
 import { type RoleName, session } from "../session";
 import { shared } from "../styles";
 
@@ -130,7 +131,7 @@ export class OpUsersPanel extends LitElement {
 
   connectedCallback(): void {
     super.connectedCallback();
-    if (session.can("admin")) void this.load();
+    if (session.may("GET", "/api/auth/users")) void this.load();
   }
 
   private async load(): Promise<void> {
@@ -212,7 +213,8 @@ export class OpUsersPanel extends LitElement {
       <input name="confirm-edit" data-testid="confirm-edit" type="password"
         autocomplete="current-password" placeholder=${t("users.your_password")} required />
       <div class="roles">
-        <button class="primary" type="submit" data-testid="save-user">${t("users.save")}</button>
+        <button class="primary" type="submit" data-testid="save-user"
+          ${makes(request("PUT", `/api/auth/users/${encodeURIComponent(user.name)}`))}>${t("users.save")}</button>
         <button type="button" data-testid="cancel-edit" @click=${() => (this.editing = "")}>
           ${t("users.cancel")}</button>
       </div>
@@ -241,7 +243,7 @@ export class OpUsersPanel extends LitElement {
   }
 
   render() {
-    if (!session.can("admin")) {
+    if (!session.may("GET", "/api/auth/users")) {
       return html`<p class="error" role="alert" data-testid="admin-only">${t("users.admin_only")}</p>`;
     }
     return html`
@@ -254,11 +256,13 @@ export class OpUsersPanel extends LitElement {
               <td translate="no">${u.name}</td>
               <td>${t(`auth.role.${u.role}`)}${u.has_pin ? html` · ${t("auth.pin")}` : ""}</td>
               <td>
-                <button data-testid="change-user-${u.name}" @click=${() => this.edit(u)}>
+                <button data-testid="change-user-${u.name}" @click=${() => this.edit(u)}
+                  ${makes(request("PUT", `/api/auth/users/${encodeURIComponent(u.name)}`))}>
                   ${t("users.change")}</button>
                 ${u.name === session.me?.user
                   ? ""
                   : html`<button class="danger" data-testid="remove-user-${u.name}"
+                      ${makes(request("DELETE", `/api/auth/users/${encodeURIComponent(u.name)}`))}
                       @click=${() => this.removeUser(u.name)}>${t("users.remove")}</button>`}
               </td>
             </tr>`,
@@ -274,7 +278,8 @@ export class OpUsersPanel extends LitElement {
             autocomplete="new-password" placeholder=${t("auth.password")} required />
           <input name="confirm-user" data-testid="confirm-user" type="password"
             autocomplete="current-password" placeholder=${t("users.your_password")} required />
-          <button class="primary" type="submit" data-testid="add-user">${t("users.add")}</button>
+          <button class="primary" type="submit" data-testid="add-user"
+            ${makes(request("POST", "/api/auth/users"))}>${t("users.add")}</button>
         </form>
       </section>
       <h2>${t("users.tokens")}</h2>
@@ -290,7 +295,7 @@ export class OpUsersPanel extends LitElement {
           ${this.roleButtons(this.tokenRole, (r) => (this.tokenRole = r), "token-role")}
           <input name="confirm-token" type="password" autocomplete="current-password"
             placeholder=${t("users.your_password")} required />
-          <button type="submit" data-testid="add-token">${t("users.add_token")}</button>
+          <button type="submit" data-testid="add-token" ${makes(request("POST", "/api/auth/tokens"))}>${t("users.add_token")}</button>
         </form>
         ${this.newToken
           ? html`<p>${t("users.token_once")}</p><p class="token" data-testid="new-token">${this.newToken}</p>`

@@ -2,7 +2,7 @@ import { LitElement, css, html } from "lit";
 import { api, errorText, sendRaw } from "../api";
 import { type StringKey, t } from "../i18n";
 import { FeedController, feed } from "../live";
-import { session } from "../session";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import "../vision/camera-view";
 import { fileButton } from "../vision/styles";
@@ -170,11 +170,10 @@ export class OpVisionPanel extends LitElement {
       <span class="chip ${this.placed ? "ok" : "warn"}" data-testid="vision-placed"
         >${this.placed ? t("vision.placed") : t("vision.not_placed")}</span>
       ${c ? html`<a class="file" href="/api/vision/cameras/${camera}/calibration.yaml" download>${t("vision.export")}</a>` : ""}
-      ${session.can("programmer")
-        ? html`<label class="file">${t("vision.import")}
-            <input type="file" accept=".yaml,.yml,application/x-yaml,text/yaml"
-              data-testid="vision-import" @change=${(e: Event) => void this.importYaml(e)} /></label>`
-        : ""}
+      <label class="file" data-testid="vision-import-label"
+        ${makes(request("PUT", `/api/vision/cameras/${camera}/calibration.yaml`))}>${t("vision.import")}
+        <input type="file" accept=".yaml,.yml,application/x-yaml,text/yaml"
+          data-testid="vision-import" @change=${(e: Event) => void this.importYaml(e)} /></label>
     </div>`;
   }
 

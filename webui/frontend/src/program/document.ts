@@ -6,6 +6,7 @@
 
 import type { ReactiveController, ReactiveControllerHost } from "lit";
 import { api, errorText } from "../api";
+import { session } from "../session";
 import type { ProgramEditor } from "./editor";
 import type { Generated, Problem, Program, ProgramSummary, Saved } from "./types";
 
@@ -105,7 +106,9 @@ export class ProgramDocument implements ReactiveController {
   async saveAs(name: string): Promise<void> {
     if (!this.editor) return;
     const state = this.editor.state();
-    const saved = await api<Saved>("PUT", path(name), { workspace: state });
+    const saved = await api<Saved>("PUT", `/api/programs/${encodeURIComponent(name)}`, {
+      workspace: state,
+    });
     this.name = saved.name;
     this.saved = JSON.stringify(state);
     this.dirty = JSON.stringify(this.editor.state()) !== this.saved;
@@ -116,19 +119,19 @@ export class ProgramDocument implements ReactiveController {
   }
 
   async rename(to: string): Promise<void> {
-    await api("POST", path(this.name, "rename"), { to });
+    await api("POST", `/api/programs/${encodeURIComponent(this.name)}/rename`, { to });
     this.name = to;
     await this.listPrograms();
   }
 
   /** A copy of the program as saved, under another name; this one stays on show. */
   async duplicate(to: string): Promise<void> {
-    await api("POST", path(this.name, "duplicate"), { to });
+    await api("POST", `/api/programs/${encodeURIComponent(this.name)}/duplicate`, { to });
     await this.listPrograms();
   }
 
   async remove(): Promise<void> {
-    await api("DELETE", path(this.name));
+    await api("DELETE", `/api/programs/${encodeURIComponent(this.name)}`);
     this.dirty = false;
     this.host.requestUpdate();
   }
@@ -148,6 +151,8 @@ export class ProgramDocument implements ReactiveController {
   /** The Python of the blocks as they are now, or why there is none. */
   private async preview(): Promise<void> {
     if (!this.editor || this.source !== "blocks") return;
+    // Generating is a programmer's: an operator's Python is the saved program's.
+    if (!session.may("POST", "/api/programs/_generate")) return;
     const ticket = ++this.previewing;
     try {
       const generated = await api<Generated>("POST", "/api/programs/_generate", {

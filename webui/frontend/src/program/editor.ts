@@ -3,9 +3,11 @@
 
 import * as Blockly from "blockly";
 import { t } from "../i18n";
+import { worded } from "../i18n/words";
 import { currentTheme, paletteColour } from "../theme";
 import { applyBlocklyLanguage, localizedToolbox } from "./blockly-words";
 import { rememberNames, type BlockCatalog, defineBlocks } from "./catalog";
+import type { Problem } from "./types";
 
 const BREAKPOINT_CLASS = "opBreakpoint";
 
@@ -163,9 +165,11 @@ export class ProgramEditor extends EventTarget {
   }
 
   /** Warnings on the blocks that keep the program from running; cleared on the rest. */
-  warn(problems: { block: string; message: string }[]): void {
+  warn(problems: Problem[]): void {
     const messages = new Map<string, string[]>();
-    for (const p of problems) messages.set(p.block, [...(messages.get(p.block) ?? []), p.message]);
+    for (const p of problems) {
+      messages.set(p.block, [...(messages.get(p.block) ?? []), worded(p.message, p.words)]);
+    }
     for (const block of this.workspace.getAllBlocks(false)) {
       const text = messages.get(block.id)?.join("\n") ?? null;
       block.setWarningText(text);

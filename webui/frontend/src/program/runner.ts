@@ -81,7 +81,8 @@ export class ProgramRunner implements ReactiveController {
       const token = control.token(device.local_name);
       if (token) leases[device.local_name] = token;
     }
-    const status = await api<RunStatus>("POST", path(this.program(), "run"), {
+    const program = encodeURIComponent(this.program());
+    const status = await api<RunStatus>("POST", `/api/programs/${program}/run`, {
       breakpoints: this.editor()?.liveBreakpoints() ?? [],
       leases,
       robot: robot || null,
@@ -92,7 +93,7 @@ export class ProgramRunner implements ReactiveController {
   async command(action: RunCommand): Promise<void> {
     const name = this.program();
     if (action === "stop" && runs.sendStop(name)) return; // its outcome is pushed
-    await api<RunStatus>("POST", path(name, action));
+    await api<RunStatus>("POST", `/api/programs/${encodeURIComponent(name)}/${action}`);
   }
 
   /** Breakpoints set or cleared while it runs apply to the run at once. */
@@ -100,7 +101,8 @@ export class ProgramRunner implements ReactiveController {
     const editor = this.editor();
     const status = this.status();
     if (editor && status && LIVE_STATES.includes(status.state)) {
-      await api("PUT", path(this.program(), "breakpoints"), { ids: editor.liveBreakpoints() });
+      const program = encodeURIComponent(this.program());
+      await api("PUT", `/api/programs/${program}/breakpoints`, { ids: editor.liveBreakpoints() });
     }
   }
 

@@ -1,5 +1,7 @@
 // Shapes of the program service's API (see runtime/program/models.py).
 
+import type { Words } from "../i18n/words";
+
 export interface ProgramSummary {
   name: string;
   source: "blocks" | "python";
@@ -16,6 +18,7 @@ export interface Program extends ProgramSummary {
 export interface Problem {
   block: string;
   message: string;
+  words?: Words | null;
 }
 
 export interface Saved {
@@ -47,6 +50,7 @@ export interface OutputEntry {
   stream: string;
   block: string | null;
   ts: number;
+  words?: Words | null;
 }
 
 export interface RunError {
@@ -55,6 +59,7 @@ export interface RunError {
   line: number | null;
   block: string | null;
   code: string | null;
+  words?: Words | null;
 }
 
 export interface RunStatus {

@@ -1,10 +1,19 @@
-// The robot in 3D: its URDF with meshes, posed from live joint values, with waypoint markers.
-// Rendered only when something changed, to spare a tablet's battery.
+// The robots of the cell in 3D, each its URDF with meshes, posed from live joint values and
+// standing where the motion service places it; the one in focus as its URDF draws it, the
+// others faint. Waypoint markers and a simulated cell's parts are the focused robot's; the
+// scene's objects and a path preview are in the world. Rendered only when something
+// changed, to spare a tablet's battery.
 
 import * as THREE from "three";
 import { OrbitControls } from "three/examples/jsm/controls/OrbitControls.js";
-import URDFLoader, { type URDFRobot } from "urdf-loader";
 import { holding, onHeldChange } from "../activity";
+import {
+  CellRobot,
+  type DrawnRobotReport,
+  disposeMaterial,
+  matrixOf,
+  type RobotSource,
+} from "./cell-robot";
 
 /** A name drawn beside a marker, always facing the camera and never hidden by the robot. */
 function label(text: string, color: number): THREE.Sprite {
@@ -33,12 +42,11 @@ function label(text: string, color: number): THREE.Sprite {
 
 function disposeTree(root: THREE.Object3D): void {
   root.traverse((part) => {
-    if (part instanceof THREE.Mesh) {
+    if (part instanceof THREE.Mesh || part instanceof THREE.Line) {
       part.geometry.dispose();
-      (part.material as THREE.Material).dispose();
+      for (const m of [part.material].flat() as THREE.Material[]) disposeMaterial(m);
     } else if (part instanceof THREE.Sprite) {
-      part.material.map?.dispose();
-      part.material.dispose();
+      disposeMaterial(part.material);
     }
   });
 }
@@ -83,19 +91,10 @@ export interface PathPreview {
   collision: [number, number, number] | null;
 }
 
+/** What the scene holds besides the robots, in the world frame. */
 export interface WorldContents {
-  base: PoseJson | null; // this robot's base in the world
   obstacles: Obstacle[];
   path: PathPreview | null;
-}
-
-function matrixOf(pose: PoseJson): THREE.Matrix4 {
-  const [x, y, z, w] = pose.orientation;
-  return new THREE.Matrix4().compose(
-    new THREE.Vector3(...pose.position),
-    new THREE.Quaternion(x, y, z, w),
-    new THREE.Vector3(1, 1, 1),
-  );
 }
 
 function obstacleMesh(o: Obstacle): THREE.Object3D | null {
@@ -131,17 +130,25 @@ function isSoftware(renderer: THREE.WebGLRenderer): boolean {
   return /swiftshader|llvmpipe|software/i.test(name);
 }
 
+export type { DrawnRobotReport, RobotSource };
+
+const GRID_TURN = new THREE.Matrix4().makeRotationX(Math.PI / 2); // three's grids lie in x-z
+
 export class RobotScene {
   private renderer: THREE.WebGLRenderer;
   private scene = new THREE.Scene();
   private camera = new THREE.PerspectiveCamera(45, 1, 0.01, 50);
   private controls: OrbitControls;
-  private robot: URDFRobot | null = null;
-  private base: THREE.Object3D | null = null;
-  private markers = new THREE.Group();
-  private parts = new THREE.Group(); // in the robot's base frame, placed by its base link
-  private world = new THREE.Group(); // world-frame contents, placed by the robot's base
-  private worldBase: PoseJson | null = null;
+  private robots = new Map<string, CellRobot>();
+  private loading = new Map<string, number>(); // robot → the round of its latest load
+  private loads = 0;
+  private bases = new Map<string, PoseJson | null>();
+  private focused = "";
+  private disposed = false;
+  private grid = new THREE.GridHelper(2, 20, 0x3a4a5c, 0x222d3a); // under the focused robot
+  private markers = new THREE.Group(); // in the focused robot's base frame
+  private parts = new THREE.Group(); // likewise
+  private world = new THREE.Group(); // the world frame
   private frame = 0;
   private lastFrame = 0;
   private unsubscribe: () => void;
@@ -169,82 +176,136 @@ export class RobotScene {
     const sun = new THREE.DirectionalLight(0xffffff, 1.6);
     sun.position.set(2, -3, 4);
     this.scene.add(sun);
-    const grid = new THREE.GridHelper(2, 20, 0x3a4a5c, 0x222d3a);
-    grid.rotation.x = Math.PI / 2;
-    this.world.matrixAutoUpdate = false;
-    this.parts.matrixAutoUpdate = false;
-    this.scene.add(grid, this.markers, this.world, this.parts);
+    for (const group of [this.grid, this.markers, this.parts]) group.matrixAutoUpdate = false;
+    this.scene.add(this.grid, this.markers, this.world, this.parts);
+    this.placeFocused();
     this.resize();
   }
 
-  async load(urdf: string, packages: Record<string, string>, baseLink: string,
-             progress: Progress): Promise<void> {
-    const manager = new THREE.LoadingManager();
-    manager.onProgress = (_url, loaded, total) => progress(loaded, total);
-    const done = new Promise<void>((resolve) => (manager.onLoad = () => resolve()));
-    const loader = new URDFLoader(manager);
-    loader.packages = packages;
-    loader.parseVisual = !this.software;
-    loader.parseCollision = this.software;
-    const robot = await loader.loadAsync(urdf);
-    this.robot = robot;
-    this.base = robot.links[baseLink] ?? robot;
-    this.scene.add(robot);
-    await done; // the meshes
-    if (this.software) {
-      // Collision meshes carry no material of their own, and STL files often carry zeroed
-      // normals (which light as black).
-      const grey = new THREE.MeshPhongMaterial({ color: 0x9aa3ab });
-      robot.traverse((part) => {
-        if (part instanceof THREE.Mesh) {
-          part.material = grey;
-          part.geometry.computeVertexNormals();
-        }
-      });
+  /** Draws a robot, or draws it anew if its URDF changed. False when it was removed, or
+   * asked for again, before its meshes came. */
+  async addRobot(name: string, source: RobotSource, progress: Progress): Promise<boolean> {
+    if (this.robots.get(name)?.urdf === source.urdf && !this.loading.has(name)) return true;
+    const round = ++this.loads;
+    this.loading.set(name, round);
+    let robot: CellRobot;
+    try {
+      robot = await CellRobot.load(name, source, this.software, progress);
+    } catch (err) {
+      if (this.loading.get(name) === round) this.loading.delete(name);
+      throw err;
     }
-    this.frameRobot(robot);
-    this.placeWorld();
-    this.placeParts();
+    if (this.disposed || this.loading.get(name) !== round) {
+      robot.dispose();
+      return false;
+    }
+    this.loading.delete(name);
+    this.robots.get(name)?.dispose();
+    this.robots.set(name, robot);
+    robot.setBase(this.bases.get(name) ?? null);
+    robot.setDimmed(name !== this.focused);
+    this.scene.add(robot.mount);
+    if (name === this.focused) {
+      this.placeFocused();
+      this.frameFocused();
+    }
+    this.requestRender();
+    return true;
+  }
+
+  removeRobot(name: string): void {
+    this.loading.delete(name);
+    this.robots.get(name)?.dispose();
+    this.robots.delete(name);
+    this.bases.delete(name);
+    if (name === this.focused) this.placeFocused();
     this.requestRender();
   }
 
-  /** Frame the robot by its reach (measured stretched out, as URDFs load), around its
-   * base: the view then suits every pose it can take. */
-  private frameRobot(robot: THREE.Object3D): void {
-    robot.updateMatrixWorld(true);
-    const box = new THREE.Box3().setFromObject(robot);
-    if (box.isEmpty()) return;
-    const reach = Math.max(...box.getSize(new THREE.Vector3()).toArray(), 0.3);
-    this.controls.target.set(0, 0, reach * 0.35);
-    this.camera.position.set(reach * 1.25, -reach * 1.45, reach * 1.0);
+  /** The robot drawn as it is; every other one faint. The view turns to it. */
+  setFocus(name: string): void {
+    if (name === this.focused) return;
+    this.focused = name;
+    for (const [other, robot] of this.robots) robot.setDimmed(other !== name);
+    this.placeFocused();
+    this.frameFocused();
+    this.requestRender();
+  }
+
+  /** Where a robot's base stands in the world (null: the origin). */
+  setBase(name: string, pose: PoseJson | null): void {
+    this.bases.set(name, pose);
+    const robot = this.robots.get(name);
+    if (!robot) return;
+    const before = robot.basePose.clone();
+    robot.setBase(pose);
+    if (name === this.focused) {
+      // The view goes with it, as it is turned now.
+      const moved = robot.basePose.clone().multiply(before.invert());
+      const c = this.controls;
+      for (const point of [this.camera.position, c.target, c.position0, c.target0]) {
+        point.applyMatrix4(moved);
+      }
+      c.update();
+      this.placeFocused();
+    }
+    this.requestRender();
+  }
+
+  setJoints(name: string, joints: string[], values: number[]): void {
+    const robot = this.robots.get(name);
+    if (!robot) return;
+    robot.setJoints(joints, values);
+    this.requestRender();
+  }
+
+  /** What is drawn of each robot, where (world frame), and whether faint. */
+  drawn(): DrawnRobotReport[] {
+    return [...this.robots.values()].map((robot) => robot.report());
+  }
+
+  /** Markers, parts and the grid on the focused robot's base (the world's origin, while
+   * none is drawn). */
+  private placeFocused(): void {
+    const base = this.robots.get(this.focused)?.basePose ?? new THREE.Matrix4();
+    for (const group of [this.markers, this.parts]) {
+      if (group.matrix.equals(base)) continue;
+      group.matrix.copy(base);
+      group.matrixWorldNeedsUpdate = true;
+    }
+    this.grid.matrix.copy(base).multiply(GRID_TURN);
+    this.grid.matrixWorldNeedsUpdate = true;
+  }
+
+  /** Frame the focused robot by its reach (measured stretched out, as URDFs load), around
+   * its base: the view then suits every pose it can take. */
+  private frameFocused(): void {
+    const robot = this.robots.get(this.focused);
+    if (!robot) return;
+    const reach = robot.reach;
+    const base = robot.basePose;
+    this.controls.target.set(0, 0, reach * 0.35).applyMatrix4(base);
+    this.camera.position.set(reach * 1.25, -reach * 1.45, reach * 1.0).applyMatrix4(base);
     this.controls.update();
     this.controls.saveState();
   }
 
-  /** Back to the view the robot was first shown in. */
+  /** Back to the view the robot in focus was first shown in. */
   resetView(): void {
     this.controls.reset();
-    this.requestRender();
-  }
-
-  setJoints(names: string[], values: number[]): void {
-    if (!this.robot) return;
-    names.forEach((name, i) => this.robot?.setJointValue(name, values[i]));
     this.requestRender();
   }
 
   setMarkers(markers: Marker[]): void {
     for (const child of [...this.markers.children]) disposeTree(child);
     this.markers.clear();
-    if (!this.base) return;
-    this.base.updateMatrixWorld(true);
     for (const m of markers) {
       const color = m.selected ? 0x3fb950 : 0xf5a524;
       const sphere = new THREE.Mesh(
         new THREE.SphereGeometry(m.selected ? 0.022 : 0.014, 16, 12),
         new THREE.MeshStandardMaterial({ color }),
       );
-      sphere.position.set(...m.position).applyMatrix4(this.base.matrixWorld);
+      sphere.position.set(...m.position);
       sphere.name = m.name;
       const tag = label(m.name, color);
       tag.position.set(0, 0, 0.045);
@@ -271,27 +332,13 @@ export class RobotScene {
       this.parts.add(box);
       drawn.push(`${p.id}@${p.pose.position.map((v) => v.toFixed(3)).join(",")}`);
     }
-    this.placeParts();
     this.requestRender();
     return drawn;
   }
 
-  private placeParts(): void {
-    if (!this.base) return;
-    this.base.updateMatrixWorld(true);
-    this.parts.matrix.copy(this.base.matrixWorld);
-    this.parts.matrixWorldNeedsUpdate = true;
-  }
-
   setWorld(contents: WorldContents): void {
-    for (const child of [...this.world.children]) {
-      this.world.remove(child);
-      child.traverse((part) => {
-        if (part instanceof THREE.Mesh || part instanceof THREE.Line) part.geometry.dispose();
-      });
-    }
-    this.worldBase = contents.base;
-    this.placeWorld();
+    for (const child of [...this.world.children]) disposeTree(child);
+    this.world.clear();
     for (const o of contents.obstacles) {
       const mesh = o.attached_to ? null : obstacleMesh(o);
       if (mesh) this.world.add(mesh);
@@ -316,17 +363,6 @@ export class RobotScene {
     this.requestRender();
   }
 
-  /** World coordinates drawn where they are relative to the robot, which stands at the
-   * view's origin: base link × (base in the world)⁻¹. */
-  private placeWorld(): void {
-    const inWorld = this.worldBase ? matrixOf(this.worldBase).invert() : new THREE.Matrix4();
-    if (this.base) {
-      this.base.updateMatrixWorld(true);
-      this.world.matrix.copy(this.base.matrixWorld).multiply(inWorld);
-    } else this.world.matrix.copy(inWorld);
-    this.world.matrixWorldNeedsUpdate = true;
-  }
-
   resize(): void {
     const width = Math.max(1, this.host.clientWidth);
     const height = Math.max(1, this.host.clientHeight);
@@ -337,7 +373,7 @@ export class RobotScene {
   }
 
   requestRender(): void {
-    if (this.frame) return;
+    if (this.frame || this.disposed) return;
     // A software frame can block the page longer than a jog heartbeat may wait.
     if (this.software && holding()) return;
     const wait = this.software ? this.lastFrame + SOFTWARE_FRAME_MS - performance.now() : 0;
@@ -353,12 +389,19 @@ export class RobotScene {
     else draw();
   }
 
+  /** Frees everything it drew, and its WebGL context (a browser keeps only a few). */
   dispose(): void {
+    this.disposed = true;
     cancelAnimationFrame(this.frame);
     window.clearTimeout(this.frame);
     this.unsubscribe();
+    this.loading.clear();
+    for (const robot of this.robots.values()) robot.dispose();
+    this.robots.clear();
+    for (const group of [this.markers, this.parts, this.world, this.grid]) disposeTree(group);
     this.controls.dispose();
     this.renderer.dispose();
+    this.renderer.forceContextLoss();
     this.renderer.domElement.remove();
   }
 }

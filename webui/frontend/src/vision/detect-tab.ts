@@ -1,9 +1,17 @@
 import { html } from "lit";
 import { errorText } from "../api";
 import { t } from "../i18n";
-import { session } from "../session";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
-import { type Detections, detect, detectionList, detectorsOf, overlayOf } from "./detections";
+import {
+  DETECTOR_PREFIX,
+  type Detections,
+  detect,
+  detectionList,
+  detectorsOf,
+  detects,
+  overlayOf,
+} from "./detections";
 import "./detector-form";
 import { VisionStep } from "./step";
 import { visionStyles } from "./styles";
@@ -110,15 +118,18 @@ export class OpDetectTab extends VisionStep {
           </div>
           <div class="actions">
             <button class="primary" data-testid="detect-once" ?disabled=${this.running}
+              ${detects(this.chosen)}
               @click=${() => void this.once()}>${t("vision.detect.once")}</button>
             ${this.running
               ? html`<button data-testid="detect-stop" @click=${() => (this.running = false)}>${t("vision.detect.stop")}</button>`
-              : html`<button data-testid="detect-live" @click=${() => void this.keepDetecting()}>${t("vision.detect.live")}</button>`}
+              : html`<button data-testid="detect-live" @click=${() => void this.keepDetecting()}
+                  ${detects(this.chosen)}>${t("vision.detect.live")}</button>`}
             <button @click=${() => void this.load()}>${t("vision.detect.reload")}</button>
           </div>`}
       <div class="actions">
+        <!-- The form it opens saves the detector under the name typed there. -->
         <button data-testid="detector-add" aria-pressed=${this.adding}
-          ?disabled=${!session.can("programmer")}
+          ${makes(request("PUT", `/api/variables/${DETECTOR_PREFIX}new`))}
           @click=${() => (this.adding = !this.adding)}>${t("vision.detect.add")}</button>
       </div>
       ${this.adding

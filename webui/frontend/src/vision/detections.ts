@@ -1,6 +1,7 @@
 import { html } from "lit";
 import { api } from "../api";
 import { t } from "../i18n";
+import { makes, request } from "../rights";
 import type { Pose } from "../types";
 import { lengthWithUnit } from "../units";
 import type { Overlay } from "./camera-view";
@@ -43,6 +44,12 @@ export async function detectorsOf(camera: string): Promise<string[]> {
 
 export function detect(name: string): Promise<Detections> {
   return api<Detections>("POST", `/api/vision/detectors/${encodeURIComponent(name)}/detect`, {});
+}
+
+/** On a control that detects with a detector (none chosen yet: nothing to declare). */
+export function detects(name: string) {
+  return makes(...(name
+    ? [request("POST", `/api/vision/detectors/${encodeURIComponent(name)}/detect`)] : []));
 }
 
 export function overlayOf(found: Detections | null): Overlay {

@@ -2,6 +2,7 @@ import { LitElement, html } from "lit";
 import { api, errorText } from "../api";
 import { session } from "../session";
 import { t } from "../i18n";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import { DETECTOR_PREFIX } from "./detections";
 import { lengthField, numberField } from "./fields";
@@ -84,41 +85,40 @@ export class OpDetectorForm extends LitElement {
     if (!file) return;
     this.error = "";
     this.uploading = 0;
-    const request = new XMLHttpRequest();
+    const xhr = new XMLHttpRequest();
     // The file's own name as a model's name may be (letters, digits, _ . -, ending .onnx).
     const stem = file.name.replace(/\.onnx$/i, "").replace(/[^A-Za-z0-9_.-]+/g, "_").replace(/^[^A-Za-z0-9]+/, "");
     const name = `${stem.slice(0, 60) || "model"}.onnx`;
-    request.open("PUT", `/api/vision/models/${encodeURIComponent(name)}`);
-    request.setRequestHeader("content-type", "application/octet-stream");
-    if (session.csrf) request.setRequestHeader("x-csrf-token", session.csrf);
-    request.upload.onprogress = (p) => {
+    xhr.open("PUT", `/api/vision/models/${encodeURIComponent(name)}`);
+    xhr.setRequestHeader("content-type", "application/octet-stream");
+    if (session.csrf) xhr.setRequestHeader("x-csrf-token", session.csrf);
+    xhr.upload.onprogress = (p) => {
       if (p.lengthComputable) this.uploading = p.loaded / p.total;
     };
-    request.onload = () => {
+    xhr.onload = () => {
       this.uploading = null;
-      if (request.status >= 200 && request.status < 300) {
-        this.models = JSON.parse(request.responseText) as string[];
+      if (xhr.status >= 200 && xhr.status < 300) {
+        this.models = JSON.parse(xhr.responseText) as string[];
         this.set({ model: name });
         return;
       }
       const body = (() => {
         try {
-          return JSON.parse(request.responseText) as { error?: { message?: string } };
+          return JSON.parse(xhr.responseText) as { error?: { message?: string } };
         } catch {
           return null;
         }
       })();
-      this.error = body?.error?.message ?? t("app.request_failed", { status: request.status });
+      this.error = body?.error?.message ?? t("app.request_failed", { status: xhr.status });
     };
-    request.onerror = () => {
+    xhr.onerror = () => {
       this.uploading = null;
       this.error = t("app.unreachable");
     };
-    request.send(file);
+    xhr.send(file);
   }
 
   private uploadControl() {
-    if (!session.can("admin")) return "";
     if (this.uploading !== null) {
       return html`<div class="operation" data-testid="model-uploading">
         <progress max="1" value=${this.uploading}></progress>
@@ -126,7 +126,8 @@ export class OpDetectorForm extends LitElement {
       </div>`;
     }
     return html`<div class="actions">
-      <label class="file">${t("vision.detector.upload")}
+      <label class="file" data-testid="model-upload-label"
+        ${makes(request("PUT", "/api/vision/models/model.onnx"))}>${t("vision.detector.upload")}
         <input type="file" accept=".onnx" data-testid="model-upload" @change=${(e: Event) => this.upload(e)} /></label>
     </div>`;
   }
@@ -216,7 +217,8 @@ export class OpDetectorForm extends LitElement {
                 @input=${(e: Event) => this.set({ classes: (e.target as HTMLInputElement).value })} /></label>`}
       <div class="actions">
         <button class="primary" data-testid="detector-save"
-          ?disabled=${this.busy || !this.camera || !session.can("programmer")}
+          ?disabled=${this.busy || !this.camera}
+          ${makes(request("PUT", `/api/variables/${DETECTOR_PREFIX}${d.name}`))}
           @click=${() => void this.save()}>${t("vision.save")}</button>
       </div>
       ${this.error ? html`<p class="error" role="alert" data-testid="detector-error">${this.error}</p>` : ""}

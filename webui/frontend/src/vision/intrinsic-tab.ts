@@ -1,9 +1,16 @@
 import { html } from "lit";
 import { api, errorText } from "../api";
 import { type StringKey, t } from "../i18n";
-import { session } from "../session";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
-import { type OperationStatus, cancelOperation, follow, operationView, saveOperation } from "./operation";
+import {
+  type OperationStatus,
+  cancelOperation,
+  follow,
+  operationView,
+  saveOperation,
+  savesOperation,
+} from "./operation";
 import { VisionStep } from "./step";
 import { visionStyles } from "./styles";
 
@@ -254,7 +261,8 @@ export class OpIntrinsicTab extends VisionStep {
       </div>
       <div class="actions">
         <button class="primary" data-testid="intrinsic-start"
-          ?disabled=${this.busy || !this.camera || !session.can("programmer")}
+          ?disabled=${this.busy || !this.camera}
+          ${makes(request("POST", "/api/vision/intrinsic"))}
           @click=${() => this.start()}>${t("vision.intrinsic.start")}</button>
       </div>`;
   }
@@ -284,9 +292,11 @@ export class OpIntrinsicTab extends VisionStep {
     return html`<h3>${t("vision.intrinsic.frames", { count: view.frames.length, min: view.min_frames })}</h3>
       <div class="actions">
         <button class="primary" data-testid="intrinsic-capture" ?disabled=${this.busy || solving}
+          ${makes(request("POST", `${this.path()}/capture`))}
           @click=${() => this.capture()}>${t("vision.intrinsic.capture")}</button>
         <button data-testid="intrinsic-solve" class=${c.ready ? "primary" : ""}
           ?disabled=${this.busy || solving || view.frames.length < MIN_SOLVE}
+          ${makes(request("POST", `${this.path()}/solve`))}
           @click=${() => this.solve()}>${t("vision.intrinsic.solve")}</button>
       </div>
       ${this.reportLine()}
@@ -306,6 +316,7 @@ export class OpIntrinsicTab extends VisionStep {
               ${t(`vision.tilt.${f.tilt}` as StringKey)}${f.error === null ? "" : ` · ${f.error.toFixed(2)} px`}
               ${f.outlier ? html` · <strong>${t("vision.intrinsic.left_out")}</strong>` : ""}</span>
             <button data-testid="frame-drop-${f.index}" ?disabled=${this.busy || solving}
+              ${makes(request("DELETE", `${this.path()}/frames/${f.index}`))}
               @click=${() => this.drop(f.index)}>${t("vision.intrinsic.drop")}</button>
           </li>`,
         )}
@@ -335,6 +346,7 @@ export class OpIntrinsicTab extends VisionStep {
       </dl>
       <div class="actions">
         <button class="primary" data-testid="intrinsic-save" ?disabled=${this.busy || this.saved !== ""}
+          ${savesOperation(op.id)}
           @click=${() => this.save()}>${t("vision.save")}</button>
       </div>
       ${this.saved ? html`<p class="chip ok" data-testid="intrinsic-saved">${t("vision.saved", { names: this.saved })}</p>` : ""}

@@ -1,6 +1,7 @@
 import { html, type TemplateResult } from "lit";
 import { api } from "../api";
 import { t } from "../i18n";
+import { makes, request } from "../rights";
 
 // A long vision operation (a solve, a robot-origin run): followed until it ends, its
 // progress and stage shown with a Cancel button; what it found is stored only on Save.
@@ -41,6 +42,11 @@ export function cancelOperation(id: string): Promise<unknown> {
   return api("POST", `/api/vision/operations/${encodeURIComponent(id)}/cancel`);
 }
 
+/** On a control that saves what an operation found. */
+export function savesOperation(id: string) {
+  return makes(request("POST", `/api/vision/operations/${encodeURIComponent(id)}/save`));
+}
+
 export async function saveOperation(id: string): Promise<string[]> {
   const saved = await api<{ saved: string[] }>(
     "POST",
@@ -59,7 +65,8 @@ export function operationView(
     return html`<div class="operation" data-testid="op-running">
       <progress max="1" value=${op.progress}></progress>
       <span>${Math.round(op.progress * 100)} % · ${op.stage}</span>
-      <button class="danger" data-testid="op-cancel" @click=${cancel}>${t("vision.cancel")}</button>
+      <button class="danger" data-testid="op-cancel" @click=${cancel}
+        ${makes(request("POST", `/api/vision/operations/${encodeURIComponent(op.id)}/cancel`))}>${t("vision.cancel")}</button>
     </div>`;
   }
   if (op.state === "failed") {

@@ -1,15 +1,22 @@
 import { html } from "lit";
 import { api, errorText } from "../api";
-import { control } from "../control";
+import { control, leaseRequest } from "../control";
 import { t } from "../i18n";
 import { feed } from "../live";
-import { session } from "../session";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { Pose } from "../types";
 import { lengthWithUnit } from "../units";
 import { DICTIONARIES } from "./intrinsic-tab";
 import { lengthField, numberField } from "./fields";
-import { type OperationStatus, cancelOperation, follow, operationView, saveOperation } from "./operation";
+import {
+  type OperationStatus,
+  cancelOperation,
+  follow,
+  operationView,
+  saveOperation,
+  savesOperation,
+} from "./operation";
 import { VisionStep } from "./step";
 import { visionStyles } from "./styles";
 
@@ -162,6 +169,7 @@ export class OpOriginTab extends VisionStep {
       </ul>
       <div class="actions">
         <button class="primary" data-testid="origin-save" ?disabled=${this.saved !== ""}
+          ${savesOperation(this.op!.id)}
           @click=${() => void this.act(async () => {
             this.saved = (await saveOperation(this.op!.id)).join(", ");
           })}>${t("vision.save")}</button>
@@ -208,10 +216,12 @@ export class OpOriginTab extends VisionStep {
       <div class="actions">
         ${mine
           ? ""
-          : html`<button data-testid="origin-control" ?disabled=${!robot || !session.can("operator")}
+          : html`<button data-testid="origin-control" ?disabled=${!robot}
+              ${makes(...(robot ? [leaseRequest(robot)] : []))}
               @click=${() => void this.act(() => control.take(robot))}>${t("jog.control.take")}</button>`}
         <button class="primary" data-testid="origin-run"
-          ?disabled=${this.busy || running || !mine || !this.camera || !session.can("programmer")}
+          ?disabled=${this.busy || running || !mine || !this.camera}
+          ${makes(request("POST", "/api/vision/robot_origin"))}
           @click=${() => void this.run(robot)}>${t("vision.origin.run")}</button>
       </div>
       ${robots.length ? "" : html`<p class="muted">${t("vision.origin.no_robot")}</p>`}

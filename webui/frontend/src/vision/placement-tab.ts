@@ -2,12 +2,19 @@ import { html } from "lit";
 import { api, errorText } from "../api";
 import { t } from "../i18n";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
-import { session } from "../session";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { Pose } from "../types";
 import { lengthWithUnit } from "../units";
 import { lengthField, numberField } from "./fields";
-import { type OperationStatus, cancelOperation, follow, operationView, saveOperation } from "./operation";
+import {
+  type OperationStatus,
+  cancelOperation,
+  follow,
+  operationView,
+  saveOperation,
+  savesOperation,
+} from "./operation";
 import { VisionStep } from "./step";
 import { visionStyles } from "./styles";
 
@@ -129,7 +136,7 @@ export class OpPlacementTab extends VisionStep {
       </dl>
       <div class="actions">
         <button class="primary" data-testid="placement-save"
-          ?disabled=${this.saved !== "" || !session.can("programmer")}
+          ?disabled=${this.saved !== ""} ${savesOperation(this.op!.id)}
           @click=${() => void this.save()}>${t("vision.save")}</button>
       </div>
       ${this.saved ? html`<p class="chip ok" data-testid="placement-saved">${t("vision.saved", { names: this.saved })}</p>` : ""}
@@ -162,7 +169,8 @@ export class OpPlacementTab extends VisionStep {
           </div>`}
       <div class="actions">
         <button class="primary" data-testid="placement-run"
-          ?disabled=${this.busy || running || !this.camera || !session.can("programmer")}
+          ?disabled=${this.busy || running || !this.camera}
+          ${makes(request("POST", "/api/vision/extrinsic"))}
           @click=${() => void this.run()}>${t("vision.placement.run")}</button>
       </div>
       ${operationView(this.op, () => void cancelOperation(this.op!.id).catch((e) => (this.error = errorText(e))))}

@@ -1,11 +1,11 @@
 import { html } from "lit";
 import { api } from "../api";
 import { t } from "../i18n";
-import { session } from "../session";
+import { makes, request } from "../rights";
 import { shared } from "../styles";
 import { lengthFromField, lengthToField, lengthUnit } from "../units";
 import type { Box } from "./camera-view";
-import { type Detections, detect, detectionList, overlayOf } from "./detections";
+import { type Detections, detect, detectionList, detects, overlayOf } from "./detections";
 import { VisionStep } from "./step";
 import { visionStyles } from "./styles";
 
@@ -98,9 +98,12 @@ export class OpTemplateTab extends VisionStep {
       </p>
       <div class="actions">
         <button class="primary" data-testid="template-teach"
-          ?disabled=${this.busy || !b || !this.camera || !session.can("programmer")}
+          ?disabled=${this.busy || !b || !this.camera}
+          ${makes(request("PUT",
+            `/api/vision/detectors/${encodeURIComponent(this.name || "new")}/template`))}
           @click=${() => void this.teach()}>${t("vision.template.teach")}</button>
         <button data-testid="template-test" ?disabled=${this.busy || !this.taught}
+          ${detects(this.taught)}
           @click=${() => void this.test()}>${t("vision.template.test")}</button>
       </div>
       ${this.taught ? html`<p class="chip ok" data-testid="template-taught">${t("vision.template.taught", { name: `detectors.${this.taught}` })}</p>` : ""}
