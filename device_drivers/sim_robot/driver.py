@@ -65,13 +65,16 @@ class LoopTimer:
 
 
 class SimRobot(RobotDriver):
-    def __init__(self, identity: DeviceIdentity, info: RobotInfo) -> None:
+    def __init__(self, identity: DeviceIdentity, info: RobotInfo, *, time_scale: int = 1) -> None:
+        """`time_scale`: control cycles per period while a trajectory runs (states keep
+        wall-clock stamps, so staleness and the deadman are as in real time)."""
         if SIM_CELL not in info.capabilities:  # its parts are listed for the 3D view
             info = info.model_copy(update={"capabilities": [*info.capabilities, SIM_CELL]})
         super().__init__(identity, info)
         self.core = SimCore(info, Kinematics(info))
         self.lock = threading.Lock()
         self.timer = LoopTimer()
+        self.time_scale = time_scale
         self._running = threading.Event()
         self._thread: threading.Thread | None = None
         # The parts around it, which its tool and a simulated gripper on it pick.
@@ -113,7 +116,7 @@ class SimRobot(RobotDriver):
             self.timer.tick(start)
             with self.lock:
                 try:
-                    self.core.step(time.monotonic())
+                    self.cycle(time.monotonic())
                 except Exception as exc:
                     # The loop must outlive any bug in a cycle: fault the robot, keep running.
                     log.exception("control cycle failed")
@@ -126,6 +129,16 @@ class SimRobot(RobotDriver):
                 # Late by more than a cycle: start afresh instead of bursting to catch up.
                 self.timer.overruns += 1
                 deadline = time.perf_counter()
+
+    def cycle(self, now: float) -> None:
+        """One period of the control loop (the caller holds the lock): one control cycle, or
+        `time_scale` of them along a trajectory. Only there: a stream's commands (a jog, a
+        Move to) and their deadlines are in real time."""
+        self.core.step(now)
+        for _ in range(self.time_scale - 1):
+            if self.core.mode is not CommandMode.trajectory:
+                break
+            self.core.step(now)
 
     def state(self) -> RobotState:
         with self.lock:

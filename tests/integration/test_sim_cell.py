@@ -14,7 +14,7 @@ import pytest
 
 from runtime.bench.harness.blocks import block, number, stack, waypoint, workspace
 from runtime.bench.harness.jog import Cell
-from runtime.bench.harness.processes import Runtime, wait_for, whole_cell_env
+from runtime.bench.harness.processes import FAST_MOTION_ENV, Runtime, wait_for, whole_cell_env
 from runtime.kit.settings import default_devices
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
@@ -30,7 +30,7 @@ def tcp_at(joints: list[float], arm: Kinematics = UR5) -> list[float]:
 @pytest.fixture(scope="module")
 def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cell]:
     home = tmp_path_factory.mktemp("sim-cell")
-    runtime = Runtime(home, env=whole_cell_env(home))
+    runtime = Runtime(home, env=whole_cell_env(home, **FAST_MOTION_ENV))
     runtime.wait_ready()
     try:
         cell = Cell(runtime)

@@ -8,7 +8,8 @@ robot-origin calibration, run through the API (the robot moving through 12 gener
 under the test's lease), finds it within 1 mm and 0.1°; and the same program places every
 part in its row again. A cancelled calibration run stops the robot and stores nothing.
 
-Not `concurrent`: the robot moves in real time."""
+Not `concurrent`: the robot streams its state in real time (its trajectories play 5x faster,
+FAST_MOTION_ENV: only where they end matters here)."""
 
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ from scipy.spatial.transform import Rotation
 
 from runtime.bench.harness.blocks import block, number, stack, var, workspace
 from runtime.bench.harness.jog import Cell
-from runtime.bench.harness.processes import Runtime, child_env, wait_for
+from runtime.bench.harness.processes import FAST_MOTION_ENV, Runtime, child_env, wait_for
 from runtime.kit.settings import DeviceSpec, default_devices
 from tests.support.vision import CAMERA_SPEC, HOME, REGION, Cam, calibrate, off_by, place_the_camera
 
@@ -44,7 +45,7 @@ def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Cell, Cam]]
     home = tmp_path_factory.mktemp("vision-pick")
     robot, _io, gripper = default_devices()
     devices = json.dumps([robot.model_dump(), gripper.model_dump(), CAMERA_SPEC.model_dump()])
-    runtime = Runtime(home, env=child_env(home, OPENPENDANT_DEVICES=devices))
+    runtime = Runtime(home, env=child_env(home, OPENPENDANT_DEVICES=devices, **FAST_MOTION_ENV))
     runtime.wait_ready()
     try:
         cell = Cell(runtime)

@@ -480,3 +480,33 @@ def test_placing_the_arm_puts_it_there_at_rest_and_only_while_it_stands(core: Si
     clock.run(0.2)
     assert np.allclose(core.tracker.position, target, atol=1e-12)
     assert np.allclose(core.tracker.velocity, 0.0)
+
+
+def test_a_faster_clock_runs_trajectories_only_and_on_the_same_path(ur5: RobotInfo) -> None:
+    """Issue 33: the test suite's time scale. A robot at 5x plays its trajectory in a fifth
+    of the loop's periods, through the same setpoints a robot at 1x passes; a stream (a jog)
+    stays in real time, its commands' deadlines with it."""
+    identity = DeviceIdentity(uuid="u-1", kind="robot", model="ur5", name="t")
+    paths = {}
+    for scale in (1, 5):
+        robot = SimRobot(identity, ur5, time_scale=scale)
+        robot.core.enable()
+        trajectory_id, _, goal = straight_trajectory(robot.core, ur5, [0.8, -0.3, 0.4, 0, 0, 0])
+        periods = 0
+        while robot.core.trajectory_status(trajectory_id).state != "finished":
+            robot.cycle(periods * CYCLE)
+            periods += 1
+            assert periods < 10_000
+        paths[scale] = (periods, np.array([s.position for s in robot.core.setpoints]))
+        assert np.allclose(robot.core.tracker.position, goal, atol=1e-6)
+    (slow, slow_path), (fast, fast_path) = paths[1], paths[5]
+    assert abs(fast * 5 - slow) <= 5
+    assert np.abs(fast_path[: len(slow_path)] - slow_path[: len(fast_path)]).max() < 1e-12
+
+    robot = SimRobot(identity, ur5, time_scale=5)
+    robot.core.enable()
+    robot.core.set_mode(CommandMode.jog)
+    robot.core.stream(CommandMode.jog, np.array([0.3, 0, 0, 0, 0, 0]), None, 0.1, 0.0)
+    for k in range(10):
+        robot.cycle(k * CYCLE)
+    assert robot.core.sim_time == pytest.approx(10 * CYCLE)

@@ -44,6 +44,9 @@ ROBOT_ONLY_ENV = {"OPENPENDANT_DEVICES": json.dumps([default_devices()[0].model_
 # 25 %: every move and jog would take four times as long); test_first_speed.py
 # and the browser's first hold run with the default.
 FULL_SPEED_ENV = {"OPENPENDANT_LINK__FIRST_SPEED_RATIO": "1.0"}
+# For tests that only need moves to finish: the simulated robots play trajectories 5x faster
+# than real time (their states keep wall-clock stamps; jogs and streams stay in real time).
+FAST_MOTION_ENV = {"OPENPENDANT_SIM_TIME_SCALE": "5"}
 
 
 def child_env(home: Path, **extra: str) -> dict[str, str]:
