@@ -261,6 +261,8 @@ class DeviceRegistry:
                 )
             if request.uuid is not None:
                 record = self._record_from_detected(request.uuid, request.local_name)
+                if request.pairing is None:
+                    await self._require_proof(record)
             else:
                 record = await self._record_from_url(str(request.url), request.local_name)
             for conn in self.connections.values():
@@ -303,6 +305,22 @@ class DeviceRegistry:
         self._publish_devices()
         self._publish_detected()
         return self._added(conn)
+
+    async def _require_proof(self, record: DeviceRecord) -> None:
+        """Added with the key this runtime keeps (no pairing code): what answers at the
+        announced address must prove it holds that key, there. The key's id it announces is
+        no proof: anyone may copy it."""
+        secret = self.secret_of(record.uuid)
+        if secret is None:
+            return  # a device that was never paired: its link says what it is
+        refused = await disproof(record.url, secret)
+        if refused is not None:
+            log.warning("refused to add %s at %s: %s", record.uuid, record.url, refused)
+            raise Conflict(
+                f"the device at {record.url} did not prove it is the one paired here "
+                f"({refused}); add it with its pairing code",
+                code="unproven",
+            )
 
     def _record_from_detected(self, uuid: str, local_name: str) -> DeviceRecord:
         found = self.detected.get(uuid)

@@ -3,8 +3,9 @@ state into the next streamed command."""
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 
 import numpy as np
 import pinocchio as pin
@@ -62,8 +63,10 @@ class Action(ABC):
 def override(asked: float, state: RobotState) -> float:
     """The fraction of the jog speed a press runs at: what it asked, never more than the
     robot's speed override as it is now (a client's own figure does not raise it, and an
-    override lowered by anyone slows a press already held)."""
-    return min(asked, state.speed_ratio)
+    override lowered by anyone slows a held jog; a Move to or a step keeps the speed it was
+    planned at). An override the driver reports out of [0, 1] or not a number counts as 0."""
+    ratio = state.speed_ratio
+    return min(asked, ratio) if math.isfinite(ratio) and 0.0 <= ratio <= 1.0 else 0.0
 
 
 def scaled_cap(tcp_cap: float | None, fraction: float) -> float | None:
@@ -294,6 +297,8 @@ class MouseJog(Action):
         self.level = np.zeros(6)  # the deflection as followed: it changes in RAMP at most
         self.away = False  # the mouse is gone; the robot was halted
         self.after_halt = False  # the driver is halted: a new deflection needs its mode again
+        # Checks a new deflection after a halt must pass as a new press would (control held).
+        self.recheck: Callable[[], Awaitable[None]] | None = None
         self.armed = False  # its cap was seen at rest since it was bound or came back
         self.waits_for_rest = False  # deflected, but not armed: it drives nothing
 
@@ -384,6 +389,11 @@ class MouseJog(Action):
         if self.waits_for_rest:
             axes, deflected = np.zeros(6), False
         q = np.array(state.joint_position_command)
+        if self.after_halt:
+            if not deflected:
+                return None  # its halt holds the robot (braking still, maybe) until pushed
+            # Pushed anew: it starts from rest, whatever the halt is still braking.
+            self.previous = np.zeros(q.size)
         previous = np.array(state.joint_velocity) if self.previous is None else self.previous
         axes = self.follow(axes, self.dt(now))
         fraction = override(self.speed, state)

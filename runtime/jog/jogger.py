@@ -101,21 +101,7 @@ class Jogger:
         # The press belongs to the link it began on: if that link is lost, the next one
         # refuses its commands, and it ends.
         action.generation = self.link.generation
-        state = self.link.current(action.generation)
-        flags = state.flags
-        if not flags.ready:
-            # The same codes the driver uses, whichever of the two notices first.
-            if flags.estop:
-                raise RobotError("the E-stop is engaged", code="estop", words=words("robot.estop"))
-            if flags.error:
-                raise RobotError(
-                    f"the robot has an error: {state.error_message}",
-                    code="error",
-                    words=words("robot.fault", error=state.error_message),
-                )
-            raise RobotError(
-                "the robot is not enabled", code="not_enabled", words=words("robot.not_enabled")
-            )
+        self._require_ready(action)
         previous = self.action
         self.action = None
         self._held = ""
@@ -136,6 +122,34 @@ class Jogger:
                 await self._halt_ended(action, "refused")
             raise
         self._wake.set()
+
+    def _require_ready(self, action: Action) -> None:
+        flags = self.link.current(action.generation).flags
+        if flags.ready:
+            return
+        # The same codes the driver uses, whichever of the two notices first.
+        if flags.estop:
+            raise RobotError("the E-stop is engaged", code="estop", words=words("robot.estop"))
+        if flags.error:
+            message = self.link.current(action.generation).error_message
+            raise RobotError(
+                f"the robot has an error: {message}",
+                code="error",
+                words=words("robot.fault", error=message),
+            )
+        raise RobotError(
+            "the robot is not enabled", code="not_enabled", words=words("robot.not_enabled")
+        )
+
+    async def _resume_mouse(self, action: MouseJog) -> None:
+        """A 3D mouse back after its own halt, pushed anew from rest: a new press, checked as
+        one (ready, manual mode, control still held) before its mode is taken again."""
+        self._require_ready(action)
+        action.tcp_cap = self.tcp_cap()
+        if action.recheck is not None:
+            await action.recheck()
+        action.after_halt = False
+        await self.link.ensure_mode(action.mode, action.generation)
 
     async def stop(self, press: str, reason: str, *, halt: bool, said: Words | None = None) -> None:
         """End a press: on release the robot decelerates under its limits; on a lost deadman
@@ -254,10 +268,7 @@ class Jogger:
         command = action.tick(state, now)
         if command is not None:
             if isinstance(action, MouseJog) and action.after_halt and not isinstance(command, Halt):
-                # Its own halt (the mouse went away) left the driver halted; the mouse is back
-                # and moved anew from rest: a new press, in the mode it needs.
-                action.after_halt = False
-                await self.link.ensure_mode(action.mode, action.generation)
+                await self._resume_mouse(action)
             action.streamed = True  # before the send: one that fails may have gone out
             await self.link.stream(command, action.generation)
         self._report_held(action, now)

@@ -9,6 +9,7 @@ import logging
 import math
 import time
 from collections import deque
+from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -158,6 +159,7 @@ class JogSession:
                 on_button=lambda b: self._mouse_button(request, b),
                 speed=request.speed,
             )
+            action.recheck = self._lease_check(request)
             self.ended = deque((p for p in self.ended if p != press), maxlen=1000)
             self.touched.add(request.robot)
             self.held[press] = Held(request.robot, None, time.monotonic())
@@ -186,6 +188,10 @@ class JogSession:
         state = {"state": "held", "reason": reason, "message": why} if why else {"state": "moving"}
         self.send({"type": "status", "press": press, "robot": robot, **state})
 
+    def _lease_check(self, request: MouseBinding) -> Callable[[], Awaitable[None]]:
+        """The binding's control, checked again when its mouse comes back and is pushed."""
+        return lambda: self.directory.check_lease(request.robot, request.token)
+
     async def _rebind(self, press: str, request: MouseBinding) -> bool:
         """A binding sent again while the mouse drives a robot: the same robot takes the new
         mode, frame, speed and joints at once (the page's frame buttons drive the mouse too);
@@ -210,6 +216,7 @@ class JogSession:
         action.joints = request.joints
         action.speeds = mouse_speeds(request)
         action.speed = request.speed
+        action.recheck = self._lease_check(request)
         self.send(
             {
                 "type": "mouse_frame",

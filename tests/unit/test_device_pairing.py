@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+import pytest
 import uvicorn
 from starlette.applications import Starlette
 from starlette.requests import Request
@@ -23,11 +24,13 @@ from starlette.types import ASGIApp
 
 from runtime.device_manager.addresses import unsettled
 from runtime.device_manager.connection import DeviceConnection
+from runtime.device_manager.models import AddDeviceRequest
 from runtime.device_manager.registry import DeviceRegistry
 from runtime.drivers.guard import CommandGuard
 from runtime.interfaces.variables import DeviceRecord
 from runtime.kit.device_auth import address_text, disproof, keep_secret, proof
 from runtime.kit.discovery import Detected
+from runtime.kit.errors import Conflict, OpenPendantError
 from runtime.kit.serve import listening_socket
 from runtime.kit.websocket import Fanout
 from runtime.variable_storage.client import StorageClient
@@ -250,5 +253,35 @@ def test_a_proven_device_waits_for_the_user_while_its_robot_was_moving_faulted_o
                 # The user confirms: the link moves (the robot halted first).
                 moved = await registry.repoint("robot", board.url)
                 assert moved.url == board.url and conn.record.url == board.url
+
+    run(scenario)
+
+
+def test_a_device_added_with_the_key_kept_here_must_prove_it_holds_it(tmp_path: Path) -> None:
+    """Review of issue 32: the Devices panel marks a device whose announced key id matches
+    a key this runtime keeps "paired: no pairing code needed"; that id is public, anyone may
+    copy it. Added so, what answers at the announced address must prove it holds the key."""
+
+    async def scenario() -> None:
+        keep_secret(tmp_path, UUID, SECRET)
+        storage = StorageClient(NOWHERE, timeout=0.5)
+        registry = DeviceRegistry(storage, Fanout(), data_dir=tmp_path)
+        registry.loaded = True
+        request = AddDeviceRequest(uuid=UUID, local_name="robot")
+        try:
+            async with Served(device("another boards secret")) as impostor:
+                registry.on_found(announced(impostor.url))
+                with pytest.raises(Conflict) as refused:
+                    await registry.add(request)
+                assert refused.value.code == "unproven"
+                assert "robot" not in registry.connections
+            async with Served(device()) as board:
+                registry.on_found(announced(board.url))
+                # Proven: it goes on to be stored (here the storage is away: refused there).
+                with pytest.raises(OpenPendantError) as stopped:
+                    await registry.add(request)
+                assert stopped.value.code != "unproven"
+        finally:
+            await storage.aclose()
 
     run(scenario)

@@ -104,3 +104,13 @@ def test_a_client_asking_less_than_the_override_gets_what_it_asked() -> None:
     action = TwistJog("p", controller, kinematics, twist, "base", MANUAL_TCP_SPEED, speed=0.05)
     _, speeds = hold(kinematics, action, home, [1.0] * 100)
     assert speeds[-1] == pytest.approx(0.05 * min(LINEAR_SPEED, MANUAL_TCP_SPEED), rel=0.05)
+
+
+@pytest.mark.parametrize("reported", [float("nan"), -1.0, 2.0, float("inf")])
+def test_an_override_out_of_range_moves_nothing(reported: float) -> None:
+    kinematics, controller, home = parts("ur5")
+    velocity = np.zeros(home.size)
+    velocity[0] = JOINT_SPEED
+    action = JointVelocityJog("p", controller, velocity, MANUAL_TCP_SPEED, speed=1.0)
+    _, speeds = hold(kinematics, action, home, [reported] * 50)
+    assert max(speeds) == 0.0

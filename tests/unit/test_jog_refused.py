@@ -13,15 +13,17 @@ import contextlib
 import json
 import time
 from collections.abc import AsyncIterator, Callable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import pytest
 import websockets
 from websockets.asyncio.server import ServerConnection
 
+from runtime.clients.input import InputClient
 from runtime.clients.robot import RobotClient
 from runtime.interfaces.device import DeviceIdentity
+from runtime.interfaces.input import InputState
 from runtime.interfaces.robot import (
     CommandMode,
     OperationalMode,
@@ -29,9 +31,9 @@ from runtime.interfaces.robot import (
     RobotFlags,
     RobotState,
 )
-from runtime.jog.actions import JointVelocityJog
+from runtime.jog.actions import JointVelocityJog, MouseJog
 from runtime.jog.jogger import Ended, Jogger
-from runtime.kit.errors import RobotError
+from runtime.kit.errors import Conflict, RobotError
 from runtime.links.hub import LinkHub
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
@@ -257,5 +259,67 @@ def test_a_press_refused_at_its_first_cycle_halts_the_one_it_replaced_and_never_
             await nothing_streams_after(socket, halt, "p1")
             assert socket.sent("p2") == []
             await a_new_press_moves(socket, jogger, "p3")
+
+    asyncio.run(scenario())
+
+
+class MouseFeed:
+    """A 3D mouse's newest state as the jog service reads it (None: its link is down)."""
+
+    def __init__(self) -> None:
+        self.state: InputState | None = None
+        self.seqno = 0
+
+    def report(self, axes: list[float] | None) -> None:
+        self.seqno += 1
+        if axes is None:
+            self.state = None
+        else:
+            self.state = InputState(seqno=self.seqno, ts=0.0, axes=axes, connected=True)
+
+
+def test_a_mouse_back_after_its_halt_is_checked_as_a_new_press() -> None:
+    """Review of issue 32: a 3D mouse whose binding waited while it was away drove again on
+    its next deflection without the checks a new press has; control lost meanwhile must end
+    the binding, not move the robot."""
+
+    async def scenario() -> None:
+        async with jogging() as (socket, jogger):
+            feed = MouseFeed()
+            feed.report([0.0] * 6)
+            mouse = MouseJog(
+                "mouse:m",
+                jogger.controller,
+                KINEMATICS,
+                cast(InputClient, feed),
+                cartesian=False,
+                frame="base",
+                joints=[0, 1, 2, 3, 4, 5],
+                speeds=np.full(6, 0.5),
+                tcp_cap=jogger.tcp_cap(),
+                window=5.0,
+                on_button=lambda _: None,
+            )
+            lost = False
+
+            async def recheck() -> None:
+                if lost:
+                    raise Conflict("another pendant has control of arm", code="lease_held")
+
+            mouse.recheck = recheck
+            ended: list[Ended] = []
+            await jogger.start(mouse, ended.append)
+            feed.report([0.5, 0, 0, 0, 0, 0])
+            await until(lambda: len(socket.sent("mouse:m")) >= 3, "the mouse driving")
+            feed.report(None)  # its driver restarts
+            await until(lambda: socket.halts("mouse:m:halt"), "halted when it went")
+            halt = socket.halts("mouse:m:halt")[0]
+            lost = True  # control taken by another pendant meanwhile
+            feed.report([0.0] * 6)  # back, at rest: nothing
+            await until(lambda: mouse.armed, "the mouse seen at rest")
+            feed.report([0.5, 0, 0, 0, 0, 0])  # pushed anew
+            await until(lambda: ended, "the binding ended")
+            assert [(e.state, e.reason) for e in ended] == [("refused", "lease_held")]
+            assert [i for i in socket.sent("mouse:m") if i > halt] == []
 
     asyncio.run(scenario())

@@ -57,6 +57,7 @@ class Cell:
         self.feed = Feed(None)
         self.reports = 0
         self.now = 0.0
+        self.velocity: FloatArray = np.zeros(self.q.size)  # as the robot reports it
         self.action = MouseJog(
             "mouse:m",
             controller,
@@ -79,7 +80,7 @@ class Cell:
             operational_mode=OperationalMode.manual_reduced_speed,
             flags=RobotFlags(enabled=True, ready=True, homed=True),
             joint_position=self.q.tolist(),
-            joint_velocity=[0.0] * self.q.size,
+            joint_velocity=self.velocity.tolist(),
             joint_position_command=self.q.tolist(),
             tcp_pose=self.kinematics.tcp_pose(self.q),
             speed_ratio=1.0,
@@ -153,3 +154,18 @@ def test_a_mouse_bound_with_its_cap_pushed_drives_only_after_it_was_let_go() -> 
     assert cell.action.held()[0] == "mouse_not_at_rest"
     cell.run(AT_REST, 3)
     assert moving(cell.run(PUSHED, 20))
+
+
+def test_a_mouse_back_while_the_halt_still_brakes_leaves_the_halt_to_it() -> None:
+    """Review of issue 32: seeded from the braking robot's velocity, the binding streamed
+    commands again (out of the driver's halt) before anyone touched the mouse."""
+    cell = Cell()
+    cell.run(AT_REST, 5)
+    cell.run(PUSHED, 50)
+    cell.run(None, 1)  # gone: halted
+    cell.velocity = np.full(cell.q.size, 0.2)  # the halt still braking when it comes back
+    assert cell.run(AT_REST, 20) == [None] * 20  # the halt goes on undisturbed
+    pushed = cell.run(PUSHED, 1)[0]
+    assert isinstance(pushed, VelocityCommand)
+    reach = np.array([j.max_acceleration for j in load_robot_info("ur5").joints]) * PERIOD
+    assert np.all(np.abs(pushed.velocity) <= reach + 1e-12)  # from rest, not from the braking

@@ -80,14 +80,17 @@ export class JogSocket extends EventTarget {
       this.dispatchEvent(new CustomEvent<JogMessage>("message", { detail: message }));
     };
     socket.onclose = (event) => {
-      // The sign-in that opened it ended: the session ends here too, saying why (a ticket's
-      // own refusal leaves the session standing, and the socket opens again).
-      if (event.code === SIGN_IN_ENDED) session.lost();
       this.socket = null;
       this.online = false;
       direct = null; // a restarted runtime may listen on another port: ask again
       for (const press of [...this.held.keys()]) this.stopBeating(press);
       this.dispatchEvent(new Event("change"));
+      if (event.code === SIGN_IN_ENDED) {
+        // The sign-in that opened it ended: the session ends here too, saying why, and the
+        // socket is not opened again (a ticket's own refusal leaves the session standing).
+        void session.lost().then(() => session.me && !this.closed && this.connect());
+        return;
+      }
       if (!this.closed) window.setTimeout(() => this.connect(), 1000);
     };
   }

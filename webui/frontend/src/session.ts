@@ -58,7 +58,7 @@ class Session extends EventTarget {
   me: Me | null = null;
   /** Why the last session ended (shown on the sign-in screen until the next sign-in). */
   ended: Ended | null = null;
-  private checking = false;
+  private checking: Promise<void> | null = null; // asking the gateway why, under way
   private rules: Rule[] | null = null; // null: not read (the gateway decides alone)
   private otherwise: Need = "admin";
   private changes = 0;
@@ -110,27 +110,30 @@ class Session extends EventTarget {
   /** A request or a socket was refused for want of a session (it expired, or was ended
    * elsewhere). The gateway is asked why, and whether it did end: a socket may also close
    * for a ticket of its own while the session stands. */
-  lost(): void {
-    if (this.me === null || this.checking) return;
-    this.checking = true;
-    void whyEnded().then((ended) => {
-      this.checking = false;
+  lost(): Promise<void> {
+    if (this.me === null) return Promise.resolve();
+    this.checking ??= whyEnded().then(async (ended) => {
+      this.checking = null;
       if (ended === undefined || this.me === null) return;
       this.ended = ended;
-      void this.set(null);
+      await this.set(null);
     });
+    return this.checking;
   }
 }
 
-/** undefined: the session stands; else why it ended (null fields where nobody said). */
+/** Why the session ended, as the gateway says it; undefined while it stands or the gateway
+ * cannot say (restarting, unreachable: the next refusal asks again). */
 async function whyEnded(): Promise<Ended | undefined> {
   try {
     const response = await fetch("/api/auth/me", { credentials: "same-origin" });
-    if (response.ok) return undefined;
-    const body = (await response.json()) as { error?: { message?: string; words?: Words } };
+    if (response.status !== 401) return undefined;
+    const body = (await response.json().catch(() => ({}))) as {
+      error?: { message?: string; words?: Words };
+    };
     return { message: body.error?.message ?? "", words: body.error?.words ?? null };
   } catch {
-    return { message: "", words: null };
+    return undefined;
   }
 }
 

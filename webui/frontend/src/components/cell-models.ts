@@ -80,6 +80,6 @@ export class CellModels {
     } finally {
       if (round === this.round) this.fetching.delete(name);
     }
-    this.changed();
+    if (round === this.round) this.changed(); // not to a view that has left the page
   }
 }

@@ -37,7 +37,7 @@ export const de: Catalogue = {
   "devices.also_at": "Auch angekündigt unter {urls}: ein anderes Gerät gibt sich als dieses aus",
   "devices.detected": "Im Netzwerk erkannt",
   "devices.not_added": "({count} nicht hinzugefügt)",
-  "devices.mark.paired": "Mit dieser Runtime gekoppelt: kein Kopplungscode nötig.",
+  "devices.mark.paired": "Mit dieser Runtime gekoppelt: kein Kopplungscode nötig (es muss sich beim Hinzufügen ausweisen).",
   "devices.mark.new": "Nicht mit dieser Runtime gekoppelt: zum Hinzufügen braucht es seinen Kopplungscode.",
   "devices.mark.other_runtime":
     "Gehört zu einer anderen Runtime, die es gestartet hat. Hier nur mit seinem Kopplungscode hinzufügen, und nur, wenn es jene Zelle verlassen soll.",

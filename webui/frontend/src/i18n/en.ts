@@ -37,7 +37,7 @@ export const en = {
   "devices.also_at": "Also announced at {urls}: another device claims this identity",
   "devices.detected": "Detected on the network",
   "devices.not_added": "({count} not added)",
-  "devices.mark.paired": "Paired with this runtime: no pairing code needed.",
+  "devices.mark.paired": "Paired with this runtime: no pairing code needed (it must prove it when added).",
   "devices.mark.new": "Not paired with this runtime: adding it needs its pairing code.",
   "devices.mark.other_runtime":
     "Belongs to another runtime, which started it. Add it here only with its pairing code, and only if it should leave that cell.",
