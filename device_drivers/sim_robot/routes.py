@@ -34,6 +34,10 @@ class PlaceRequest(Strict):
     joints: list[float] = Field(min_length=1, max_length=16)
 
 
+class TimeScaleRequest(Strict):
+    scale: int = Field(ge=1, le=50)
+
+
 class PushRequest(Strict):
     velocity: list[float] = Field(min_length=1, max_length=16)  # rad/s per joint
 
@@ -98,6 +102,15 @@ def sim_router(robot: SimRobot) -> APIRouter:
         its setpoint and pulled back when let go; halted, the brakes hold it."""
         robot.push(body.velocity)
         return robot.state()
+
+    @router.put("/time_scale")
+    async def time_scale(body: TimeScaleRequest) -> dict[str, int]:
+        """Trajectories played this many times faster than real time from the next control
+        period on (streams and states stay in real time): a test's moves that only need to
+        end, in less time."""
+        with robot.lock:
+            robot.time_scale = body.scale
+        return {"time_scale": body.scale}
 
     @router.put("/digital_inputs/{index}")
     async def digital_input(index: int, body: DigitalInputRequest) -> RobotState:
