@@ -89,21 +89,26 @@ def phone(browser: Browser, request: pytest.FixtureRequest) -> Iterator[BrowserC
     context.close()
 
 
-@pytest.fixture(scope="module")
-def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
-    home = tmp_path_factory.mktemp("browser")
-    # The deadman window is widened here, not in the product: on this 2-core VM a software-
-    # rendered Chromium and the whole runtime share the cores, and a heartbeat can sit in a
-    # run queue for over 100 ms. The 100 ms default is proven by tests/integration/test_jog.py.
-    # For the same reason a robot's state stream can stall past the 200 ms after which its
-    # link is stale (seen: a Blockly drag on a phone); the link tests prove the defaults.
-    env = child_env(
+def browser_env(home: Path, **extra: str) -> dict[str, str]:
+    """child_env with the browser tests' deadman and link timeouts. They are widened here, not
+    in the product: on this 2-core VM a software-rendered Chromium and the whole runtime share
+    the cores, and a heartbeat can sit in a run queue for over 100 ms (the 100 ms default is
+    proven by tests/integration/test_jog.py); for the same reason a robot's state stream can
+    stall past the 200 ms after which its link is stale (seen: a Blockly drag on a phone; the
+    link tests prove the defaults)."""
+    return child_env(
         home,
         OPENPENDANT_DEADMAN_SECONDS=str(BROWSER_DEADMAN),
         OPENPENDANT_LINK__STALE_AFTER=str(BROWSER_LINK_TIMEOUT),
         OPENPENDANT_LINK__DRIVER_TIMEOUT=str(BROWSER_LINK_TIMEOUT),
+        **extra,
     )
-    proc = Runtime(home, env=env)
+
+
+@pytest.fixture(scope="module")
+def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
+    home = tmp_path_factory.mktemp("browser")
+    proc = Runtime(home, env=browser_env(home))
     proc.wait_ready()
     yield proc
     proc.stop()

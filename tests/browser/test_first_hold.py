@@ -14,15 +14,14 @@ import pytest
 from playwright.sync_api import BrowserContext, expect
 
 from runtime.bench.harness.jog import RobotView
-from runtime.bench.harness.processes import FULL_SPEED_ENV, Runtime, child_env, wait_for
+from runtime.bench.harness.processes import FULL_SPEED_ENV, Runtime, wait_for
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
 from tests.browser.conftest import (
-    BROWSER_DEADMAN,
-    BROWSER_LINK_TIMEOUT,
     Finger,
     PageErrors,
     add_robot,
+    browser_env,
     robot_at_rest,
 )
 from tests.browser.test_shop_floor import take_control_and_enable
@@ -33,12 +32,7 @@ UR5 = Kinematics(load_robot_info("ur5"))
 @pytest.fixture(scope="module")
 def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
     home = tmp_path_factory.mktemp("first-hold")
-    env = child_env(
-        home,
-        OPENPENDANT_DEADMAN_SECONDS=str(BROWSER_DEADMAN),
-        OPENPENDANT_LINK__STALE_AFTER=str(BROWSER_LINK_TIMEOUT),
-        OPENPENDANT_LINK__DRIVER_TIMEOUT=str(BROWSER_LINK_TIMEOUT),
-    )
+    env = browser_env(home)
     for name in FULL_SPEED_ENV:  # the product's first speed, not the tests' full speed
         del env[name]
     proc = Runtime(home, env=env)

@@ -16,8 +16,12 @@ import pytest
 from playwright.sync_api import BrowserContext, expect
 
 from runtime.bench.harness.blocks import block, number, stack, text, workspace
-from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
-from tests.browser.conftest import BROWSER_DEADMAN, BROWSER_LINK_TIMEOUT, PageErrors, sign_in
+from runtime.bench.harness.processes import DriverProc, Runtime, wait_for
+from tests.browser.conftest import (
+    PageErrors,
+    browser_env,
+    sign_in,
+)
 
 ROOT = Path(__file__).resolve().parents[2]
 PLUGIN = ROOT / "plugins" / "conveyor"
@@ -45,14 +49,7 @@ def installed() -> Iterator[None]:
 
 
 def start_runtime(home: Path, **extra: str) -> Runtime:
-    env = child_env(
-        home,
-        OPENPENDANT_DEADMAN_SECONDS=str(BROWSER_DEADMAN),
-        OPENPENDANT_LINK__STALE_AFTER=str(BROWSER_LINK_TIMEOUT),
-        OPENPENDANT_LINK__DRIVER_TIMEOUT=str(BROWSER_LINK_TIMEOUT),
-        **extra,
-    )
-    runtime = Runtime(home, env=env)
+    runtime = Runtime(home, env=browser_env(home, **extra))
     runtime.wait_ready()
     return runtime
 

@@ -18,13 +18,12 @@ import numpy as np
 import pytest
 from playwright.sync_api import Browser, BrowserContext, Locator, Page, ViewportSize, expect
 
-from runtime.bench.harness.processes import STILL, Runtime, SimRobotProc, child_env, wait_for
+from runtime.bench.harness.processes import STILL, Runtime, SimRobotProc, wait_for
 from tests.browser.conftest import (
-    BROWSER_DEADMAN,
-    BROWSER_LINK_TIMEOUT,
     PHONE,
     TABLET,
     PageErrors,
+    browser_env,
     fits_the_screen,
     open_context,
     robot_at_rest,
@@ -100,13 +99,7 @@ def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
     process of the test's (frozen by the stale-link test)."""
     home = tmp_path_factory.mktemp("safety-bar")
     paths = [str(long_panels_plugin(home / "plugin")), os.environ.get("PYTHONPATH", "")]
-    env = child_env(
-        home,
-        OPENPENDANT_DEADMAN_SECONDS=str(BROWSER_DEADMAN),
-        OPENPENDANT_LINK__STALE_AFTER=str(BROWSER_LINK_TIMEOUT),
-        OPENPENDANT_LINK__DRIVER_TIMEOUT=str(BROWSER_LINK_TIMEOUT),
-        PYTHONPATH=os.pathsep.join(p for p in paths if p),
-    )
+    env = browser_env(home, PYTHONPATH=os.pathsep.join(p for p in paths if p))
     proc = Runtime(home, extra=["--no-sim"], env=env)
     proc.wait_ready()
     yield proc

@@ -333,24 +333,38 @@ def test_a_robot_added_inside_another_is_reported_then_mounted_elsewhere_and_jog
     expect(page.get_by_test_id("lease")).to_contain_text("Nobody has control")
 
 
-def test_the_3d_mouse_follows_the_frame_buttons_and_shows_its_axes(
-    runtime: Runtime, robot: str, phone: BrowserContext, tmp_path: Path, artifacts: Path
-) -> None:
-    """Switched on in Joints and then set to Base, a lift raises the tool (in Joints it would
-    turn joint 3); at rest the mouse says so; each axis shows live what it drives; the halt
-    banner (the mouse unplugged) stays on the screen."""
+def added_mouse(
+    runtime: Runtime, tmp_path: Path, name: str, rest: float
+) -> tuple[SpaceMouseProc, Path]:
+    """A 3D mouse whose recording lifts the cap for 0.6 s, then rests `rest` s (and stays
+    silent at rest: nothing to halt), added to the runtime as `mouse` with its pairing code;
+    and its recording (to start it again)."""
     recording = mouse_recording(
         tmp_path / "lift.jsonl",
-        [(0.6, [0, 0, -300, 0, 0, 0], 0), (0.5, [0, 0, 0, 0, 0, 0], 0)],
-        end="stuck",  # silent at rest: nothing to halt
+        [(0.6, [0, 0, -300, 0, 0, 0], 0), (rest, [0, 0, 0, 0, 0, 0], 0)],
+        end="stuck",
     )
-    mouse = SpaceMouseProc(tmp_path, "ui-mouse", recording)
+    mouse = SpaceMouseProc(tmp_path, name, recording)
     mouse.wait_ready()
     try:
         wait_for(lambda: runtime.is_detected(mouse.uuid), 10, what="mouse detected")
         paired = {"uuid": mouse.uuid, "local_name": "mouse", "pairing": mouse.secret}
         added = runtime.api("POST", "/devices", json=paired)
         assert added.status_code == 201, added.text
+    except BaseException:
+        mouse.stop()
+        raise
+    return mouse, recording
+
+
+def test_the_3d_mouse_follows_the_frame_buttons_and_shows_its_axes(
+    runtime: Runtime, robot: str, phone: BrowserContext, tmp_path: Path, artifacts: Path
+) -> None:
+    """Switched on in Joints and then set to Base, a lift raises the tool (in Joints it would
+    turn joint 3); at rest the mouse says so; each axis shows live what it drives; the halt
+    banner (the mouse unplugged) stays on the screen."""
+    mouse, _ = added_mouse(runtime, tmp_path, "ui-mouse", rest=0.5)
+    try:
         page = phone.new_page()
         page.goto(f"{runtime.url}/#/jog")
         take_control_and_enable(page)
@@ -528,18 +542,8 @@ def test_a_restarting_mouse_driver_keeps_the_3d_mouse_on_and_a_robot_restart_say
     said on the card; back, the mouse drives again (from rest, by a new deflection). The
     robot's driver restarting is a lost link: the switch goes off, and the card says why.
     Last in the module: the runtime's own robot is killed (the launcher restarts it)."""
-    recording = mouse_recording(
-        tmp_path / "lift.jsonl",
-        [(0.6, [0, 0, -300, 0, 0, 0], 0), (0.3, [0, 0, 0, 0, 0, 0], 0)],
-        end="stuck",  # silent at rest: nothing to halt
-    )
-    mouse = SpaceMouseProc(tmp_path, "restarting-mouse", recording)
-    mouse.wait_ready()
+    mouse, recording = added_mouse(runtime, tmp_path, "restarting-mouse", rest=0.3)
     try:
-        wait_for(lambda: runtime.is_detected(mouse.uuid), 10, what="mouse detected")
-        paired = {"uuid": mouse.uuid, "local_name": "mouse", "pairing": mouse.secret}
-        added = runtime.api("POST", "/devices", json=paired)
-        assert added.status_code == 201, added.text
         page = tablet.new_page()
         page.goto(f"{runtime.url}/#/jog")
         take_control_and_enable(page)
