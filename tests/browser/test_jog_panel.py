@@ -13,7 +13,7 @@ from pathlib import Path
 import httpx
 import numpy as np
 import pytest
-from playwright.sync_api import BrowserContext, Locator, expect
+from playwright.sync_api import BrowserContext, Locator, Route, expect
 
 from device_drivers.ur_rtde.emulator import control as emulator_control
 from runtime.bench.harness.processes import STILL, DriverProc, Runtime, SimRobotProc, wait_for
@@ -26,6 +26,7 @@ from tests.browser.conftest import (
     robot_joints,
 )
 from tests.browser.test_shop_floor import take_control_and_enable
+from tests.support.held_handshake import CLOSE, HeldHandshake
 from tests.support.png import decode
 
 UR_HOST = "127.0.0.8"  # the UR emulator's own loopback address (its ports are fixed)
@@ -489,3 +490,36 @@ def test_a_refused_move_to_says_why_at_the_button_held(
     assert np.abs(robot_joints(runtime) - before).max() < 1e-3
     page.get_by_test_id("control").tap()
     assert errors.errors == []
+
+
+def test_leaving_the_panel_while_its_jog_socket_connects_closes_it_cleanly(
+    runtime: Runtime, robot: str, tablet: BrowserContext
+) -> None:
+    """A CI run: a tablet whose session ended while its jog socket was still connecting
+    closed it half-way, the browser reported an error and the jog service logged a dropped
+    handshake. A socket still connecting is closed once it opens, and nothing it carries
+    reaches the page. Here the jog socket's handshake is held (the page is pointed at a
+    server that answers only when told), and the page leaves the panel meanwhile."""
+    held = HeldHandshake()
+    try:
+
+        def to_held(route: Route) -> None:
+            settings = {**route.fetch().json(), "socket_port": held.port}
+            route.fulfill(json=settings)
+
+        page = tablet.new_page()
+        errors = PageErrors(page)
+        page.route("**/api/jog/settings", to_held)
+        with page.expect_websocket(lambda ws: f":{held.port}/" in ws.url, timeout=20_000):
+            page.goto(f"{runtime.url}/#/jog")
+        held.wait_asked(timeout=10)
+        assert b"GET /jog/ws?ticket=" in held.request
+        page.get_by_test_id("nav-devices").tap()
+        expect(page.get_by_test_id("jog-row")).to_have_count(0)  # the jog panel is gone
+        assert held.answer(), "the page dropped the socket while it connected"
+        assert held.first_frame_opcode() == CLOSE  # closed once open, by the page
+        page.get_by_test_id("nav-jog").tap()
+        expect(page.get_by_test_id("jog-row")).to_have_count(6)
+        assert errors.errors == []
+    finally:
+        held.close()

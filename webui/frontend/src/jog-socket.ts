@@ -2,7 +2,7 @@ import { changeHeld } from "./activity";
 import { api } from "./api";
 import type { Words } from "./i18n/words";
 import { session } from "./session";
-import { SIGN_IN_ENDED, socketUrl } from "./socket";
+import { closeSocket, SIGN_IN_ENDED, socketUrl } from "./socket";
 
 // The jog socket: hold-to-run presses with heartbeats, releases, stops and 3D-mouse
 // bindings. The server halts the robot if heartbeats stop or this socket closes.
@@ -97,11 +97,11 @@ export class JogSocket extends EventTarget {
 
   close(): void {
     this.closed = true;
-    this.socket?.close();
+    closeSocket(this.socket);
   }
 
   send(message: object): boolean {
-    if (!this.socket || this.socket.readyState !== WebSocket.OPEN) return false;
+    if (this.closed || !this.socket || this.socket.readyState !== WebSocket.OPEN) return false;
     this.socket.send(JSON.stringify(message));
     return true;
   }

@@ -13,6 +13,16 @@ export function socketUrl(path: string, port?: number): string {
   return `${scheme}://${host}${path}`;
 }
 
+/** Closes a socket. One still connecting is closed once open instead: closing it while it
+ * connects drops its handshake half-way, which the browser reports as an error and the
+ * server logs as one. Nothing it carries reaches the page after this. */
+export function closeSocket(socket: WebSocket | null | undefined): void {
+  if (!socket) return;
+  socket.onmessage = null;
+  if (socket.readyState === WebSocket.CONNECTING) socket.onopen = () => socket.close();
+  else socket.close();
+}
+
 export function retryDelay(attempt: number): number {
   return Math.min(500 * 2 ** attempt, 2000);
 }
@@ -40,8 +50,9 @@ export class ReconnectingSocket {
     };
     socket.onmessage = (event) => this.onMessage(String(event.data));
     socket.onclose = (event) => {
-      this.socket = null;
       if (event.code === SIGN_IN_ENDED) session.lost();
+      if (this.socket !== socket) return; // stopped, and maybe started again since
+      this.socket = null;
       if (this.stopped) return;
       window.setTimeout(() => this.start(), retryDelay(this.retry++));
     };
@@ -56,7 +67,7 @@ export class ReconnectingSocket {
 
   stop(): void {
     this.stopped = true;
-    this.socket?.close();
+    closeSocket(this.socket);
     this.socket = null;
   }
 }

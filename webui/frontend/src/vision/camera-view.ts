@@ -1,6 +1,6 @@
 import { LitElement, css, html } from "lit";
 import { t } from "../i18n";
-import { SIGN_IN_ENDED, retryDelay, socketUrl } from "../socket";
+import { SIGN_IN_ENDED, closeSocket, retryDelay, socketUrl } from "../socket";
 import { session } from "../session";
 import { shared } from "../styles";
 
@@ -138,7 +138,7 @@ export class OpCameraView extends LitElement {
     this.streaming = "";
     const socket = this.socket;
     this.socket = null;
-    socket?.close();
+    closeSocket(socket);
   }
 
   private open(): void {
