@@ -22,7 +22,7 @@ def _run(args: argparse.Namespace) -> int:
         sim=False if args.no_sim else None,
     )
     setup_logging("launcher", settings.log_level, human=True)
-    return run(settings)
+    return run(settings, entry=main)
 
 
 def _service(args: argparse.Namespace) -> int:

@@ -10,7 +10,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from device_drivers.sim_robot.tracker import JointTracker, TrackerError
 from runtime.interfaces.limits import CheckedTrajectory, FloatArray
 from runtime.interfaces.robot import (
     CommandMode,
@@ -26,6 +25,7 @@ from runtime.kit.words import words
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.reference import Limits, RunningTrajectory, TrajectoryReference
 from runtime.robotics.time_scaling import TimeScaling
+from runtime.robotics.tracker import JointTracker, TrackerError
 
 CYCLE = 0.002
 STREAM_MODES = (

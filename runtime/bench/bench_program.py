@@ -22,7 +22,7 @@ from typing import Any
 import httpx
 from websockets.sync.client import ClientConnection, connect
 
-from blockly_blocks.generator import generate
+from blockly_blocks.generate import generate
 from runtime.bench.harness.blocks import block, number, stack, text, workspace
 from runtime.bench.harness.jog import Cell
 from runtime.bench.harness.processes import Runtime, wait_for

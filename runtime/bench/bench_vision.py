@@ -22,7 +22,8 @@ from runtime.imaging.markers import find_markers
 from runtime.imaging.template import find_template
 from runtime.interfaces.common import Pose
 from runtime.vision.intrinsics import IntrinsicSession
-from runtime.vision.poses import PoseRegion, flange_poses
+from runtime.vision.models import PoseRegion
+from runtime.vision.poses import flange_poses
 from runtime.vision.robot_origin import Camera, Sighting, solve_origin, tag_corners
 
 FIGURES = (

@@ -5,8 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from runtime.device_manager.leases import LeaseGranted
-from runtime.device_manager.models import AddedDevice, DeviceDetails
+from runtime.device_manager.models import AddedDevice, DeviceDetails, LeaseGranted
 
 __all__ = ["AddedDevice", "DeviceDetails", "DeviceManagerClient", "LeaseGranted", "require_token"]
 from runtime.kit.client import ServiceClient

@@ -11,9 +11,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from pydantic import BaseModel, Field
-
-from runtime.interfaces.common import PlainText, Strict
+from runtime.device_manager.models import LeaseGranted, LeaseInfo
 from runtime.kit.constant_time import same_secret
 from runtime.kit.errors import Conflict, OpenPendantError
 from runtime.kit.words import words
@@ -26,25 +24,6 @@ LEASE_SECONDS = 15.0
 class LeaseRefused(OpenPendantError):
     status = 409
     code = "lease_held"
-
-
-class LeaseRequest(Strict):
-    holder: PlainText = Field(min_length=1, max_length=64)
-
-
-class LeaseGranted(BaseModel):
-    """Returned to the holder only: the token is what proves control."""
-
-    device: str
-    holder: str
-    token: str
-    expires: float
-
-
-class LeaseInfo(BaseModel):
-    device: str
-    holder: str | None = None
-    expires: float | None = None
 
 
 @dataclass

@@ -17,16 +17,14 @@ import contextlib
 import json
 import logging
 from collections import deque
-from typing import TYPE_CHECKING, Any
+from collections.abc import Mapping
+from typing import Any, Protocol
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from runtime.device_manager.claims import MAX_CLAIM, Claims
 from runtime.device_manager.connection import DeviceConnection
 from runtime.kit.errors import NotFound, OpenPendantError
-
-if TYPE_CHECKING:
-    from runtime.device_manager.registry import DeviceRegistry
 
 log = logging.getLogger(__name__)
 
@@ -80,8 +78,17 @@ class LinkClient:
                 await self.ws.send_text("\n".join(lines))
 
 
+class Devices(Protocol):
+    """What the link server reads of the registry that owns it."""
+
+    @property
+    def connections(self) -> Mapping[str, DeviceConnection]: ...
+
+    def devices_message(self) -> str: ...
+
+
 class LinkServer:
-    def __init__(self, registry: DeviceRegistry) -> None:
+    def __init__(self, registry: Devices) -> None:
         self.registry = registry
         self.clients: set[LinkClient] = set()
         # device -> (client, generation): the last to command it, halted if it goes away.

@@ -7,7 +7,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field, field_validator, model_validator
 
-from runtime.interfaces.common import Strict
+from runtime.interfaces.common import PlainText, Strict
 
 LOCAL_NAME_PATTERN = r"^[a-z][a-z0-9_]{0,31}$"
 
@@ -106,3 +106,22 @@ class AddDeviceRequest(Strict):
         if (self.uuid is None) == (self.url is None):
             raise ValueError("give either a uuid (of a detected device) or a url")
         return self
+
+
+class LeaseRequest(Strict):
+    holder: PlainText = Field(min_length=1, max_length=64)
+
+
+class LeaseGranted(BaseModel):
+    """Returned to the holder only: the token is what proves control."""
+
+    device: str
+    holder: str
+    token: str
+    expires: float
+
+
+class LeaseInfo(BaseModel):
+    device: str
+    holder: str | None = None
+    expires: float | None = None

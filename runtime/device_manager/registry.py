@@ -23,7 +23,7 @@ from runtime.device_manager.connection import (
     has_session,
     short,
 )
-from runtime.device_manager.leases import LeaseBook, LeaseGranted, LeaseInfo
+from runtime.device_manager.leases import LeaseBook
 from runtime.device_manager.links import LinkServer
 from runtime.device_manager.models import (
     AddDeviceRequest,
@@ -31,6 +31,8 @@ from runtime.device_manager.models import (
     AddressClaim,
     DetectedDevice,
     DeviceDetails,
+    LeaseGranted,
+    LeaseInfo,
 )
 from runtime.device_manager.tools import stored_tool, tool_variable
 from runtime.interfaces.robot import RobotInfo, ToolSetup

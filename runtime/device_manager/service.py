@@ -13,12 +13,14 @@ from fastapi.responses import JSONResponse
 from runtime.device_manager.calls import CallRequest, call_device, stop_all
 from runtime.device_manager.cell import cell_parts
 from runtime.device_manager.frames import relay_frames
-from runtime.device_manager.leases import LeaseGranted, LeaseInfo, LeaseRequest
 from runtime.device_manager.models import (
     AddDeviceRequest,
     AddedDevice,
     DetectedDevice,
     DeviceDetails,
+    LeaseGranted,
+    LeaseInfo,
+    LeaseRequest,
     RepointRequest,
 )
 from runtime.device_manager.registry import DeviceRegistry

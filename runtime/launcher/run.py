@@ -42,14 +42,13 @@ class StartupFailed(RuntimeError):
 SPAWN_ENV = "OPENPENDANT_SPAWN"
 
 
-def forking() -> Main | None:
-    """How children start: forked from this process (its imports shared copy-on-write), or
-    with OPENPENDANT_SPAWN=exec each as a fresh interpreter."""
+def forking(entry: Main) -> Main | None:
+    """How children start: forked from this process (its imports shared copy-on-write),
+    each running `entry` (the `openpendant` command's), or with OPENPENDANT_SPAWN=exec each
+    as a fresh interpreter."""
     if os.environ.get(SPAWN_ENV, "fork") == "exec":
         return None
-    from runtime.cli import main
-
-    return main
+    return entry
 
 
 def preload(settings: RuntimeSettings) -> None:
@@ -192,7 +191,9 @@ def wait_healthy(urls: dict[str, str], supervisor: Supervisor, timeout: float) -
             time.sleep(0.05)
 
 
-def run(settings: RuntimeSettings) -> int:
+def run(settings: RuntimeSettings, entry: Main) -> int:
+    """`entry`: what a forked child runs with its command line (the `openpendant` command's
+    main: passed down, so that the launcher does not import the command above it)."""
     started = time.monotonic()
     # Small matrices only: one thread each (no BLAS or OpenMP pools per process, and none
     # alive in this process when it forks).
@@ -237,7 +238,7 @@ def run(settings: RuntimeSettings) -> int:
         }
     )
 
-    main = forking()
+    main = forking(entry)
     if main is not None:
         preload(settings)
     supervisor = Supervisor(settings.restart_healthy_after, settings.restart_backoff)

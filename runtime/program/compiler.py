@@ -21,7 +21,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from blockly_blocks.generator import Generated, generate
+from blockly_blocks.generate import generate
+from blockly_blocks.generator import Generated
 from blockly_blocks.workspace import WorkspaceError, allow_deep_json, dump_json, parse_json
 from runtime.interfaces.variables import StoredProgram
 from runtime.kit.errors import InvalidValue, OpenPendantError

@@ -90,6 +90,15 @@ def mesh(name: str, path: Path, scale: tuple[float, float, float], local: pin.SE
     return Shape(name, geometry, local, radius, center, drawing, hull=(vertices, faces))
 
 
+@dataclass
+class BodyPart:
+    """A shape of a robot's body, and where it is fixed on the robot."""
+
+    shape: Shape
+    frame: int  # model frame the shape is fixed to
+    joint: int  # model joint that moves it (0: fixed to the base)
+
+
 @dataclass(frozen=True)
 class Proximity:
     """The nearest points of two bodies (world frame) and their signed distance."""

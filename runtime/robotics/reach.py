@@ -6,15 +6,11 @@ carries the axis), and bounded through the joint offsets of the kinematic chain 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import pinocchio as pin
 
 from runtime.interfaces.limits import FloatArray
-
-if TYPE_CHECKING:
-    from runtime.robotics.robot_body import BodyPart
+from runtime.robotics.geometry import BodyPart
 
 Axis = tuple[FloatArray, FloatArray]  # a point and a unit direction
 

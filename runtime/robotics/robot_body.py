@@ -4,7 +4,6 @@ it carries on its TCP (tool, held part), placed for any joint configuration."""
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
 
@@ -15,16 +14,9 @@ from runtime.interfaces.limits import FloatArray
 from runtime.kit.errors import InvalidValue
 from runtime.paths import resolve_package_uri
 from runtime.robotics import geometry
-from runtime.robotics.geometry import Shape
+from runtime.robotics.geometry import BodyPart, Shape
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.reach import Reach
-
-
-@dataclass
-class BodyPart:
-    shape: Shape
-    frame: int  # model frame the shape is fixed to
-    joint: int  # model joint that moves it (0: fixed to the base)
 
 
 def _origin(element: ET.Element | None) -> pin.SE3:

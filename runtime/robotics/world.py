@@ -17,9 +17,9 @@ from runtime.kit.errors import NotFound
 from runtime.paths import resolve_package_uri
 from runtime.robotics import geometry
 from runtime.robotics.broadphase import FixedShapes, sphere_gaps
-from runtime.robotics.geometry import Proximity, Shape, proximity
+from runtime.robotics.geometry import BodyPart, Proximity, Shape, proximity
 from runtime.robotics.kinematics import Kinematics, pose_to_se3
-from runtime.robotics.robot_body import BodyPart, RobotBody
+from runtime.robotics.robot_body import RobotBody
 
 IntArray = npt.NDArray[np.intp]
 

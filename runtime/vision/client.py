@@ -8,7 +8,7 @@ from urllib.parse import quote
 from runtime.interfaces.detector import DetectRequest
 from runtime.kit.client import ServiceClient
 from runtime.services import urls_from_env
-from runtime.vision.detectors import LocatedDetections
+from runtime.vision.models import LocatedDetections
 
 DETECT_TIMEOUT = 30.0  # s: a frame, a detection and the poses
 

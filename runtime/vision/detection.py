@@ -17,11 +17,10 @@ from runtime.vision.calibrations import Calibrations
 from runtime.vision.detectors import (
     ArucoDetector,
     DetectorConfig,
-    Located,
-    LocatedDetections,
     TemplateTeaching,
     detector_variable,
 )
+from runtime.vision.models import Located, LocatedDetections
 from runtime.vision.neural_detector import NeuralDetector
 from runtime.vision.template_detector import TemplateDetector
 from runtime.vision.transforms import matrix_of, pose_of

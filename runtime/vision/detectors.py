@@ -13,7 +13,7 @@ from typing import Literal
 
 import cv2
 import numpy as np
-from pydantic import BaseModel, Field, field_validator, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from runtime.imaging.boards import Dictionary
 from runtime.imaging.markers import find_markers
@@ -149,24 +149,3 @@ class ArucoDetector(DetectorInterface):
         matrix[:3, :3] = cv2.Rodrigues(rvec)[0]
         matrix[:3, 3] = tvec.ravel()
         return pose_of(matrix)
-
-
-class Located(Detection):
-    """A detection with its pose in the world, where the camera is placed in it."""
-
-    world_pose: Pose | None = None
-
-
-class LocatedDetections(BaseModel):
-    """What one image showed; `ts` is when it was taken and `age` how long before the answer
-    (s): a program acting on a detection knows how old it is."""
-
-    ts: float
-    age: float
-    detector: str
-    camera: str
-    width: int
-    height: int
-    calibrated: bool  # poses in the camera frame
-    placed: bool  # and in the world
-    detections: list[Located] = Field(default_factory=list)

@@ -5,14 +5,29 @@ from __future__ import annotations
 
 from typing import Literal
 
+import numpy as np
 from pydantic import BaseModel, Field
 
 from runtime.imaging.boards import BoardSpec, Dictionary
 from runtime.interfaces.camera import Intrinsics
-from runtime.interfaces.common import Pose, Strict
-from runtime.vision.poses import PoseRegion
+from runtime.interfaces.common import Pose, Strict, Vector3
+from runtime.interfaces.detector import Detection
 
 NAME = r"^[a-z][a-z0-9_]{0,31}$"  # a device's local name
+
+
+class PoseRegion(Strict):
+    """A box in the robot's base frame (centre and size, m) and how far from facing the
+    camera the tag may turn (degrees)."""
+
+    centre: Vector3 = Field(default_factory=lambda: [0.4, 0.0, 0.4])
+    size: Vector3 = Field(default_factory=lambda: [0.3, 0.3, 0.2])
+    tilt: float = Field(default=30.0, ge=5.0, le=60.0)
+    spin: float = Field(default=60.0, ge=0.0, le=180.0)
+
+    def inside(self, point: np.ndarray) -> bool:
+        lower = np.array(self.centre) - np.array(self.size) / 2
+        return bool(np.all(point >= lower - 1e-9) and np.all(point <= lower + self.size))
 
 
 def calibration_variable(camera: str) -> str:
@@ -176,3 +191,24 @@ class RobotOriginResult(BaseModel):
     tag_on_flange: Pose
     rms_px: float
     poses: list[OriginPose]
+
+
+class Located(Detection):
+    """A detection with its pose in the world, where the camera is placed in it."""
+
+    world_pose: Pose | None = None
+
+
+class LocatedDetections(BaseModel):
+    """What one image showed; `ts` is when it was taken and `age` how long before the answer
+    (s): a program acting on a detection knows how old it is."""
+
+    ts: float
+    age: float
+    detector: str
+    camera: str
+    width: int
+    height: int
+    calibrated: bool  # poses in the camera frame
+    placed: bool  # and in the world
+    detections: list[Located] = Field(default_factory=list)

@@ -5,24 +5,9 @@ way within a range, and spun about its axis: the rotations a hand-eye solve need
 from __future__ import annotations
 
 import numpy as np
-from pydantic import Field
 from scipy.spatial.transform import Rotation
 
-from runtime.interfaces.common import Strict, Vector3
-
-
-class PoseRegion(Strict):
-    """A box in the robot's base frame (centre and size, m) and how far from facing the
-    camera the tag may turn (degrees)."""
-
-    centre: Vector3 = Field(default_factory=lambda: [0.4, 0.0, 0.4])
-    size: Vector3 = Field(default_factory=lambda: [0.3, 0.3, 0.2])
-    tilt: float = Field(default=30.0, ge=5.0, le=60.0)
-    spin: float = Field(default=60.0, ge=0.0, le=180.0)
-
-    def inside(self, point: np.ndarray) -> bool:
-        lower = np.array(self.centre) - np.array(self.size) / 2
-        return bool(np.all(point >= lower - 1e-9) and np.all(point <= lower + self.size))
+from runtime.vision.models import PoseRegion
 
 
 def _halton(index: int, base: int) -> float:

@@ -21,7 +21,7 @@ from runtime.variable_storage.client import StorageClient
 from runtime.vision.calibration_file import MAX_FILE, from_yaml, to_yaml
 from runtime.vision.calibrations import Calibrations
 from runtime.vision.detection import Detection
-from runtime.vision.detectors import DetectorConfig, LocatedDetections, TemplateTeaching
+from runtime.vision.detectors import DetectorConfig, TemplateTeaching
 from runtime.vision.model_files import ModelFiles
 from runtime.vision.models import (
     CameraCalibration,
@@ -29,6 +29,7 @@ from runtime.vision.models import (
     FrameReport,
     IntrinsicSessionView,
     IntrinsicStart,
+    LocatedDetections,
     OperationStatus,
     RobotOriginRequest,
     RobotOriginResult,

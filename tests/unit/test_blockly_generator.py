@@ -15,7 +15,7 @@ from typing import Any
 import pytest
 
 from blockly_blocks.catalog import definition, toolbox_blocks
-from blockly_blocks.generator import generate, known_types
+from blockly_blocks.generate import generate, known_types
 from blockly_blocks.workspace import MAX_BLOCKS, MAX_NESTING, WorkspaceError
 from runtime.bench.harness import blocks as wb
 from sandbox.policy import compile_program

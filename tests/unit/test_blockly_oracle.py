@@ -23,7 +23,7 @@ from typing import Any
 import pytest
 
 from blockly_blocks.catalog import definition, toolbox_blocks
-from blockly_blocks.generator import generate
+from blockly_blocks.generate import generate
 from blockly_blocks.workspace import WorkspaceError
 from sandbox.guards import SandboxError
 from sandbox.library.blocks import math_is

@@ -1,13 +1,14 @@
 """The layers of DESIGN.md §1, read from the imports of every module: the robotics core and
-the interfaces import no service and no web framework, and a service reaches another service
-only through that service's `client` module."""
+the interfaces import no service and no web framework, a service reaches another service
+only through that service's `client` module, no module imports one of a layer above its own,
+and no module imports itself back through others (no cycles, type-only imports included)."""
 
 from __future__ import annotations
 
 import ast
 import subprocess
 import sys
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 
 from runtime.services import services
@@ -118,3 +119,182 @@ def test_the_robotics_core_loads_no_web_framework_or_network_library_even_indire
     banned = (*WEB, "zeroconf", "pydantic_settings", *SERVICE_PACKAGES)
     found = [m for m in loaded if any(m == b or m.startswith(b + ".") for b in banned)]
     assert found == []
+
+
+# The layers, lowest first: each module imports only from its own layer and those below.
+FOUNDATION, CORE, CLIENTS, SERVICES, TOP = range(5)
+LAYERS = {
+    # What everything stands on: the service kit, sign-in, where services are, the plugin API.
+    "runtime": FOUNDATION,  # the package itself (its version)
+    "runtime.kit": FOUNDATION,
+    "runtime.auth": FOUNDATION,
+    "runtime.services": FOUNDATION,
+    "plugins": FOUNDATION,
+    "plugins.api": FOUNDATION,
+    "plugins.registry": FOUNDATION,
+    # The interfaces and the robotics core.
+    "runtime.interfaces": CORE,
+    "runtime.robotics": CORE,
+    "runtime.imaging": CORE,
+    "runtime.paths": CORE,
+    # Typed clients and links (a service's `client` and `models` too), the driver kit and the
+    # drivers, the sandbox and the blocks, the cell model the services share.
+    "runtime.links": CLIENTS,
+    "runtime.clients": CLIENTS,
+    "runtime.cell": CLIENTS,
+    "runtime.drivers": CLIENTS,
+    "device_drivers": CLIENTS,
+    "sandbox": CLIENTS,
+    "blockly_blocks": CLIENTS,
+    # Above everything: the gateway, the launcher and command, the built-ins' registrations
+    # (plugins: nothing imports them) and the example plugin.
+    "webui": TOP,
+    "runtime.launcher": TOP,
+    "runtime.cli": TOP,
+    "runtime.plugin": TOP,
+    "device_drivers.plugin": TOP,
+    "blockly_blocks.plugin": TOP,
+    "plugins.conveyor": TOP,
+}
+
+
+def layer(module: str) -> int | None:
+    service = service_of(module)
+    if service is not None:
+        # Its client and the models on its wire are what others use of a service.
+        wire = (f"{service}.client", f"{service}.models")
+        return CLIENTS if module in wire else SERVICES
+    prefixes = [p for p in LAYERS if module == p or module.startswith(p + ".")]
+    return LAYERS[max(prefixes, key=len)] if prefixes else None
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Each module and the project's modules it imports."""
+    found = dict(every_module())
+    return {
+        module: {name for _, name in imports(path, module) if name in found and name != module}
+        for module, path in found.items()
+    }
+
+
+def upward(graph: Mapping[str, Iterable[str]]) -> list[str]:
+    return sorted(
+        f"{module} (layer {layer(module)}) imports {name} (layer {layer(name)})"
+        for module, names in graph.items()
+        for name in names
+        if (layer(name) or 0) > (layer(module) or 0)
+    )
+
+
+def cycles(graph: Mapping[str, Iterable[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan's algorithm,
+    iterative: no recursion limit to meet)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(graph[root]))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, edges = work[-1]
+            step = next(edges, None)
+            if step is not None:
+                if step not in index:
+                    index[step] = low[step] = len(index)
+                    stack.append(step)
+                    on_stack.add(step)
+                    work.append((step, iter(graph.get(step, ()))))
+                elif step in on_stack:
+                    low[node] = min(low[node], index[step])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.append(sorted(component))
+    return found
+
+
+def test_every_module_has_a_layer() -> None:
+    assert [m for m, _ in every_module() if layer(m) is None] == []
+
+
+def test_no_module_imports_from_a_layer_above_its_own() -> None:
+    assert upward(import_graph()) == []
+
+
+def test_no_module_imports_itself_back() -> None:
+    assert cycles(import_graph()) == []
+
+
+def test_the_layer_and_cycle_checks_catch_what_they_are_for() -> None:
+    """Fed a graph that breaks each rule: a core module importing a service, a driver
+    importing the launcher, two blocks modules importing each other (as generator.py and
+    standard.py did), and a longer loop."""
+    graph = {
+        "runtime.robotics.kinematics": {"runtime.motion.service"},
+        "device_drivers.sim_robot.core": {"runtime.launcher.run", "runtime.interfaces.robot"},
+        "runtime.motion.service": {"runtime.jog.client", "runtime.interfaces.robot"},
+        "blockly_blocks.generator": {"blockly_blocks.standard"},
+        "blockly_blocks.standard": {"blockly_blocks.generator"},
+        "sandbox.a": {"sandbox.b"},
+        "sandbox.b": {"sandbox.c"},
+        "sandbox.c": {"sandbox.a"},
+    }
+    assert upward(graph) == [
+        "device_drivers.sim_robot.core (layer 2) imports runtime.launcher.run (layer 4)",
+        "runtime.robotics.kinematics (layer 1) imports runtime.motion.service (layer 3)",
+    ]
+    assert sorted(cycles(graph)) == [
+        ["blockly_blocks.generator", "blockly_blocks.standard"],
+        ["sandbox.a", "sandbox.b", "sandbox.c"],
+    ]
+
+
+# The simulated cell (its parts and frames) that every simulator shares: not a driver.
+SHARED_BY_DRIVERS = "device_drivers.sim_cell"
+
+
+def drivers_borrowing(graph: Mapping[str, Iterable[str]]) -> list[str]:
+    """A driver's imports of another driver's package (the UR emulator's arm controller was
+    the simulated robot's tracker; what several drivers need is in the robotics core or the
+    driver kit, runtime.drivers)."""
+
+    def driver(module: str) -> str | None:
+        parts = module.split(".")
+        if parts[0] != "device_drivers" or len(parts) < 2 or parts[1] == "plugin":
+            return None
+        return ".".join(parts[:2])
+
+    return sorted(
+        f"{module} imports {name}"
+        for module, names in graph.items()
+        for name in names
+        if driver(module) is not None
+        and driver(name) not in (None, driver(module), SHARED_BY_DRIVERS)
+    )
+
+
+def test_a_driver_takes_nothing_from_another_driver() -> None:
+    assert drivers_borrowing(import_graph()) == []
+    fed = {
+        "device_drivers.ur_rtde.emulator.controller": {"device_drivers.sim_robot.tracker"},
+        "device_drivers.sim_camera.driver": {"device_drivers.sim_cell.link"},
+    }
+    assert drivers_borrowing(fed) == [
+        "device_drivers.ur_rtde.emulator.controller imports device_drivers.sim_robot.tracker"
+    ]

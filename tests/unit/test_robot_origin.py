@@ -11,7 +11,8 @@ from scipy.spatial.transform import Rotation
 
 from device_drivers.sim_camera.entry import SimCameraOptions, camera_model
 from runtime.kit.errors import InvalidValue
-from runtime.vision.poses import PoseRegion, flange_poses
+from runtime.vision.models import PoseRegion
+from runtime.vision.poses import flange_poses
 from runtime.vision.robot_origin import Camera, Sighting, solve_origin, tag_corners
 
 MODEL = camera_model(SimCameraOptions())

@@ -18,7 +18,8 @@ import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
-from blockly_blocks.generator import INPUT_WORDS, generate
+from blockly_blocks.generate import generate
+from blockly_blocks.generator import INPUT_WORDS
 from blockly_blocks.workspace import WorkspaceError
 from runtime.auth.audit import AuditLog
 from runtime.auth.roles import Role

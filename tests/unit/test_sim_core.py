@@ -10,7 +10,6 @@ import pytest
 
 from device_drivers.sim_robot.core import CYCLE, SimCore
 from device_drivers.sim_robot.driver import SimRobot
-from device_drivers.sim_robot.tracker import JointTracker
 from runtime.interfaces.device import DeviceIdentity
 from runtime.interfaces.limits import FloatArray, JointLimitChecker
 from runtime.interfaces.robot import (
@@ -26,6 +25,7 @@ from runtime.interfaces.robot import (
 from runtime.kit.errors import InvalidValue, RobotError
 from runtime.robotics.kinematics import Kinematics
 from runtime.robotics.robot_info import load_robot_info
+from runtime.robotics.tracker import JointTracker
 
 
 @pytest.fixture(scope="module")

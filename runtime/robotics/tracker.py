@@ -1,5 +1,7 @@
 """Online trajectory generation with ruckig: every cycle the setpoint moves one step toward
-the current target without exceeding the joint velocity, acceleration and jerk limits."""
+the current target without exceeding the joint velocity, acceleration and jerk limits. The
+joint-level controller of every simulated arm (the simulated robot, the UR emulator): in
+the robotics core, so that no driver takes it from another."""
 
 from __future__ import annotations
 
