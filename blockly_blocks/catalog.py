@@ -13,8 +13,8 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from plugins.api import Block
-from plugins.registry import registry
+from openpendant.plugins.api import Block
+from openpendant.plugins.registry import registry
 
 HERE = Path(__file__).parent
 TOOLBOX = HERE / "toolbox.json"

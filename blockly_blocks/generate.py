@@ -9,11 +9,11 @@ import ast
 from functools import cache
 from typing import Any
 
-from blockly_blocks import standard  # noqa: F401  (registers Blockly's standard blocks)
-from blockly_blocks.generator import STATEMENTS, VALUES, Generated, Generator
-from blockly_blocks.workspace import Reader, parse_json
-from plugins.api import resolve
-from plugins.registry import registry
+from openpendant.blockly_blocks import standard  # noqa: F401  (registers Blockly's standard blocks)
+from openpendant.blockly_blocks.generator import STATEMENTS, VALUES, Generated, Generator
+from openpendant.blockly_blocks.workspace import Reader, parse_json
+from openpendant.plugins.api import resolve
+from openpendant.plugins.registry import registry
 
 
 def known_types() -> frozenset[str]:

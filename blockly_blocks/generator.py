@@ -12,9 +12,9 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
-from blockly_blocks.names import NameTable
-from blockly_blocks.workspace import Block, Workspace, WorkspaceError
-from runtime.kit.words import Words, words
+from openpendant.blockly_blocks.names import NameTable
+from openpendant.blockly_blocks.workspace import Block, Workspace, WorkspaceError
+from openpendant.runtime.kit.words import Words, words
 
 INDENT = "    "
 StatementGen = Callable[[Block, "Generator"], list[str]]

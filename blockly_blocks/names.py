@@ -7,10 +7,10 @@ from __future__ import annotations
 import keyword
 import re
 
-from plugins.registry import registry
-from sandbox.builtins import SAFE_NAMES
-from sandbox.library import REGISTRY
-from sandbox.policy import FORBIDDEN_NAMES
+from openpendant.plugins.registry import registry
+from openpendant.sandbox.builtins import SAFE_NAMES
+from openpendant.sandbox.library import REGISTRY
+from openpendant.sandbox.policy import FORBIDDEN_NAMES
 
 # The sandbox functions: the library's and every plugin block's.
 FUNCTIONS = {*REGISTRY, *(name for b in registry().blocks.values() for name in b.functions)}

@@ -9,7 +9,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from plugins.api import Block, Plugin
+from openpendant.plugins.api import Block, Plugin
 
 DEFINITIONS = Path(__file__).parent / "definitions"
 DECLARATION = ("type", "toolbox", "generator", "functions", "handlers")

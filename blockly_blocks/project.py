@@ -4,10 +4,10 @@ functions."""
 
 from __future__ import annotations
 
-from blockly_blocks.catalog import static_options
-from blockly_blocks.generator import Generator, block_kind, py_string
-from blockly_blocks.workspace import Block, WorkspaceError
-from runtime.kit.words import words
+from openpendant.blockly_blocks.catalog import static_options
+from openpendant.blockly_blocks.generator import Generator, block_kind, py_string
+from openpendant.blockly_blocks.workspace import Block, WorkspaceError
+from openpendant.runtime.kit.words import words
 
 MAX_NAME = 128
 

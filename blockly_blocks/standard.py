@@ -3,7 +3,7 @@ functions, with Blockly's meaning (1-based positions, degrees for trigonometry).
 
 from __future__ import annotations
 
-from blockly_blocks.generator import (
+from openpendant.blockly_blocks.generator import (
     DUAL,
     Generator,
     indent,
@@ -11,8 +11,8 @@ from blockly_blocks.generator import (
     statement,
     value,
 )
-from blockly_blocks.workspace import Block, WorkspaceError
-from runtime.kit.words import words
+from openpendant.blockly_blocks.workspace import Block, WorkspaceError
+from openpendant.runtime.kit.words import words
 
 MAX_ITEMS = 500
 

@@ -3,9 +3,9 @@ detection with a marker id or class, its grip pose, a pose above it, how many th
 
 from __future__ import annotations
 
-from blockly_blocks.generator import Generator, py_string
-from blockly_blocks.project import _choice
-from blockly_blocks.workspace import Block
+from openpendant.blockly_blocks.generator import Generator, py_string
+from openpendant.blockly_blocks.project import _choice
+from openpendant.blockly_blocks.workspace import Block
 
 
 def vision_detect(block: Block, g: Generator) -> str:

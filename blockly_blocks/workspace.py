@@ -10,7 +10,7 @@ import sys
 from dataclasses import dataclass, field
 from typing import Any
 
-from runtime.kit.words import Words, words
+from openpendant.runtime.kit.words import Words, words
 
 MAX_WORKSPACE_BYTES = 4 * 1024 * 1024
 MAX_BLOCKS = 5000

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from functools import cache
 from typing import Any
 
-from plugins.api import (
+from openpendant.plugins.api import (
     Block,
     Category,
     DeviceKind,

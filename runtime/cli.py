@@ -6,13 +6,13 @@ import argparse
 import sys
 from pathlib import Path
 
-from runtime import __version__
+from openpendant.runtime import __version__
 
 
 def _run(args: argparse.Namespace) -> int:
-    from runtime.kit.logs import setup_logging
-    from runtime.kit.settings import load_settings
-    from runtime.launcher.run import run
+    from openpendant.runtime.kit.logs import setup_logging
+    from openpendant.runtime.kit.settings import load_settings
+    from openpendant.runtime.launcher.run import run
 
     settings = load_settings(
         args.config,
@@ -28,8 +28,8 @@ def _run(args: argparse.Namespace) -> int:
 def _service(args: argparse.Namespace) -> int:
     import sys
 
-    from runtime.kit.settings import settings_from_env
-    from runtime.services import all_services, run_service
+    from openpendant.runtime.kit.settings import settings_from_env
+    from openpendant.runtime.services import all_services, run_service
 
     if args.name not in all_services():
         known = ", ".join(sorted(all_services()))
@@ -52,21 +52,21 @@ def _service(args: argparse.Namespace) -> int:
 
 
 def _driver(name: str, rest: list[str]) -> int:
-    from runtime.drivers.run import run_driver
+    from openpendant.runtime.drivers.run import run_driver
 
     return run_driver(name, rest)
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from runtime.bench.runner import main
+    from openpendant.runtime.bench.runner import main
 
     return main(only=args.only, json_path=args.json)
 
 
 def _token(args: argparse.Namespace) -> int:
-    from runtime.auth.setup import create_token
-    from runtime.kit.errors import OpenPendantError
-    from runtime.kit.settings import load_settings
+    from openpendant.runtime.auth.setup import create_token
+    from openpendant.runtime.kit.errors import OpenPendantError
+    from openpendant.runtime.kit.settings import load_settings
 
     data_dir = args.data_dir or load_settings(args.config).data_dir
     try:
@@ -79,7 +79,7 @@ def _token(args: argparse.Namespace) -> int:
 
 def _drivers(rest: list[str]) -> int:
     if not rest or rest[0].startswith("-"):
-        from plugins.registry import registry
+        from openpendant.plugins.registry import registry
 
         print("openpendant driver NAME [--help | options]; installed drivers:")
         for name, spec in sorted(registry().drivers.items()):

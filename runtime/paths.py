@@ -8,9 +8,9 @@ import sysconfig
 from functools import cache
 from pathlib import Path
 
-import deploy
-from runtime.kit.errors import NotFound
-from runtime.robotics.dh_urdf import GENERATED_PACKAGE, generated_dir
+from openpendant import deploy
+from openpendant.runtime.kit.errors import NotFound
+from openpendant.runtime.robotics.dh_urdf import GENERATED_PACKAGE, generated_dir
 
 # Package data (deploy/robots), found the same in a source checkout and an installed runtime.
 DEPLOY_DIR = Path(deploy.__file__).resolve().parent

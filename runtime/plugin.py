@@ -3,11 +3,11 @@ standard interfaces, the services, and the built-in variable types."""
 
 from __future__ import annotations
 
-from plugins.api import DeviceKind, Plugin, Service, VariableType
+from openpendant.plugins.api import DeviceKind, Plugin, Service, VariableType
 
-IF = "runtime.interfaces"
-C = "runtime.clients"
-T = "runtime.variable_storage.types"
+IF = "openpendant.runtime.interfaces"
+C = "openpendant.runtime.clients"
+T = "openpendant.runtime.variable_storage.types"
 
 PLUGIN = Plugin(
     name="core",
@@ -20,7 +20,7 @@ PLUGIN = Plugin(
             f"{C}.robot:RobotClient",
             "an industrial robot arm",
             session=True,
-            routes="runtime.drivers.robot_routes:command_router",
+            routes="openpendant.runtime.drivers.robot_routes:command_router",
         ),
         DeviceKind(
             "input",
@@ -35,7 +35,7 @@ PLUGIN = Plugin(
             f"{IF}.camera:CameraState",
             f"{C}.kinds:CameraClient",
             "a camera",
-            routes="runtime.drivers.camera_routes:frames_router",
+            routes="openpendant.runtime.drivers.camera_routes:frames_router",
         ),
         DeviceKind(
             "detector",
@@ -60,12 +60,20 @@ PLUGIN = Plugin(
         ),
     ),
     services=(
-        Service("variable_storage", "runtime.variable_storage.service:build_app", ("variables",)),
-        Service("device_manager", "runtime.device_manager.service:build_app", ("devices",)),
-        Service("jog", "runtime.jog.service:build_app", ("jog",), public_paths=("/jog/ws",)),
-        Service("motion", "runtime.motion.service:build_app", ("motion",)),
-        Service("program", "runtime.program.service:build_app", ("programs",)),
-        Service("vision", "runtime.vision.service:build_app", ("vision",)),
+        Service(
+            "variable_storage",
+            "openpendant.runtime.variable_storage.service:build_app",
+            ("variables",),
+        ),
+        Service(
+            "device_manager", "openpendant.runtime.device_manager.service:build_app", ("devices",)
+        ),
+        Service(
+            "jog", "openpendant.runtime.jog.service:build_app", ("jog",), public_paths=("/jog/ws",)
+        ),
+        Service("motion", "openpendant.runtime.motion.service:build_app", ("motion",)),
+        Service("program", "openpendant.runtime.program.service:build_app", ("programs",)),
+        Service("vision", "openpendant.runtime.vision.service:build_app", ("vision",)),
     ),
     variable_types=(
         VariableType("number", "a finite number", f"{T}:number"),
@@ -103,17 +111,17 @@ PLUGIN = Plugin(
         VariableType(
             "camera_calibration",
             "a camera's intrinsics as calibrated, with their errors",
-            "runtime.vision.models:CameraCalibration",
+            "openpendant.runtime.vision.models:CameraCalibration",
         ),
         VariableType(
             "calibration_board",
             "a calibration board as printed: ChArUco or chessboard, squares and sizes",
-            "runtime.imaging.boards:BoardSpec",
+            "openpendant.runtime.imaging.boards:BoardSpec",
         ),
         VariableType(
             "detector",
             "how a detector finds things, through which camera",
-            "runtime.vision.detectors:DetectorConfig",
+            "openpendant.runtime.vision.detectors:DetectorConfig",
         ),
         VariableType(
             "program",

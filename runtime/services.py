@@ -15,24 +15,24 @@ from fastapi import FastAPI
 from starlette.responses import PlainTextResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from plugins.api import Service
-from plugins.registry import registry
-from runtime.auth.audit import AUDIT_FILE, AuditLog
-from runtime.auth.roles import Role
-from runtime.auth.setup import sign_ins
-from runtime.kit.logs import setup_logging
-from runtime.kit.serve import listening_socket, run_app
-from runtime.kit.service_guard import InternalOnly, TicketRequired
-from runtime.kit.settings import RuntimeSettings, settings_from_env
-from runtime.kit.uploads import UPLOADS
-from runtime.kit.web_guard import WebGuard, WebPolicy
+from openpendant.plugins.api import Service
+from openpendant.plugins.registry import registry
+from openpendant.runtime.auth.audit import AUDIT_FILE, AuditLog
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.setup import sign_ins
+from openpendant.runtime.kit.logs import setup_logging
+from openpendant.runtime.kit.serve import listening_socket, run_app
+from openpendant.runtime.kit.service_guard import InternalOnly, TicketRequired
+from openpendant.runtime.kit.settings import RuntimeSettings, settings_from_env
+from openpendant.runtime.kit.uploads import UPLOADS
+from openpendant.runtime.kit.web_guard import WebGuard, WebPolicy
 
 URLS_ENV = "OPENPENDANT_SERVICE_URLS"
 
 AppFactory = Callable[[RuntimeSettings, dict[str, str]], FastAPI]
 
 
-WEBUI = Service("webui", "webui.server:build_app")
+WEBUI = Service("webui", "openpendant.webui.server:build_app")
 
 
 def services() -> tuple[Service, ...]:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import builtins
 from typing import Any
 
-from sandbox.guards import guarded_pow
+from openpendant.sandbox.guards import guarded_pow
 
 SAFE_NAMES = [
     "None",

@@ -21,9 +21,9 @@ from enum import StrEnum
 from functools import cache
 from typing import Any, Protocol
 
-from plugins.registry import registry
-from runtime.kit.words import Words, words, words_of
-from sandbox.protocol import (
+from openpendant.plugins.registry import registry
+from openpendant.runtime.kit.words import Words, words, words_of
+from openpendant.sandbox.protocol import (
     FUNCTIONS_ENV,
     MAX_LINE_BYTES,
     MAX_OUTPUT_CHARS,
@@ -114,7 +114,7 @@ async def spawn_worker(limits: str) -> Process:
     return await asyncio.create_subprocess_exec(
         sys.executable,
         "-m",
-        "sandbox.worker",
+        "openpendant.sandbox.worker",
         limits,
         stdin=asyncio.subprocess.PIPE,
         stdout=asyncio.subprocess.PIPE,

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from sandbox.guards import SandboxError, register_value_type
+from openpendant.sandbox.guards import SandboxError, register_value_type
 
 Quaternion = tuple[float, float, float, float]  # x, y, z, w
 Vector = tuple[float, float, float]

@@ -1,4 +1,4 @@
-"""The worker process that runs one program: `python -m sandbox.worker <limits JSON>`.
+"""The worker process that runs one program: `python -m openpendant.sandbox.worker <limits JSON>`.
 
 It limits itself before it reads any program code (memory, CPU, files, processes; its own
 network namespace and an unprivileged user where the system allows), then talks to the
@@ -20,12 +20,18 @@ import traceback
 from dataclasses import dataclass, field
 from typing import Any, BinaryIO
 
-from sandbox.builtins import safe_builtins
-from sandbox.guards import guard_globals
-from sandbox.library import REGISTRY
-from sandbox.library.base import ProgramError, bind
-from sandbox.policy import PROGRAM_FILENAME, ProgramCompileError, compile_program
-from sandbox.protocol import FUNCTIONS_ENV, MAX_OUTPUT_CHARS, ProtocolError, decode, encode
+from openpendant.sandbox.builtins import safe_builtins
+from openpendant.sandbox.guards import guard_globals
+from openpendant.sandbox.library import REGISTRY
+from openpendant.sandbox.library.base import ProgramError, bind
+from openpendant.sandbox.policy import PROGRAM_FILENAME, ProgramCompileError, compile_program
+from openpendant.sandbox.protocol import (
+    FUNCTIONS_ENV,
+    MAX_OUTPUT_CHARS,
+    ProtocolError,
+    decode,
+    encode,
+)
 
 CLONE_NEWNET = 0x40000000
 NOBODY = 65534
@@ -256,7 +262,7 @@ def plugin_functions() -> dict[str, Any]:
     if named is not None:
         references: dict[str, str] = json.loads(named)
     else:
-        from plugins.registry import registry
+        from openpendant.plugins.registry import registry
 
         references = {n: r for b in registry().blocks.values() for n, r in b.functions.items()}
     found: dict[str, Any] = {}

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime.bench.harness.processes import LOOPBACK_ENV
+from openpendant.runtime.bench.harness.processes import LOOPBACK_ENV
 
 # Anything started from a test (directly or by the runtime) does discovery on loopback only.
 os.environ.update(LOOPBACK_ENV)

@@ -15,8 +15,8 @@ from pathlib import Path
 
 from playwright.sync_api import Page, expect, sync_playwright
 
-from runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
-from runtime.bench.harness.processes import Runtime, child_env
+from openpendant.runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
+from openpendant.runtime.bench.harness.processes import Runtime, child_env
 from tests.browser.conftest import PHONE, TABLET, add_robot
 from tests.support.programs import PICK_AND_PLACE_WAYPOINTS, pick_and_place, teach
 

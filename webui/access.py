@@ -10,15 +10,15 @@ from typing import Any
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from runtime.auth.audit import AuditLog
-from runtime.auth.roles import Role
-from runtime.auth.store import AuthStore, Identity
-from runtime.kit.constant_time import same_secret
-from runtime.kit.service_guard import refuse
-from runtime.kit.sign_in_watch import ENDED, EndsWithSignIn
-from runtime.kit.words import Words, role_words, words
-from webui import policy
-from webui.proxy import BAD_PATH, PathRefused, service_path
+from openpendant.runtime.auth.audit import AuditLog
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.store import AuthStore, Identity
+from openpendant.runtime.kit.constant_time import same_secret
+from openpendant.runtime.kit.service_guard import refuse
+from openpendant.runtime.kit.sign_in_watch import ENDED, EndsWithSignIn
+from openpendant.runtime.kit.words import Words, role_words, words
+from openpendant.webui import policy
+from openpendant.webui.proxy import BAD_PATH, PathRefused, service_path
 
 SESSION_COOKIE = "op_session"
 CSRF_HEADER = "x-csrf-token"

@@ -10,16 +10,16 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Query, Request, Response
 from pydantic import Field
 
-from runtime.auth.audit import AuditLog
-from runtime.auth.roles import Role
-from runtime.auth.store import AuthStore, Identity, LockedOut, Unauthenticated
-from runtime.interfaces.common import Strict
-from runtime.kit import tickets
-from runtime.kit.constant_time import same_secret
-from runtime.kit.errors import InvalidValue, OpenPendantError
-from runtime.kit.settings import is_loopback
-from webui import policy
-from webui.access import SESSION_COOKIE, client_address
+from openpendant.runtime.auth.audit import AuditLog
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.store import AuthStore, Identity, LockedOut, Unauthenticated
+from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.kit import tickets
+from openpendant.runtime.kit.constant_time import same_secret
+from openpendant.runtime.kit.errors import InvalidValue, OpenPendantError
+from openpendant.runtime.kit.settings import is_loopback
+from openpendant.webui import policy
+from openpendant.webui.access import SESSION_COOKIE, client_address
 
 RoleName = Literal["viewer", "operator", "programmer", "admin"]
 Text = Annotated[str, Field(min_length=1, max_length=256)]

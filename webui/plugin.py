@@ -4,7 +4,7 @@ package instead."""
 
 from __future__ import annotations
 
-from plugins.api import Panel, Plugin
+from openpendant.plugins.api import Panel, Plugin
 
 
 def _panel(id: str, order: int, en: str, de: str) -> Panel:

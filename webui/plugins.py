@@ -15,9 +15,9 @@ import httpx
 from fastapi import APIRouter
 from fastapi.responses import FileResponse
 
-from plugins.api import Panel
-from plugins.registry import Registry, registry
-from runtime.kit.errors import NotFound
+from openpendant.plugins.api import Panel
+from openpendant.plugins.registry import Registry, registry
+from openpendant.runtime.kit.errors import NotFound
 
 PANEL_FILES = {
     ".js": "text/javascript",

@@ -10,7 +10,7 @@ import re
 from dataclasses import dataclass
 from typing import Literal
 
-from runtime.auth.roles import Role
+from openpendant.runtime.auth.roles import Role
 
 PUBLIC: Literal["public"] = "public"
 INTERNAL: Literal["internal"] = "internal"

@@ -13,15 +13,15 @@ from fastapi import Request, Response, WebSocket
 from starlette.requests import HTTPConnection
 from starlette.websockets import WebSocketDisconnect
 
-from runtime.interfaces.common import plain_text
-from runtime.kit import deadline
-from runtime.kit.app import error_response
-from runtime.kit.internal import HEADER as INTERNAL_HEADER
-from runtime.kit.internal import internal_headers
-from runtime.kit.request_start import HEADER as REQUEST_START
-from runtime.kit.request_start import stamp
-from runtime.kit.uploads import UPLOAD_TIMEOUT, UPLOADS
-from runtime.kit.websocket import until_either_ends
+from openpendant.runtime.interfaces.common import plain_text
+from openpendant.runtime.kit import deadline
+from openpendant.runtime.kit.app import error_response
+from openpendant.runtime.kit.internal import HEADER as INTERNAL_HEADER
+from openpendant.runtime.kit.internal import internal_headers
+from openpendant.runtime.kit.request_start import HEADER as REQUEST_START
+from openpendant.runtime.kit.request_start import stamp
+from openpendant.runtime.kit.uploads import UPLOAD_TIMEOUT, UPLOADS
+from openpendant.runtime.kit.websocket import until_either_ends
 
 USER_HEADER = "X-OpenPendant-User"
 ROLE_HEADER = "X-OpenPendant-Role"

@@ -14,20 +14,20 @@ from fastapi import FastAPI, Query, Request, Response, WebSocket
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
-from runtime.auth.audit import AUDIT_FILE, AuditLog
-from runtime.auth.setup import SETUP_CODE_ENV, auth_store
-from runtime.kit.app import create_app
-from runtime.kit.errors import NotFound
-from runtime.kit.settings import RuntimeSettings
-from runtime.kit.web_guard import WebGuard
-from runtime.paths import package_roots
-from runtime.services import services as declared_services
-from runtime.services import web_policy
-from webui.access import AccessGuard
-from webui.auth_routes import auth_router
-from webui.logs import MAX_ENTRIES, recent_entries
-from webui.plugins import plugins_router
-from webui.proxy import ServiceProxy
+from openpendant.runtime.auth.audit import AUDIT_FILE, AuditLog
+from openpendant.runtime.auth.setup import SETUP_CODE_ENV, auth_store
+from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.errors import NotFound
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.kit.web_guard import WebGuard
+from openpendant.runtime.paths import package_roots
+from openpendant.runtime.services import services as declared_services
+from openpendant.runtime.services import web_policy
+from openpendant.webui.access import AccessGuard
+from openpendant.webui.auth_routes import auth_router
+from openpendant.webui.logs import MAX_ENTRIES, recent_entries
+from openpendant.webui.plugins import plugins_router
+from openpendant.webui.proxy import ServiceProxy
 
 DIST = Path(__file__).resolve().parent / "frontend" / "dist"
 

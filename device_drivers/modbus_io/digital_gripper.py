@@ -16,12 +16,17 @@ from pathlib import Path
 import yaml
 from pydantic import Field, ValidationError, model_validator
 
-from device_drivers.modbus_io.driver import ModbusIODriver
-from device_drivers.modbus_io.registers import RegisterMap
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.gripper import GripperDriver, GripperInfo, GripperMotion, GripperState
-from runtime.interfaces.io import SignalWrite
-from runtime.kit.errors import InvalidValue
+from openpendant.device_drivers.modbus_io.driver import ModbusIODriver
+from openpendant.device_drivers.modbus_io.registers import RegisterMap
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.gripper import (
+    GripperDriver,
+    GripperInfo,
+    GripperMotion,
+    GripperState,
+)
+from openpendant.runtime.interfaces.io import SignalWrite
+from openpendant.runtime.kit.errors import InvalidValue
 
 ROLES = {
     "close": "coil",

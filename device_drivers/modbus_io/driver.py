@@ -12,13 +12,13 @@ import math
 import time
 from collections.abc import Callable
 
-from device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
-from device_drivers.modbus_io.link import ModbusLink, Table
-from device_drivers.modbus_io.polled import Polled
-from device_drivers.modbus_io.registers import Register, RegisterMap
-from device_drivers.modbus_io.simulator import ModbusSimulator
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.io import (
+from openpendant.device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
+from openpendant.device_drivers.modbus_io.link import ModbusLink, Table
+from openpendant.device_drivers.modbus_io.polled import Polled
+from openpendant.device_drivers.modbus_io.registers import Register, RegisterMap
+from openpendant.device_drivers.modbus_io.simulator import ModbusSimulator
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.io import (
     IODriver,
     IOInfo,
     SignalReading,
@@ -26,7 +26,7 @@ from runtime.interfaces.io import (
     SignalValue,
     SignalWrite,
 )
-from runtime.kit.errors import InvalidValue, NotFound, OpenPendantError
+from openpendant.runtime.kit.errors import InvalidValue, NotFound, OpenPendantError
 
 log = logging.getLogger(__name__)
 

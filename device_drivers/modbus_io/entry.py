@@ -10,15 +10,15 @@ from pathlib import Path
 from fastapi import APIRouter
 from pydantic import BaseModel, ConfigDict, Field
 
-from device_drivers.modbus_io.driver import ModbusIODriver
-from device_drivers.modbus_io.link import Address, ModbusLink, Parity, tcp_address
-from device_drivers.modbus_io.registers import load_map
-from device_drivers.modbus_io.simulator import ModbusSimulator
-from device_drivers.sim_cell.link import CellClient
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.io import IOState, SignalWrite
-from runtime.kit.errors import InvalidValue, NotFound
-from runtime.paths import MODBUS_MAPS_DIR
+from openpendant.device_drivers.modbus_io.driver import ModbusIODriver
+from openpendant.device_drivers.modbus_io.link import Address, ModbusLink, Parity, tcp_address
+from openpendant.device_drivers.modbus_io.registers import load_map
+from openpendant.device_drivers.modbus_io.simulator import ModbusSimulator
+from openpendant.device_drivers.sim_cell.link import CellClient
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.io import IOState, SignalWrite
+from openpendant.runtime.kit.errors import InvalidValue, NotFound
+from openpendant.runtime.paths import MODBUS_MAPS_DIR
 
 DEFAULT_MAP = MODBUS_MAPS_DIR / "cell_io.yaml"
 

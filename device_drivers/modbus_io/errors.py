@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from runtime.kit.errors import OpenPendantError, Unavailable
+from openpendant.runtime.kit.errors import OpenPendantError, Unavailable
 
 
 class ModbusRefused(OpenPendantError):

@@ -11,17 +11,20 @@ from typing import Literal
 from fastapi import APIRouter
 from pydantic import BaseModel, Field
 
-from device_drivers.modbus_io import robotiq
-from device_drivers.modbus_io.digital_gripper import DigitalGripper, load_gripper_map
-from device_drivers.modbus_io.driver import ModbusIODriver
-from device_drivers.modbus_io.entry import LinkOptions
-from device_drivers.modbus_io.link import ModbusLink
-from device_drivers.modbus_io.robotiq_gripper import RobotiqGripper
-from device_drivers.modbus_io.sim_grippers import DigitalGripperSimulator, RobotiqSimulator
-from device_drivers.sim_cell.link import CellClient
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.gripper import GripperDriver, GripperState
-from runtime.paths import MODBUS_MAPS_DIR
+from openpendant.device_drivers.modbus_io import robotiq
+from openpendant.device_drivers.modbus_io.digital_gripper import DigitalGripper, load_gripper_map
+from openpendant.device_drivers.modbus_io.driver import ModbusIODriver
+from openpendant.device_drivers.modbus_io.entry import LinkOptions
+from openpendant.device_drivers.modbus_io.link import ModbusLink
+from openpendant.device_drivers.modbus_io.robotiq_gripper import RobotiqGripper
+from openpendant.device_drivers.modbus_io.sim_grippers import (
+    DigitalGripperSimulator,
+    RobotiqSimulator,
+)
+from openpendant.device_drivers.sim_cell.link import CellClient
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.gripper import GripperDriver, GripperState
+from openpendant.runtime.paths import MODBUS_MAPS_DIR
 
 DIGITAL_MAP = MODBUS_MAPS_DIR / "digital_gripper.yaml"
 ProfileName = Literal["robotiq-2f-85", "robotiq-2f-140", "digital"]

@@ -15,8 +15,8 @@ from pymodbus import FramerType
 from pymodbus.client import AsyncModbusSerialClient, AsyncModbusTcpClient
 from pymodbus.exceptions import ModbusException
 
-from device_drivers.modbus_io.errors import no_answer, refused
-from runtime.kit.errors import InvalidValue
+from openpendant.device_drivers.modbus_io.errors import no_answer, refused
+from openpendant.runtime.kit.errors import InvalidValue
 
 Table = Literal["coil", "discrete_input", "input_register", "holding_register"]
 Parity = Literal["N", "E", "O"]

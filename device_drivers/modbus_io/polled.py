@@ -7,11 +7,11 @@ import asyncio
 from abc import ABC, abstractmethod
 from typing import TYPE_CHECKING
 
-from device_drivers.modbus_io.link import ModbusLink, poll_forever
-from runtime.kit.tasks import cancel_for_sure
+from openpendant.device_drivers.modbus_io.link import ModbusLink, poll_forever
+from openpendant.runtime.kit.tasks import cancel_for_sure
 
 if TYPE_CHECKING:
-    from device_drivers.modbus_io.simulator import ModbusSimulator
+    from openpendant.device_drivers.modbus_io.simulator import ModbusSimulator
 
 
 class Polled(ABC):

@@ -8,11 +8,11 @@ from pathlib import Path
 import yaml
 from pydantic import Field, ValidationError, model_validator
 
-from device_drivers.modbus_io.codec import DataType, Order, word_count
-from device_drivers.modbus_io.link import Table
-from runtime.interfaces.common import Strict
-from runtime.interfaces.io import SIGNAL_NAME, SignalInfo, SignalKind
-from runtime.kit.errors import InvalidValue
+from openpendant.device_drivers.modbus_io.codec import DataType, Order, word_count
+from openpendant.device_drivers.modbus_io.link import Table
+from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.interfaces.io import SIGNAL_NAME, SignalInfo, SignalKind
+from openpendant.runtime.kit.errors import InvalidValue
 
 KIND: dict[Table, SignalKind] = {
     "coil": "digital_output",

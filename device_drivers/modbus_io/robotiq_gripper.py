@@ -12,14 +12,19 @@ import dataclasses
 import time
 from collections.abc import Callable
 
-from device_drivers.modbus_io import robotiq
-from device_drivers.modbus_io.link import ModbusLink
-from device_drivers.modbus_io.polled import Polled
-from device_drivers.modbus_io.robotiq import Profile, Request, Status
-from device_drivers.modbus_io.simulator import ModbusSimulator
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.gripper import GripperDriver, GripperInfo, GripperMotion, GripperState
-from runtime.kit.errors import InvalidValue, OpenPendantError, Unavailable
+from openpendant.device_drivers.modbus_io import robotiq
+from openpendant.device_drivers.modbus_io.link import ModbusLink
+from openpendant.device_drivers.modbus_io.polled import Polled
+from openpendant.device_drivers.modbus_io.robotiq import Profile, Request, Status
+from openpendant.device_drivers.modbus_io.simulator import ModbusSimulator
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.gripper import (
+    GripperDriver,
+    GripperInfo,
+    GripperMotion,
+    GripperState,
+)
+from openpendant.runtime.kit.errors import InvalidValue, OpenPendantError, Unavailable
 
 ACTIVATION_TIMEOUT = 10.0  # s; the fingers travel the whole stroke twice to find it
 CHECK_PERIOD = 0.02  # s between status reads while following a motion

@@ -5,13 +5,13 @@ cell and opening lets it fall; otherwise a test puts an object between the finge
 
 from __future__ import annotations
 
-from device_drivers.modbus_io import robotiq
-from device_drivers.modbus_io.jaws import Jaws
-from device_drivers.modbus_io.link import Table
-from device_drivers.modbus_io.registers import Register, RegisterMap
-from device_drivers.modbus_io.robotiq import Profile, Request, Status
-from device_drivers.modbus_io.simulator import ModbusSimulator
-from device_drivers.sim_cell.link import CellClient
+from openpendant.device_drivers.modbus_io import robotiq
+from openpendant.device_drivers.modbus_io.jaws import Jaws
+from openpendant.device_drivers.modbus_io.link import Table
+from openpendant.device_drivers.modbus_io.registers import Register, RegisterMap
+from openpendant.device_drivers.modbus_io.robotiq import Profile, Request, Status
+from openpendant.device_drivers.modbus_io.simulator import ModbusSimulator
+from openpendant.device_drivers.sim_cell.link import CellClient
 
 
 async def _fingers_move(jaws: Jaws, cell: CellClient | None, closing: bool) -> None:

@@ -15,10 +15,10 @@ from pymodbus.constants import ExcCodes
 from pymodbus.server import ModbusSerialServer, ModbusTcpServer
 from pymodbus.simulator import DataType, SimData, SimDevice
 
-from device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
-from device_drivers.modbus_io.link import Address, Table, poll_forever
-from device_drivers.modbus_io.registers import KIND, RegisterMap
-from device_drivers.sim_cell.link import CellClient
+from openpendant.device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
+from openpendant.device_drivers.modbus_io.link import Address, Table, poll_forever
+from openpendant.device_drivers.modbus_io.registers import KIND, RegisterMap
+from openpendant.device_drivers.sim_cell.link import CellClient
 
 SENSE_PERIOD = 0.05  # s between looks at the simulated cell's presence sensors
 # Function code -> (table, writes)

@@ -13,11 +13,22 @@ import time
 
 import numpy as np
 
-from device_drivers.opencv_camera.sources import Settings, SourceLost, open_source, paced
-from runtime.imaging.encoding import encoded
-from runtime.interfaces.camera import CameraDriver, CameraInfo, CameraState, CaptureRequest, Image
-from runtime.interfaces.device import DeviceIdentity
-from runtime.kit.errors import DeviceError
+from openpendant.device_drivers.opencv_camera.sources import (
+    Settings,
+    SourceLost,
+    open_source,
+    paced,
+)
+from openpendant.runtime.imaging.encoding import encoded
+from openpendant.runtime.interfaces.camera import (
+    CameraDriver,
+    CameraInfo,
+    CameraState,
+    CaptureRequest,
+    Image,
+)
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.kit.errors import DeviceError
 
 log = logging.getLogger(__name__)
 REPLAY_FPS = 10.0  # a file or folder that does not say its rate

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from device_drivers.opencv_camera.driver import OpenCVCamera
-from runtime.interfaces.device import DeviceIdentity
+from openpendant.device_drivers.opencv_camera.driver import OpenCVCamera
+from openpendant.runtime.interfaces.device import DeviceIdentity
 
 
 class OpenCVCameraOptions(BaseModel):

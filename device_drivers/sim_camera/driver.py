@@ -13,19 +13,19 @@ from typing import Any
 
 import numpy as np
 
-from device_drivers.sim_camera.optics import CameraModel, Gray, Renderer, Target
-from device_drivers.sim_camera.scene import cell_targets
-from device_drivers.sim_cell.link import CellClient
-from runtime.imaging.encoding import encoded
-from runtime.interfaces.camera import (
+from openpendant.device_drivers.sim_camera.optics import CameraModel, Gray, Renderer, Target
+from openpendant.device_drivers.sim_camera.scene import cell_targets
+from openpendant.device_drivers.sim_cell.link import CellClient
+from openpendant.runtime.imaging.encoding import encoded
+from openpendant.runtime.interfaces.camera import (
     CameraDriver,
     CameraInfo,
     CameraState,
     CaptureRequest,
     Image,
 )
-from runtime.interfaces.device import DeviceIdentity
-from runtime.kit.errors import DeviceError
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.kit.errors import DeviceError
 
 CELL_WAIT = 30.0  # s the robot named by `cell` may take to come up (all start at once)
 CELL_LOOK = 0.5  # s between looks for it

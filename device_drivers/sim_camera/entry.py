@@ -10,15 +10,15 @@ from fastapi import APIRouter
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from scipy.spatial.transform import Rotation
 
-from device_drivers.sim_camera.driver import CELL_WAIT, Board, SimCamera
-from device_drivers.sim_camera.optics import CameraModel, look_at
-from device_drivers.sim_cell.link import CellClient
-from runtime.imaging.boards import DICTIONARIES, BoardSpec
-from runtime.imaging.boards import Board as VisionBoard
-from runtime.interfaces.common import Pose
-from runtime.interfaces.device import DeviceIdentity
-from runtime.kit.app import describe_validation_errors
-from runtime.kit.errors import InvalidValue
+from openpendant.device_drivers.sim_camera.driver import CELL_WAIT, Board, SimCamera
+from openpendant.device_drivers.sim_camera.optics import CameraModel, look_at
+from openpendant.device_drivers.sim_cell.link import CellClient
+from openpendant.runtime.imaging.boards import DICTIONARIES, BoardSpec
+from openpendant.runtime.imaging.boards import Board as VisionBoard
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.kit.app import describe_validation_errors
+from openpendant.runtime.kit.errors import InvalidValue
 
 BOARD_DPI_M = 4000.0  # the printed board's texture: pixels per metre (0.25 mm a pixel)
 

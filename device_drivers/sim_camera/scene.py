@@ -14,8 +14,8 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from device_drivers.sim_camera.optics import FloatArray, Gray, Target
-from runtime.imaging.boards import DICTIONARIES, dictionary_size
+from openpendant.device_drivers.sim_camera.optics import FloatArray, Gray, Target
+from openpendant.runtime.imaging.boards import DICTIONARIES, dictionary_size
 
 PIXELS_PER_METRE = 4000.0
 TAG_SHARE = 0.8  # of a part's top face's shorter side: the marker, its black border included

@@ -15,8 +15,8 @@ import socket
 from pathlib import Path
 from typing import Any
 
-from device_drivers.sim_cell.world import CellSetup, World
-from runtime.kit.settings import SETTINGS_ENV, load_settings, settings_from_env
+from openpendant.device_drivers.sim_cell.world import CellSetup, World
+from openpendant.runtime.kit.settings import SETTINGS_ENV, load_settings, settings_from_env
 
 log = logging.getLogger(__name__)
 TIMEOUT = 0.5  # s; the world is in a process on this computer

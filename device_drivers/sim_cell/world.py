@@ -21,8 +21,8 @@ import numpy as np
 import pinocchio as pin
 from pydantic import Field
 
-from runtime.interfaces.common import Pose, Strict
-from runtime.robotics.kinematics import pose_to_se3, se3_to_pose
+from openpendant.runtime.interfaces.common import Pose, Strict
+from openpendant.runtime.robotics.kinematics import pose_to_se3, se3_to_pose
 
 REACH = 0.03  # m from the TCP to a part's centre for the fingers to close on it
 TABLE_Z = 0.0  # the table top in the world (the robot stands on it until it is moved)

@@ -2,7 +2,7 @@
 
 import sys
 
-from runtime.drivers.run import run_driver
+from openpendant.runtime.drivers.run import run_driver
 
 if __name__ == "__main__":
     sys.exit(run_driver("sim-robot"))

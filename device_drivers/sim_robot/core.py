@@ -10,8 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from runtime.interfaces.limits import CheckedTrajectory, FloatArray
-from runtime.interfaces.robot import (
+from openpendant.runtime.interfaces.limits import CheckedTrajectory, FloatArray
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     OperationalMode,
     RobotFlags,
@@ -20,12 +20,12 @@ from runtime.interfaces.robot import (
     TrajectoryState,
     TrajectoryStatus,
 )
-from runtime.kit.errors import InvalidValue, NotFound, RobotError
-from runtime.kit.words import words
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.reference import Limits, RunningTrajectory, TrajectoryReference
-from runtime.robotics.time_scaling import TimeScaling
-from runtime.robotics.tracker import JointTracker, TrackerError
+from openpendant.runtime.kit.errors import InvalidValue, NotFound, RobotError
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.reference import Limits, RunningTrajectory, TrajectoryReference
+from openpendant.runtime.robotics.time_scaling import TimeScaling
+from openpendant.runtime.robotics.tracker import JointTracker, TrackerError
 
 CYCLE = 0.002
 STREAM_MODES = (

@@ -10,13 +10,13 @@ from collections import deque
 
 import numpy as np
 
-from device_drivers.sim_cell.link import CellServer
-from device_drivers.sim_cell.world import World
-from device_drivers.sim_robot.core import CYCLE, SimCore
-from runtime.interfaces.common import Pose
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.limits import CheckedTrajectory, FloatArray
-from runtime.interfaces.robot import (
+from openpendant.device_drivers.sim_cell.link import CellServer
+from openpendant.device_drivers.sim_cell.world import World
+from openpendant.device_drivers.sim_robot.core import CYCLE, SimCore
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.limits import CheckedTrajectory, FloatArray
+from openpendant.runtime.interfaces.robot import (
     SIM_CELL,
     CommandMode,
     OperationalMode,
@@ -24,9 +24,9 @@ from runtime.interfaces.robot import (
     RobotState,
     TrajectoryStatus,
 )
-from runtime.interfaces.robot_driver import RobotDriver, RobotStatus
-from runtime.kit.errors import RobotError
-from runtime.robotics.kinematics import Kinematics, se3_to_pose
+from openpendant.runtime.interfaces.robot_driver import RobotDriver, RobotStatus
+from openpendant.runtime.kit.errors import RobotError
+from openpendant.runtime.robotics.kinematics import Kinematics, se3_to_pose
 
 log = logging.getLogger(__name__)
 TOOL_OPENING = 0.1  # m: what the controller's own tool output opens (a generic gripper)

@@ -8,10 +8,10 @@ from pathlib import Path
 from fastapi import APIRouter
 from pydantic import BaseModel, ConfigDict, Field
 
-from device_drivers.sim_robot.driver import SimRobot
-from device_drivers.sim_robot.routes import sim_router
-from runtime.interfaces.device import DeviceIdentity
-from runtime.robotics.robot_info import available_models, load_robot_info
+from openpendant.device_drivers.sim_robot.driver import SimRobot
+from openpendant.device_drivers.sim_robot.routes import sim_router
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.robotics.robot_info import available_models, load_robot_info
 
 # Every simulated robot started with this in its environment runs its trajectories this many
 # times faster than real time (the test suite's, for tests that only need moves to finish).

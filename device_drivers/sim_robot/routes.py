@@ -8,10 +8,10 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Query, Response
 from pydantic import Field
 
-from device_drivers.sim_cell.world import CellSetup, Frame, Part
-from device_drivers.sim_robot.driver import SimRobot
-from runtime.interfaces.common import Pose, Strict
-from runtime.interfaces.robot import OperationalMode, RobotState
+from openpendant.device_drivers.sim_cell.world import CellSetup, Frame, Part
+from openpendant.device_drivers.sim_robot.driver import SimRobot
+from openpendant.runtime.interfaces.common import Pose, Strict
+from openpendant.runtime.interfaces.robot import OperationalMode, RobotState
 
 
 class EstopRequest(Strict):

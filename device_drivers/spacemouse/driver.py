@@ -9,10 +9,10 @@ import time
 
 import numpy as np
 
-from device_drivers.spacemouse.reports import AxisFilter, AxisSettings, RawInput
-from device_drivers.spacemouse.sources import DeviceGone, ReportSource
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.input import InputDriver, InputInfo, InputState
+from openpendant.device_drivers.spacemouse.reports import AxisFilter, AxisSettings, RawInput
+from openpendant.device_drivers.spacemouse.sources import DeviceGone, ReportSource
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.input import InputDriver, InputInfo, InputState
 
 log = logging.getLogger(__name__)
 

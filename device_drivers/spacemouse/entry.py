@@ -8,12 +8,17 @@ from typing import Literal
 from fastapi import APIRouter, Response
 from pydantic import BaseModel, ConfigDict, Field
 
-from device_drivers.spacemouse.driver import SpaceMouseDriver
-from device_drivers.spacemouse.reports import AxisSettings
-from device_drivers.spacemouse.sources import HidSource, ReplaySource, ReportSource, SpacenavdSource
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.input import AXES, InputInfo
-from runtime.kit.errors import InvalidValue
+from openpendant.device_drivers.spacemouse.driver import SpaceMouseDriver
+from openpendant.device_drivers.spacemouse.reports import AxisSettings
+from openpendant.device_drivers.spacemouse.sources import (
+    HidSource,
+    ReplaySource,
+    ReportSource,
+    SpacenavdSource,
+)
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.input import AXES, InputInfo
+from openpendant.runtime.kit.errors import InvalidValue
 
 
 class SpaceMouseOptions(BaseModel):

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import BaseModel, Field, field_validator
 
-from runtime.interfaces.input import AXES
+from openpendant.runtime.interfaces.input import AXES
 
 FULL_SCALE = 350.0  # raw counts at full deflection
 

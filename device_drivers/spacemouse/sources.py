@@ -11,8 +11,8 @@ from abc import ABC, abstractmethod
 from pathlib import Path
 from typing import Any
 
-from device_drivers.spacemouse.devices import MODELS, SpaceMouseModel, find_model
-from device_drivers.spacemouse.reports import RawInput, ReportError, parse_report
+from openpendant.device_drivers.spacemouse.devices import MODELS, SpaceMouseModel, find_model
+from openpendant.device_drivers.spacemouse.reports import RawInput, ReportError, parse_report
 
 
 class DeviceGone(Exception):

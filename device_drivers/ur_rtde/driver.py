@@ -27,12 +27,12 @@ from collections.abc import Callable
 
 import numpy as np
 
-from device_drivers.ur_rtde.io_writer import OutputWriter
-from device_drivers.ur_rtde.link import RUNNING, Reading, URLink
-from device_drivers.ur_rtde.modes import ModeWatch
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.limits import CheckedTrajectory, FloatArray
-from runtime.interfaces.robot import (
+from openpendant.device_drivers.ur_rtde.io_writer import OutputWriter
+from openpendant.device_drivers.ur_rtde.link import RUNNING, Reading, URLink
+from openpendant.device_drivers.ur_rtde.modes import ModeWatch
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.limits import CheckedTrajectory, FloatArray
+from openpendant.runtime.interfaces.robot import (
     POWER_ON,
     UNLOCK_PROTECTIVE_STOP,
     CommandMode,
@@ -43,11 +43,11 @@ from runtime.interfaces.robot import (
     TrajectoryState,
     TrajectoryStatus,
 )
-from runtime.interfaces.robot_driver import RobotDriver, RobotStatus
-from runtime.kit.errors import NotFound, RobotError
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.reference import Limits, RunningTrajectory, TrajectoryReference
-from runtime.robotics.time_scaling import TimeScaling
+from openpendant.runtime.interfaces.robot_driver import RobotDriver, RobotStatus
+from openpendant.runtime.kit.errors import NotFound, RobotError
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.reference import Limits, RunningTrajectory, TrajectoryReference
+from openpendant.runtime.robotics.time_scaling import TimeScaling
 
 log = logging.getLogger(__name__)
 CYCLE = 0.008  # s: servoJ's time per command, and the control thread's period

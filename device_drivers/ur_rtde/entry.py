@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from device_drivers.ur_rtde.driver import URDriver
-from runtime.interfaces.device import DeviceIdentity
-from runtime.kit.errors import InvalidValue
-from runtime.robotics.robot_info import available_models, load_robot_info
+from openpendant.device_drivers.ur_rtde.driver import URDriver
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.robotics.robot_info import available_models, load_robot_info
 
 
 class ControllerOptions(BaseModel):

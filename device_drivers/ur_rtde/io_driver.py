@@ -21,9 +21,9 @@ from typing import Any, Literal
 
 import rtde_receive
 
-from device_drivers.ur_rtde.io_writer import OutputWriter
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.io import (
+from openpendant.device_drivers.ur_rtde.io_writer import OutputWriter
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.io import (
     IODriver,
     IOInfo,
     SignalInfo,
@@ -32,7 +32,7 @@ from runtime.interfaces.io import (
     SignalValue,
     SignalWrite,
 )
-from runtime.kit.errors import InvalidValue, NotFound, OpenPendantError, Unavailable
+from openpendant.runtime.kit.errors import InvalidValue, NotFound, OpenPendantError, Unavailable
 
 log = logging.getLogger(__name__)
 

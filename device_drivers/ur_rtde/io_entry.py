@@ -5,9 +5,9 @@ from __future__ import annotations
 
 from pydantic import Field
 
-from device_drivers.ur_rtde.entry import ControllerOptions
-from device_drivers.ur_rtde.io_driver import Domain, URIODriver
-from runtime.interfaces.device import DeviceIdentity
+from openpendant.device_drivers.ur_rtde.entry import ControllerOptions
+from openpendant.device_drivers.ur_rtde.io_driver import Domain, URIODriver
+from openpendant.runtime.interfaces.device import DeviceIdentity
 
 
 class URIOOptions(ControllerOptions):

@@ -22,8 +22,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from device_drivers.ur_rtde.link import write_outputs
-from runtime.kit.errors import OpenPendantError, RobotError, Unavailable
+from openpendant.device_drivers.ur_rtde.link import write_outputs
+from openpendant.runtime.kit.errors import OpenPendantError, RobotError, Unavailable
 
 log = logging.getLogger(__name__)
 
@@ -117,7 +117,7 @@ class OutputWriter:
             self._child = await asyncio.create_subprocess_exec(
                 sys.executable,
                 "-m",
-                "device_drivers.ur_rtde.io_writer",
+                "openpendant.device_drivers.ur_rtde.io_writer",
                 self.host,
                 stdin=asyncio.subprocess.PIPE,
                 stdout=asyncio.subprocess.PIPE,

@@ -17,8 +17,8 @@ import rtde_control
 import rtde_io
 import rtde_receive
 
-from device_drivers.ur_rtde.models import model_mismatch
-from runtime.kit.errors import RobotError
+from openpendant.device_drivers.ur_rtde.models import model_mismatch
+from openpendant.runtime.kit.errors import RobotError
 
 log = logging.getLogger(__name__)
 _UNFREEABLE: list[Any] = []

@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from runtime.auth.store import private
+from openpendant.runtime.auth.store import private
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS audit (

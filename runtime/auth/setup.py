@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from runtime.auth.roles import Role
-from runtime.auth.standing import SignIns
-from runtime.auth.store import AuthStore
-from runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.standing import SignIns
+from openpendant.runtime.auth.store import AuthStore
+from openpendant.runtime.kit.settings import RuntimeSettings
 
 SETUP_CODE_ENV = "OPENPENDANT_SETUP_CODE"
 

@@ -15,9 +15,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from runtime.auth.roles import Role
-from runtime.auth.store import session_expired
-from runtime.kit.tickets import Ticket
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.store import session_expired
+from openpendant.runtime.kit.tickets import Ticket
 
 
 @dataclass(frozen=True)

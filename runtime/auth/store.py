@@ -21,8 +21,8 @@ from pathlib import Path
 from argon2 import PasswordHasher
 from argon2.exceptions import InvalidHashError, VerificationError
 
-from runtime.auth.roles import Role
-from runtime.kit.errors import Conflict, InvalidValue, NotFound, OpenPendantError
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.kit.errors import Conflict, InvalidValue, NotFound, OpenPendantError
 
 USERNAME = re.compile(r"^[a-z][a-z0-9_.-]{0,31}\Z")
 MIN_PASSWORD = 10

@@ -15,11 +15,11 @@ import time
 from pathlib import Path
 from typing import Any
 
-from runtime.bench.harness.browser import CHROMIUM, viewer_page
-from runtime.bench.harness.processes import Runtime, child_env, wait_for
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
-from runtime.kit.settings import DeviceSpec
+from openpendant.runtime.bench.harness.browser import CHROMIUM, viewer_page
+from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
+from openpendant.runtime.kit.settings import DeviceSpec
 
 FIGURES = ("camera_to_ui_latency_p50", "camera_to_ui_latency_p99", "camera_to_ui_fps")
 CAMERA = DeviceSpec(driver="sim-camera", name="bench-cam", options={"fps": 30, "noise": 1.0})

@@ -9,10 +9,10 @@ import tempfile
 import time
 from pathlib import Path
 
-from runtime.bench.harness.jog import Cell, JogClient
-from runtime.bench.harness.processes import Runtime
-from runtime.bench.runner import Figure
-from runtime.bench.stats import quick
+from openpendant.runtime.bench.harness.jog import Cell, JogClient
+from openpendant.runtime.bench.harness.processes import Runtime
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import quick
 
 FIGURES = ("cold_start", "total_rss", "total_pss", "total_pss_after_work")
 PSS_TARGET = 400.0  # MB

@@ -8,9 +8,9 @@ import time
 from functools import partial
 from pathlib import Path
 
-from runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
+from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
 
 FIGURES = ("discovery_time", "discovery_from_process_start")
 

@@ -17,10 +17,10 @@ from typing import Any
 
 import httpx
 
-from runtime.bench.harness.browser import CHROMIUM, viewer_page
-from runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
+from openpendant.runtime.bench.harness.browser import CHROMIUM, viewer_page
+from openpendant.runtime.bench.harness.processes import DriverProc, Runtime, child_env, wait_for
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
 
 FIGURES = ("io_panel_input_to_ui_p50", "io_panel_input_to_ui_p99")
 TARGET_P99 = 50.0  # ms

@@ -16,14 +16,14 @@ from pathlib import Path
 
 import numpy as np
 
-from runtime.bench.harness.jog import Cell, JogClient
-from runtime.bench.harness.processes import Runtime
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
-from runtime.jog.actions import TwistJog
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.velocity import VelocityController
+from openpendant.runtime.bench.harness.jog import Cell, JogClient
+from openpendant.runtime.bench.harness.processes import Runtime
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
+from openpendant.runtime.jog.actions import TwistJog
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.velocity import VelocityController
 
 FIGURES = (
     "jog_deadman_halt_p99",

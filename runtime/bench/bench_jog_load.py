@@ -18,11 +18,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from runtime.bench.bench_jog import driver_time
-from runtime.bench.harness.jog import Cell, JogClient
-from runtime.bench.harness.processes import Runtime, child_env
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
+from openpendant.runtime.bench.bench_jog import driver_time
+from openpendant.runtime.bench.harness.jog import Cell, JogClient
+from openpendant.runtime.bench.harness.processes import Runtime, child_env
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
 
 FIGURES = ("jog_deadman_under_load_false_halts", "jog_deadman_under_load_halt_p99")
 CLIENTS = 200
@@ -78,7 +78,14 @@ def run() -> list[Figure]:
         cell.ready()
         jog = JogClient(runtime, token=cell.token)
         load = subprocess.Popen(
-            [sys.executable, "-m", "runtime.bench.load", runtime.url, str(seconds), str(CLIENTS)],
+            [
+                sys.executable,
+                "-m",
+                "openpendant.runtime.bench.load",
+                runtime.url,
+                str(seconds),
+                str(CLIENTS),
+            ],
             stdout=subprocess.PIPE,
             env=child_env(home, OPENPENDANT_TOKEN=runtime.token("viewer")),
             preexec_fn=lambda: os.nice(10),

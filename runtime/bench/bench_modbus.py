@@ -7,15 +7,15 @@ from __future__ import annotations
 import asyncio
 import time
 
-from device_drivers.modbus_io.driver import ModbusIODriver
-from device_drivers.modbus_io.link import ModbusLink
-from device_drivers.modbus_io.registers import load_map
-from device_drivers.modbus_io.simulator import ModbusSimulator
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.io import SignalWrite
-from runtime.paths import MODBUS_MAPS_DIR
+from openpendant.device_drivers.modbus_io.driver import ModbusIODriver
+from openpendant.device_drivers.modbus_io.link import ModbusLink
+from openpendant.device_drivers.modbus_io.registers import load_map
+from openpendant.device_drivers.modbus_io.simulator import ModbusSimulator
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.io import SignalWrite
+from openpendant.runtime.paths import MODBUS_MAPS_DIR
 
 FIGURES = ("modbus_roundtrip_p50", "modbus_roundtrip_p99", "modbus_poll_p99")
 

@@ -11,16 +11,16 @@ from typing import Any
 import numpy as np
 from scipy.optimize import lsq_linear
 
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
-from runtime.interfaces.scene import SceneObject
-from runtime.motion.models import MoveRequest
-from runtime.motion.moves import MovePlanner, Point
-from runtime.robotics.avoidance import AvoidanceConstraint
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.velocity import VelocityController
-from runtime.robotics.world import World
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
+from openpendant.runtime.interfaces.scene import SceneObject
+from openpendant.runtime.motion.models import MoveRequest
+from openpendant.runtime.motion.moves import MovePlanner, Point
+from openpendant.runtime.robotics.avoidance import AvoidanceConstraint
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.velocity import VelocityController
+from openpendant.runtime.robotics.world import World
 
 FIGURES = (
     "ik_median",

@@ -13,20 +13,25 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from runtime.bench.runner import Figure
-from runtime.bench.stats import quick
-from runtime.interfaces.limits import FloatArray, JointLimitChecker
-from runtime.interfaces.robot import CommandMode, JointTrajectory, OperationalMode, RobotInfo
-from runtime.kit.settings import MotionSettings
-from runtime.motion.executor import trajectory as as_trajectory
-from runtime.motion.models import MoveRequest
-from runtime.motion.moves import MovePlanner, Point
-from runtime.robotics.deviation import distances_to_polyline
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.path_monitor import PathDeviation, PathMonitor
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.timing import TimedPath
-from runtime.robotics.world import World
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import quick
+from openpendant.runtime.interfaces.limits import FloatArray, JointLimitChecker
+from openpendant.runtime.interfaces.robot import (
+    CommandMode,
+    JointTrajectory,
+    OperationalMode,
+    RobotInfo,
+)
+from openpendant.runtime.kit.settings import MotionSettings
+from openpendant.runtime.motion.executor import trajectory as as_trajectory
+from openpendant.runtime.motion.models import MoveRequest
+from openpendant.runtime.motion.moves import MovePlanner, Point
+from openpendant.runtime.robotics.deviation import distances_to_polyline
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.path_monitor import PathDeviation, PathMonitor
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.timing import TimedPath
+from openpendant.runtime.robotics.world import World
 
 FIGURES = (
     "path_deviation_linear_max_mm",
@@ -76,7 +81,7 @@ def _pose(pose: pin.SE3) -> dict[str, list[float]]:
 def follow(info: RobotInfo, start: FloatArray, jt: JointTrajectory) -> FloatArray:
     """The simulated controller's setpoints (joint positions) while it runs `jt` from
     `start` in automatic mode, the trajectory taken as the driver takes it."""
-    from device_drivers.sim_robot.core import SimCore
+    from openpendant.device_drivers.sim_robot.core import SimCore
 
     received = JointTrajectory.model_validate_json(jt.model_dump_json())
     checked = JointLimitChecker(info).trajectory(received, start)

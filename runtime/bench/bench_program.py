@@ -22,14 +22,14 @@ from typing import Any
 import httpx
 from websockets.sync.client import ClientConnection, connect
 
-from blockly_blocks.generate import generate
-from runtime.bench.harness.blocks import block, number, stack, text, workspace
-from runtime.bench.harness.jog import Cell
-from runtime.bench.harness.processes import Runtime, wait_for
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
-from runtime.robotics.robot_info import load_robot_info
-from sandbox.supervisor import ProgramRun, RunState
+from openpendant.blockly_blocks.generate import generate
+from openpendant.runtime.bench.harness.blocks import block, number, stack, text, workspace
+from openpendant.runtime.bench.harness.jog import Cell
+from openpendant.runtime.bench.harness.processes import Runtime, wait_for
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.sandbox.supervisor import ProgramRun, RunState
 
 FIGURES = (
     "program_first_motion",

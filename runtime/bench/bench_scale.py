@@ -23,9 +23,9 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
+from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
 
 FIGURES = (
     "scale_20_robots_min_rate",
@@ -74,7 +74,14 @@ def run_clients(
 ) -> tuple[dict[str, Any] | None, dict[str, Any] | None]:
     """The UI clients' figures at this robot count, from the clients that did not fail (None
     when none did), and the failure (None when there was none)."""
-    argv = [sys.executable, "-m", "runtime.bench.ui_clients", url, str(clients), str(seconds)]
+    argv = [
+        sys.executable,
+        "-m",
+        "openpendant.runtime.bench.ui_clients",
+        url,
+        str(clients),
+        str(seconds),
+    ]
     try:
         done = subprocess.run(
             argv, capture_output=True, text=True, env=env, timeout=seconds + CLIENTS_GRACE

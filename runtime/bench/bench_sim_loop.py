@@ -13,9 +13,9 @@ from pathlib import Path
 
 import websockets
 
-from runtime.bench.harness.processes import SimRobotProc
-from runtime.bench.runner import Figure
-from runtime.bench.stats import quick
+from openpendant.runtime.bench.harness.processes import SimRobotProc
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import quick
 
 FIGURES = ("sim_loop_period_error_p99", "sim_loop_period_error_max", "host_timer_jitter_p99")
 

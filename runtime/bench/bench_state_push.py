@@ -14,9 +14,9 @@ import tempfile
 from functools import partial
 from pathlib import Path
 
-from runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
+from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
 
 FIGURES = ("state_push_rate", "state_push_lag_p99", "state_push_lag_p50")
 CLIENTS = 10
@@ -42,7 +42,14 @@ def run() -> list[Figure]:
         )
         url = runtime.url.replace("http://", "ws://") + "/api/devices/ws?batch=1"
         clients = subprocess.run(
-            [sys.executable, "-m", "runtime.bench.ui_clients", url, str(CLIENTS), str(seconds)],
+            [
+                sys.executable,
+                "-m",
+                "openpendant.runtime.bench.ui_clients",
+                url,
+                str(CLIENTS),
+                str(seconds),
+            ],
             capture_output=True,
             text=True,
             env=child_env(home, OPENPENDANT_TOKEN=runtime.token("viewer")),

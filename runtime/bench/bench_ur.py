@@ -16,24 +16,31 @@ from typing import Any
 
 import numpy as np
 
-from device_drivers.ur_rtde.driver import URDriver
-from device_drivers.ur_rtde.emulator.control import emulated, place, record, recorded, start, stop
-from runtime.bench.bench_path_fidelity import linear_plans
-from runtime.bench.runner import Figure
-from runtime.bench.stats import quick
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.robot import (
+from openpendant.device_drivers.ur_rtde.driver import URDriver
+from openpendant.device_drivers.ur_rtde.emulator.control import (
+    emulated,
+    place,
+    record,
+    recorded,
+    start,
+    stop,
+)
+from openpendant.runtime.bench.bench_path_fidelity import linear_plans
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import quick
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
     JogJointCommand,
     JointTrajectory,
     TrajectoryState,
 )
-from runtime.motion.executor import trajectory as as_trajectory
-from runtime.motion.moves import MovePlanner
-from runtime.robotics.deviation import distances_to_polyline
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.world import World
+from openpendant.runtime.motion.executor import trajectory as as_trajectory
+from openpendant.runtime.motion.moves import MovePlanner
+from openpendant.runtime.robotics.deviation import distances_to_polyline
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.world import World
 
 FIGURES = (
     "ur_state_rate",

@@ -10,21 +10,21 @@ import time
 import cv2
 import numpy as np
 
-from device_drivers.sim_camera.entry import SimCameraOptions, camera_model
-from device_drivers.sim_camera.optics import Renderer, Target
-from device_drivers.sim_camera.scene import cell_targets
-from device_drivers.sim_cell.world import World
-from runtime.bench.harness.views import board_views
-from runtime.bench.runner import Figure
-from runtime.bench.stats import percentile, quick
-from runtime.imaging.boards import Board, BoardSpec
-from runtime.imaging.markers import find_markers
-from runtime.imaging.template import find_template
-from runtime.interfaces.common import Pose
-from runtime.vision.intrinsics import IntrinsicSession
-from runtime.vision.models import PoseRegion
-from runtime.vision.poses import flange_poses
-from runtime.vision.robot_origin import Camera, Sighting, solve_origin, tag_corners
+from openpendant.device_drivers.sim_camera.entry import SimCameraOptions, camera_model
+from openpendant.device_drivers.sim_camera.optics import Renderer, Target
+from openpendant.device_drivers.sim_camera.scene import cell_targets
+from openpendant.device_drivers.sim_cell.world import World
+from openpendant.runtime.bench.harness.views import board_views
+from openpendant.runtime.bench.runner import Figure
+from openpendant.runtime.bench.stats import percentile, quick
+from openpendant.runtime.imaging.boards import Board, BoardSpec
+from openpendant.runtime.imaging.markers import find_markers
+from openpendant.runtime.imaging.template import find_template
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.vision.intrinsics import IntrinsicSession
+from openpendant.runtime.vision.models import PoseRegion
+from openpendant.runtime.vision.poses import flange_poses
+from openpendant.runtime.vision.robot_origin import Camera, Sighting, solve_origin, tag_corners
 
 FIGURES = (
     "aruco_fps_640",

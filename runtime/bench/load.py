@@ -1,7 +1,7 @@
 """Many HTTP clients hammering the runtime's API, from a process of their own (niced: they
 stand for tablets and laptops elsewhere on the network):
 
-python -m runtime.bench.load URL SECONDS CLIENTS
+python -m openpendant.runtime.bench.load URL SECONDS CLIENTS
 
 Each client loops over a mix of the UI's reads. Prints one JSON line at the end: requests
 answered, errors, and the p50/p99 response time (ms)."""

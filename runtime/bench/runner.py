@@ -15,7 +15,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from runtime.bench.stats import cpu_times, steal_percent
+from openpendant.runtime.bench.stats import cpu_times, steal_percent
 
 MODULES = (
     "discovery",
@@ -47,7 +47,7 @@ class Figure:
 
 
 def load(module: str) -> Any:
-    return importlib.import_module(f"runtime.bench.bench_{module}")
+    return importlib.import_module(f"openpendant.runtime.bench.bench_{module}")
 
 
 def select(only: list[str] | None) -> list[str]:

@@ -1,6 +1,6 @@
 """UI clients of the device feed, as browsers hold it (/api/devices/ws?batch=1 through the
 webui, each frame acknowledged at the next 60 Hz display frame), from a process of their
-own: python -m runtime.bench.ui_clients URL CLIENTS SECONDS
+own: python -m openpendant.runtime.bench.ui_clients URL CLIENTS SECONDS
 
 Prints one JSON line: per client (numbered from 0), the states received per device, and
 every state's age at arrival (ms: arrival time minus the driver's own timestamp; same

@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import pinocchio as pin
 
-from runtime.interfaces.common import Pose
-from runtime.kit.errors import InvalidValue, NotFound
-from runtime.robotics.kinematics import pose_to_se3
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.kit.errors import InvalidValue, NotFound
+from openpendant.runtime.robotics.kinematics import pose_to_se3
+from openpendant.runtime.variable_storage.client import StorageClient
 
 
 def frame_variable(robot: str) -> str:

@@ -15,18 +15,18 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from runtime.cell.bases import base_in_world
-from runtime.clients.devices import Devices
-from runtime.clients.robot import RobotClient
-from runtime.device_manager.client import AddedDevice, DeviceManagerClient
-from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.scene import SceneObject
-from runtime.kit.errors import OpenPendantError
-from runtime.robotics.avoidance import AvoidanceConstraint
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_body import RobotBody
-from runtime.robotics.world import Contact, World, build_obstacles
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.cell.bases import base_in_world
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.clients.robot import RobotClient
+from openpendant.runtime.device_manager.client import AddedDevice, DeviceManagerClient
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.scene import SceneObject
+from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.robotics.avoidance import AvoidanceConstraint
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_body import RobotBody
+from openpendant.runtime.robotics.world import Contact, World, build_obstacles
+from openpendant.runtime.variable_storage.client import StorageClient
 
 log = logging.getLogger(__name__)
 

@@ -12,10 +12,10 @@ from typing import Any, ClassVar, Generic, TypeVar, cast
 
 from pydantic import BaseModel
 
-from runtime.interfaces.endpoints import Endpoint
-from runtime.kit.errors import OpenPendantError, RobotError, Unavailable
-from runtime.kit.words import words_of
-from runtime.links.hub import DeviceView, LinkHub, Refusal
+from openpendant.runtime.interfaces.endpoints import Endpoint
+from openpendant.runtime.kit.errors import OpenPendantError, RobotError, Unavailable
+from openpendant.runtime.kit.words import words_of
+from openpendant.runtime.links.hub import DeviceView, LinkHub, Refusal
 
 READY_TIMEOUT = 2.0
 

@@ -9,14 +9,14 @@ import contextlib
 import time
 from typing import Any, TypeVar
 
-from plugins.api import resolve
-from plugins.registry import registry
-from runtime.clients.base import DeviceClient
-from runtime.clients.input import InputClient
-from runtime.clients.robot import RobotClient
-from runtime.device_manager.client import DeviceManagerClient, require_token
-from runtime.kit.errors import DeviceError, NotFound, OpenPendantError, Unavailable
-from runtime.links.hub import LinkHub
+from openpendant.plugins.api import resolve
+from openpendant.plugins.registry import registry
+from openpendant.runtime.clients.base import DeviceClient
+from openpendant.runtime.clients.input import InputClient
+from openpendant.runtime.clients.robot import RobotClient
+from openpendant.runtime.device_manager.client import DeviceManagerClient, require_token
+from openpendant.runtime.kit.errors import DeviceError, NotFound, OpenPendantError, Unavailable
+from openpendant.runtime.links.hub import LinkHub
 
 C = TypeVar("C", bound=DeviceClient[Any])
 

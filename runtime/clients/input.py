@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-from runtime.clients.base import DeviceClient
-from runtime.interfaces.input import InputDevice, InputState
+from openpendant.runtime.clients.base import DeviceClient
+from openpendant.runtime.interfaces.input import InputDevice, InputState
 
 
 class InputClient(DeviceClient[InputState], InputDevice):

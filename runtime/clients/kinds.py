@@ -4,11 +4,16 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-from runtime.clients.base import DeviceClient
-from runtime.interfaces.camera import Camera, CameraState, CaptureRequest, Image
-from runtime.interfaces.detector import Detections, Detector, DetectorState, DetectRequest
-from runtime.interfaces.gripper import Gripper, GripperMotion, GripperState
-from runtime.interfaces.io import IOBlock, IOState, SignalReading, SignalWrite
+from openpendant.runtime.clients.base import DeviceClient
+from openpendant.runtime.interfaces.camera import Camera, CameraState, CaptureRequest, Image
+from openpendant.runtime.interfaces.detector import (
+    Detections,
+    Detector,
+    DetectorState,
+    DetectRequest,
+)
+from openpendant.runtime.interfaces.gripper import Gripper, GripperMotion, GripperState
+from openpendant.runtime.interfaces.io import IOBlock, IOState, SignalReading, SignalWrite
 
 
 class IOClient(DeviceClient[IOState], IOBlock):

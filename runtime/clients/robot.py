@@ -11,9 +11,9 @@ from typing import Any, ClassVar
 
 from pydantic import BaseModel
 
-from runtime.clients.base import DeviceClient
-from runtime.interfaces.endpoints import stream_commands
-from runtime.interfaces.robot import (
+from openpendant.runtime.clients.base import DeviceClient
+from openpendant.runtime.interfaces.endpoints import stream_commands
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
     DigitalOutputCommand,
@@ -33,7 +33,7 @@ from runtime.interfaces.robot import (
     TrajectoryStatus,
     VelocityCommand,
 )
-from runtime.links.hub import DeviceView, LinkHub
+from openpendant.runtime.links.hub import DeviceView, LinkHub
 
 # The message type of each streamable command body, as the interface declares it.
 STREAM_TYPES: dict[type[BaseModel], str] = {

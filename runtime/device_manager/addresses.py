@@ -15,10 +15,10 @@ import time
 
 import httpx
 
-from plugins.api import resolve
-from plugins.registry import registry
-from runtime.interfaces.endpoints import stream_commands
-from runtime.kit.device_auth import DeviceAuth
+from openpendant.plugins.api import resolve
+from openpendant.plugins.registry import registry
+from openpendant.runtime.interfaces.endpoints import stream_commands
+from openpendant.runtime.kit.device_auth import DeviceAuth
 
 log = logging.getLogger(__name__)
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 
-from runtime.device_manager.models import Elsewhere, Mark
-from runtime.kit.discovery import Detected
+from openpendant.runtime.device_manager.models import Elsewhere, Mark
+from openpendant.runtime.kit.discovery import Detected
 
 log = logging.getLogger(__name__)
 

@@ -13,13 +13,13 @@ from typing import Any
 
 from pydantic import Field, ValidationError
 
-from plugins.api import DeviceKind, resolve
-from plugins.registry import registry as plugins
-from runtime.device_manager.registry import DeviceRegistry
-from runtime.interfaces.common import Strict
-from runtime.interfaces.endpoints import Endpoint, endpoints
-from runtime.kit.app import describe_validation_errors
-from runtime.kit.errors import Conflict, InvalidValue, NotFound, Unavailable
+from openpendant.plugins.api import DeviceKind, resolve
+from openpendant.plugins.registry import registry as plugins
+from openpendant.runtime.device_manager.registry import DeviceRegistry
+from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.interfaces.endpoints import Endpoint, endpoints
+from openpendant.runtime.kit.app import describe_validation_errors
+from openpendant.runtime.kit.errors import Conflict, InvalidValue, NotFound, Unavailable
 
 log = logging.getLogger(__name__)
 

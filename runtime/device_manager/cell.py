@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from runtime.device_manager.registry import DeviceRegistry
-from runtime.interfaces.robot import SIM_CELL
-from runtime.kit.errors import NotFound, Unavailable
+from openpendant.runtime.device_manager.registry import DeviceRegistry
+from openpendant.runtime.interfaces.robot import SIM_CELL
+from openpendant.runtime.kit.errors import NotFound, Unavailable
 
 PARTS_PATH = "/sim/cell/parts"
 

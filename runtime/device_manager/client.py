@@ -5,12 +5,12 @@ from __future__ import annotations
 
 from typing import Any
 
-from runtime.device_manager.models import AddedDevice, DeviceDetails, LeaseGranted
+from openpendant.runtime.device_manager.models import AddedDevice, DeviceDetails, LeaseGranted
 
 __all__ = ["AddedDevice", "DeviceDetails", "DeviceManagerClient", "LeaseGranted", "require_token"]
-from runtime.kit.client import ServiceClient
-from runtime.kit.errors import OpenPendantError
-from runtime.kit.words import words
+from openpendant.runtime.kit.client import ServiceClient
+from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.kit.words import words
 
 LEASE_HEADER = "X-Lease-Token"
 

@@ -24,19 +24,24 @@ import websockets
 from websockets.asyncio.client import ClientConnection
 from websockets.exceptions import InvalidStatus
 
-from plugins.registry import registry
-from runtime.device_manager.addresses import RecentAddresses, halt_at, halt_route, unsettled
-from runtime.device_manager.models import ConnectionStatus
-from runtime.device_manager.tools import send_tool_setup
-from runtime.interfaces.endpoints import endpoints
-from runtime.interfaces.robot import Robot
-from runtime.interfaces.variables import DeviceRecord
-from runtime.kit.device_auth import HEADER, DeviceAuth, sign
-from runtime.kit.discovery import clean_text
-from runtime.kit.errors import OpenPendantError, Unavailable
-from runtime.kit.settings import LinkSettings
-from runtime.kit.words import link_words, words
-from runtime.links.freshness import Freshness, state_stamp
+from openpendant.plugins.registry import registry
+from openpendant.runtime.device_manager.addresses import (
+    RecentAddresses,
+    halt_at,
+    halt_route,
+    unsettled,
+)
+from openpendant.runtime.device_manager.models import ConnectionStatus
+from openpendant.runtime.device_manager.tools import send_tool_setup
+from openpendant.runtime.interfaces.endpoints import endpoints
+from openpendant.runtime.interfaces.robot import Robot
+from openpendant.runtime.interfaces.variables import DeviceRecord
+from openpendant.runtime.kit.device_auth import HEADER, DeviceAuth, sign
+from openpendant.runtime.kit.discovery import clean_text
+from openpendant.runtime.kit.errors import OpenPendantError, Unavailable
+from openpendant.runtime.kit.settings import LinkSettings
+from openpendant.runtime.kit.words import link_words, words
+from openpendant.runtime.links.freshness import Freshness, state_stamp
 
 log = logging.getLogger(__name__)
 

@@ -11,10 +11,10 @@ from urllib.parse import urlencode
 import websockets
 from starlette.websockets import WebSocket
 
-from runtime.device_manager.registry import DeviceRegistry
-from runtime.interfaces.camera import Encoding
-from runtime.kit.errors import Conflict, OpenPendantError, Unavailable
-from runtime.kit.websocket import send_error, until_either_ends
+from openpendant.runtime.device_manager.registry import DeviceRegistry
+from openpendant.runtime.interfaces.camera import Encoding
+from openpendant.runtime.kit.errors import Conflict, OpenPendantError, Unavailable
+from openpendant.runtime.kit.websocket import send_error, until_either_ends
 
 
 async def relay_frames(

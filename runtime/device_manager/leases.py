@@ -11,10 +11,10 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from runtime.device_manager.models import LeaseGranted, LeaseInfo
-from runtime.kit.constant_time import same_secret
-from runtime.kit.errors import Conflict, OpenPendantError
-from runtime.kit.words import words
+from openpendant.runtime.device_manager.models import LeaseGranted, LeaseInfo
+from openpendant.runtime.kit.constant_time import same_secret
+from openpendant.runtime.kit.errors import Conflict, OpenPendantError
+from openpendant.runtime.kit.words import words
 
 log = logging.getLogger(__name__)
 

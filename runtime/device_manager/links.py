@@ -22,9 +22,9 @@ from typing import Any, Protocol
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from runtime.device_manager.claims import MAX_CLAIM, Claims
-from runtime.device_manager.connection import DeviceConnection
-from runtime.kit.errors import NotFound, OpenPendantError
+from openpendant.runtime.device_manager.claims import MAX_CLAIM, Claims
+from openpendant.runtime.device_manager.connection import DeviceConnection
+from openpendant.runtime.kit.errors import NotFound, OpenPendantError
 
 log = logging.getLogger(__name__)
 

@@ -7,7 +7,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field, field_validator, model_validator
 
-from runtime.interfaces.common import PlainText, Strict
+from openpendant.runtime.interfaces.common import PlainText, Strict
 
 LOCAL_NAME_PATTERN = r"^[a-z][a-z0-9_]{0,31}$"
 

@@ -14,18 +14,18 @@ from typing import Any
 
 import httpx
 
-from plugins.registry import registry
-from runtime.device_manager.announcements import MAX_ANNOUNCEMENTS, Announcements, mark
-from runtime.device_manager.connection import (
+from openpendant.plugins.registry import registry
+from openpendant.runtime.device_manager.announcements import MAX_ANNOUNCEMENTS, Announcements, mark
+from openpendant.runtime.device_manager.connection import (
     DeviceConnection,
     describe,
     fetch_info,
     has_session,
     short,
 )
-from runtime.device_manager.leases import LeaseBook
-from runtime.device_manager.links import LinkServer
-from runtime.device_manager.models import (
+from openpendant.runtime.device_manager.leases import LeaseBook
+from openpendant.runtime.device_manager.links import LinkServer
+from openpendant.runtime.device_manager.models import (
     AddDeviceRequest,
     AddedDevice,
     AddressClaim,
@@ -34,12 +34,18 @@ from runtime.device_manager.models import (
     LeaseGranted,
     LeaseInfo,
 )
-from runtime.device_manager.tools import stored_tool, tool_variable
-from runtime.interfaces.robot import RobotInfo, ToolSetup
-from runtime.interfaces.variables import DeviceRecord
-from runtime.kit.device_auth import disproof, keep_secret, key_id, known_secret, runtime_tag
-from runtime.kit.discovery import Detected, checked_uuid, clean_text
-from runtime.kit.errors import (
+from openpendant.runtime.device_manager.tools import stored_tool, tool_variable
+from openpendant.runtime.interfaces.robot import RobotInfo, ToolSetup
+from openpendant.runtime.interfaces.variables import DeviceRecord
+from openpendant.runtime.kit.device_auth import (
+    disproof,
+    keep_secret,
+    key_id,
+    known_secret,
+    runtime_tag,
+)
+from openpendant.runtime.kit.discovery import Detected, checked_uuid, clean_text
+from openpendant.runtime.kit.errors import (
     Conflict,
     DeviceError,
     InvalidValue,
@@ -47,10 +53,10 @@ from runtime.kit.errors import (
     OpenPendantError,
     Unavailable,
 )
-from runtime.kit.settings import LinkSettings
-from runtime.kit.websocket import Fanout
-from runtime.kit.words import link_words
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.kit.settings import LinkSettings
+from openpendant.runtime.kit.websocket import Fanout
+from openpendant.runtime.kit.words import link_words
+from openpendant.runtime.variable_storage.client import StorageClient
 
 log = logging.getLogger(__name__)
 

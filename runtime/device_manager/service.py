@@ -10,10 +10,10 @@ from typing import Annotated, Any
 from fastapi import APIRouter, FastAPI, Header, Response, WebSocket
 from fastapi.responses import JSONResponse
 
-from runtime.device_manager.calls import CallRequest, call_device, stop_all
-from runtime.device_manager.cell import cell_parts
-from runtime.device_manager.frames import relay_frames
-from runtime.device_manager.models import (
+from openpendant.runtime.device_manager.calls import CallRequest, call_device, stop_all
+from openpendant.runtime.device_manager.cell import cell_parts
+from openpendant.runtime.device_manager.frames import relay_frames
+from openpendant.runtime.device_manager.models import (
     AddDeviceRequest,
     AddedDevice,
     DetectedDevice,
@@ -23,15 +23,15 @@ from runtime.device_manager.models import (
     LeaseRequest,
     RepointRequest,
 )
-from runtime.device_manager.registry import DeviceRegistry
-from runtime.interfaces.camera import Encoding
-from runtime.interfaces.robot import RobotInfo, ToolSetup
-from runtime.kit.app import create_app
-from runtime.kit.discovery import Browser
-from runtime.kit.errors import Unavailable
-from runtime.kit.settings import RuntimeSettings
-from runtime.kit.websocket import Fanout
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.device_manager.registry import DeviceRegistry
+from openpendant.runtime.interfaces.camera import Encoding
+from openpendant.runtime.interfaces.robot import RobotInfo, ToolSetup
+from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.discovery import Browser
+from openpendant.runtime.kit.errors import Unavailable
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.kit.websocket import Fanout
+from openpendant.runtime.variable_storage.client import StorageClient
 
 LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 

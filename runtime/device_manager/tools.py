@@ -8,10 +8,10 @@ from typing import Any
 
 import httpx
 
-from runtime.interfaces.endpoints import endpoints
-from runtime.interfaces.robot import Robot, ToolSetup
-from runtime.kit.errors import NotFound, OpenPendantError
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.interfaces.endpoints import endpoints
+from openpendant.runtime.interfaces.robot import Robot, ToolSetup
+from openpendant.runtime.kit.errors import NotFound, OpenPendantError
+from openpendant.runtime.variable_storage.client import StorageClient
 
 TOOL_PREFIX = "tools."
 CALL_TIMEOUT = 5.0

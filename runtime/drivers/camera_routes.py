@@ -13,10 +13,10 @@ import json
 from fastapi import APIRouter, WebSocket
 from starlette.websockets import WebSocketDisconnect
 
-from runtime.drivers.command_log import CommandLog
-from runtime.interfaces.camera import CameraDriver, CaptureRequest, Encoding
-from runtime.kit.errors import OpenPendantError
-from runtime.kit.websocket import send_error
+from openpendant.runtime.drivers.command_log import CommandLog
+from openpendant.runtime.interfaces.camera import CameraDriver, CaptureRequest, Encoding
+from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.kit.websocket import send_error
 
 
 def frames_router(driver: CameraDriver, log: CommandLog) -> APIRouter:

@@ -19,12 +19,12 @@ from fastapi import WebSocket
 from pydantic import ValidationError
 from starlette.websockets import WebSocketDisconnect
 
-from runtime.drivers.command_log import CommandLog
-from runtime.interfaces.endpoints import stream_commands
-from runtime.interfaces.robot import CommandMode
-from runtime.interfaces.robot_driver import RobotDriver
-from runtime.kit.app import describe_validation_errors
-from runtime.kit.errors import OpenPendantError
+from openpendant.runtime.drivers.command_log import CommandLog
+from openpendant.runtime.interfaces.endpoints import stream_commands
+from openpendant.runtime.interfaces.robot import CommandMode
+from openpendant.runtime.interfaces.robot_driver import RobotDriver
+from openpendant.runtime.kit.app import describe_validation_errors
+from openpendant.runtime.kit.errors import OpenPendantError
 
 log = logging.getLogger(__name__)
 

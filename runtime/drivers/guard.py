@@ -11,8 +11,8 @@ from urllib.parse import parse_qs
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from runtime.kit.device_auth import HEADER, PROOF_PATH, Verifier, address_text, proof
-from runtime.kit.service_guard import refuse
+from openpendant.runtime.kit.device_auth import HEADER, PROOF_PATH, Verifier, address_text, proof
+from openpendant.runtime.kit.service_guard import refuse
 
 OPEN_SOCKETS = frozenset({"/state/ws"})
 # A simulator's hooks into the world around its device (an E-stop pressed, a part taken, a

@@ -13,19 +13,19 @@ from typing import Any
 
 from fastapi import APIRouter, FastAPI, Query, WebSocket
 
-from plugins.api import resolve
-from plugins.registry import registry
-from runtime.drivers import command_stream
-from runtime.drivers.command_log import CommandLog
-from runtime.drivers.guard import CommandGuard
-from runtime.drivers.routes import interface_router
-from runtime.drivers.state_stream import StateStream
-from runtime.interfaces.device import DeviceDriver
-from runtime.kit.app import create_app
-from runtime.kit.device_auth import key_id
-from runtime.kit.discovery import DEFAULT_TTL, Advertisement, Advertiser, Interfaces
-from runtime.kit.serve import listening_socket, run_app
-from runtime.kit.tasks import cancel_for_sure
+from openpendant.plugins.api import resolve
+from openpendant.plugins.registry import registry
+from openpendant.runtime.drivers import command_stream
+from openpendant.runtime.drivers.command_log import CommandLog
+from openpendant.runtime.drivers.guard import CommandGuard
+from openpendant.runtime.drivers.routes import interface_router
+from openpendant.runtime.drivers.state_stream import StateStream
+from openpendant.runtime.interfaces.device import DeviceDriver
+from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.device_auth import key_id
+from openpendant.runtime.kit.discovery import DEFAULT_TTL, Advertisement, Advertiser, Interfaces
+from openpendant.runtime.kit.serve import listening_socket, run_app
+from openpendant.runtime.kit.tasks import cancel_for_sure
 
 log = logging.getLogger(__name__)
 

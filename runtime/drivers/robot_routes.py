@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from fastapi import APIRouter, WebSocket
 
-from runtime.drivers.command_log import CommandLog
-from runtime.drivers.command_stream import CommandStream
-from runtime.interfaces.robot_driver import RobotDriver
+from openpendant.runtime.drivers.command_log import CommandLog
+from openpendant.runtime.drivers.command_stream import CommandStream
+from openpendant.runtime.interfaces.robot_driver import RobotDriver
 
 
 def command_router(driver: RobotDriver, log: CommandLog) -> APIRouter:

@@ -10,8 +10,8 @@ from typing import Any
 
 from fastapi import APIRouter, Query, Response
 
-from runtime.drivers.command_log import CommandLog, LoggedCommand
-from runtime.interfaces.endpoints import Endpoint, endpoints, param_types
+from openpendant.runtime.drivers.command_log import CommandLog, LoggedCommand
+from openpendant.runtime.interfaces.endpoints import Endpoint, endpoints, param_types
 
 Handler = Callable[..., Coroutine[Any, Any, Any]]
 

@@ -19,14 +19,14 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
-from plugins.api import Driver, resolve
-from plugins.registry import registry
-from runtime.drivers.host import serve_driver
-from runtime.kit.app import describe_validation_errors
-from runtime.kit.device_auth import device_secret, runtime_tag
-from runtime.kit.errors import OpenPendantError
-from runtime.kit.logs import setup_logging
-from runtime.kit.settings import SETTINGS_ENV, load_settings, settings_from_env
+from openpendant.plugins.api import Driver, resolve
+from openpendant.plugins.registry import registry
+from openpendant.runtime.drivers.host import serve_driver
+from openpendant.runtime.kit.app import describe_validation_errors
+from openpendant.runtime.kit.device_auth import device_secret, runtime_tag
+from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.kit.logs import setup_logging
+from openpendant.runtime.kit.settings import SETTINGS_ENV, load_settings, settings_from_env
 
 SECRET_ENV = "OPENPENDANT_DEVICE_SECRET"
 NAMESPACE = uuids.UUID("6f1d9a52-3c39-4b61-9d0e-5c2a1f6b7e10")

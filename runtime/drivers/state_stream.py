@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 from pydantic import BaseModel
 
-from runtime.kit.websocket import Fanout
+from openpendant.runtime.kit.websocket import Fanout
 
 # An unchanged state is repeated this often, so a quiet device is not taken for a dead or
 # stale one (the runtime calls a link stale after 0.2 s without a state).

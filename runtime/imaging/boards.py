@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 from pydantic import AfterValidator, Field, model_validator
 
-from runtime.interfaces.common import Strict
+from openpendant.runtime.interfaces.common import Strict
 
 DICTIONARIES: dict[str, int] = {
     name.removeprefix("DICT_").lower(): getattr(cv2.aruco, name)

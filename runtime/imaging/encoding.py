@@ -8,8 +8,8 @@ import base64
 import cv2
 import numpy as np
 
-from runtime.interfaces.camera import CaptureRequest, Image
-from runtime.kit.errors import DeviceError
+from openpendant.runtime.interfaces.camera import CaptureRequest, Image
+from openpendant.runtime.kit.errors import DeviceError
 
 
 def encoded(pixels: np.ndarray, request: CaptureRequest, seqno: int, taken: float) -> Image:

@@ -15,7 +15,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from runtime.imaging.boards import DICTIONARIES
+from openpendant.runtime.imaging.boards import DICTIONARIES
 
 SAMPLES = 12  # points per edge
 STEP = 0.25  # px between samples across an edge

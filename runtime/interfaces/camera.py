@@ -8,9 +8,9 @@ from typing import Literal
 
 from pydantic import BaseModel, Field
 
-from runtime.interfaces.common import Strict
-from runtime.interfaces.device import DeviceIdentity, KindDriver
-from runtime.interfaces.endpoints import endpoint
+from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.interfaces.device import DeviceIdentity, KindDriver
+from openpendant.runtime.interfaces.endpoints import endpoint
 
 Encoding = Literal["jpeg", "png"]
 ENCODINGS: tuple[Encoding, ...] = ("jpeg", "png")

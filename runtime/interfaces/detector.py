@@ -8,9 +8,9 @@ from abc import ABC, abstractmethod
 
 from pydantic import BaseModel, Field
 
-from runtime.interfaces.common import Pose, Strict
-from runtime.interfaces.device import DeviceIdentity, KindDriver
-from runtime.interfaces.endpoints import endpoint
+from openpendant.runtime.interfaces.common import Pose, Strict
+from openpendant.runtime.interfaces.device import DeviceIdentity, KindDriver
+from openpendant.runtime.interfaces.endpoints import endpoint
 
 
 class DetectorInfo(BaseModel):

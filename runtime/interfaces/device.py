@@ -8,7 +8,7 @@ from typing import ClassVar, Generic, TypeVar
 
 from pydantic import BaseModel, Field
 
-from runtime.kit.api_version import API_VERSION
+from openpendant.runtime.kit.api_version import API_VERSION
 
 
 class DeviceIdentity(BaseModel):

@@ -6,7 +6,7 @@ from abc import ABC, abstractmethod
 
 from pydantic import BaseModel, Field
 
-from runtime.interfaces.device import DeviceIdentity, KindDriver
+from openpendant.runtime.interfaces.device import DeviceIdentity, KindDriver
 
 AXES = ("x", "y", "z", "rx", "ry", "rz")
 

@@ -11,9 +11,9 @@ from typing import Literal
 
 from pydantic import BaseModel, Field
 
-from runtime.interfaces.common import Strict
-from runtime.interfaces.device import DeviceIdentity, KindDriver
-from runtime.interfaces.endpoints import endpoint
+from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.interfaces.device import DeviceIdentity, KindDriver
+from openpendant.runtime.interfaces.endpoints import endpoint
 
 SIGNAL_NAME = r"^[a-z][a-z0-9_]{0,31}$"
 SignalKind = Literal["digital_input", "digital_output", "analog_input", "analog_output"]

@@ -9,9 +9,9 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from runtime.interfaces.robot import JointTrajectory, RobotInfo
-from runtime.kit.errors import RobotError
-from runtime.kit.words import words
+from openpendant.runtime.interfaces.robot import JointTrajectory, RobotInfo
+from openpendant.runtime.kit.errors import RobotError
+from openpendant.runtime.kit.words import words
 
 FloatArray = npt.NDArray[np.float64]
 

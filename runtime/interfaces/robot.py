@@ -8,9 +8,9 @@ from typing import Annotated
 
 from pydantic import BaseModel, Field, model_validator
 
-from runtime.interfaces.common import JointVector, Pose, Strict, Vector3
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.endpoints import endpoint
+from openpendant.runtime.interfaces.common import JointVector, Pose, Strict, Vector3
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.endpoints import endpoint
 
 MAX_COMMAND_TIMEOUT = 1.0
 

@@ -6,9 +6,9 @@ from __future__ import annotations
 from abc import abstractmethod
 from dataclasses import dataclass
 
-from runtime.interfaces.device import DeviceDriver, DeviceIdentity
-from runtime.interfaces.limits import CheckedTrajectory, FloatArray, JointLimitChecker
-from runtime.interfaces.robot import (
+from openpendant.runtime.interfaces.device import DeviceDriver, DeviceIdentity
+from openpendant.runtime.interfaces.limits import CheckedTrajectory, FloatArray, JointLimitChecker
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
     DigitalOutputCommand,
@@ -29,8 +29,8 @@ from runtime.interfaces.robot import (
     TrajectoryStatus,
     VelocityCommand,
 )
-from runtime.kit.errors import InvalidValue, RobotError
-from runtime.kit.words import words
+from openpendant.runtime.kit.errors import InvalidValue, RobotError
+from openpendant.runtime.kit.words import words
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ from typing import Literal
 
 from pydantic import Field, model_validator
 
-from runtime.interfaces.common import Pose, Strict
+from openpendant.runtime.interfaces.common import Pose, Strict
 
 ShapeKind = Literal["box", "cylinder", "sphere", "mesh"]
 # How many numbers `size` holds for each shape, and what they mean.

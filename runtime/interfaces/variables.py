@@ -8,7 +8,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
-from runtime.interfaces.common import JointVector, Pose, Strict
+from openpendant.runtime.interfaces.common import JointVector, Pose, Strict
 
 # A variable's name is only a name: no path separators, spaces, control or bidi characters.
 NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_.\-]{0,127}\Z")

@@ -10,20 +10,20 @@ from collections.abc import Awaitable, Callable
 import numpy as np
 import pinocchio as pin
 
-from runtime.clients.input import InputClient
-from runtime.clients.robot import Halt, Streamed
-from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import (
+from openpendant.runtime.clients.input import InputClient
+from openpendant.runtime.clients.robot import Halt, Streamed
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     FreedriveCommand,
     PositionCommand,
     RobotState,
     VelocityCommand,
 )
-from runtime.robotics.joint_move import PlannedMove
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.path_monitor import PathMonitor
-from runtime.robotics.velocity import VelocityController
+from openpendant.runtime.robotics.joint_move import PlannedMove
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.path_monitor import PathMonitor
+from openpendant.runtime.robotics.velocity import VelocityController
 
 # The driver halts on its own if the stream stops for this long (the deadman's backstop).
 COMMAND_TIMEOUT = 0.2

@@ -4,9 +4,9 @@ Move-to must not drive the arm through a box."""
 
 from __future__ import annotations
 
-from runtime.interfaces.limits import FloatArray
-from runtime.kit.errors import OpenPendantError
-from runtime.motion.client import MotionClient, MoveKind, MoveRequest, Target
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.motion.client import MotionClient, MoveKind, MoveRequest, Target
 
 
 class PathRefused(OpenPendantError):

@@ -6,12 +6,12 @@ from __future__ import annotations
 import asyncio
 from collections.abc import Callable
 
-from runtime.clients.devices import Devices
-from runtime.clients.input import InputClient
-from runtime.interfaces.robot import RobotInfo
-from runtime.jog.jogger import Jogger
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.velocity import Constraint
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.clients.input import InputClient
+from openpendant.runtime.interfaces.robot import RobotInfo
+from openpendant.runtime.jog.jogger import Jogger
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.velocity import Constraint
 
 
 class Directory:

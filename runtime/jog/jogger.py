@@ -13,21 +13,21 @@ from typing import Any
 
 import numpy as np
 
-from runtime.clients.robot import Halt, RobotClient
-from runtime.interfaces.robot import (
+from openpendant.runtime.clients.robot import Halt, RobotClient
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     OperationalMode,
     ProtectiveStopRequest,
     VelocityCommand,
 )
-from runtime.jog.actions import Action, MouseJog, RampedJog
-from runtime.kit.errors import OpenPendantError, RobotError
-from runtime.kit.words import Words, words, words_of
-from runtime.links.hub import LINK_FAULTS
-from runtime.robotics.avoidance import SAFETY
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.path_monitor import PathDeviation
-from runtime.robotics.velocity import MANUAL_TCP_SPEED, Constraint, VelocityController
+from openpendant.runtime.jog.actions import Action, MouseJog, RampedJog
+from openpendant.runtime.kit.errors import OpenPendantError, RobotError
+from openpendant.runtime.kit.words import Words, words, words_of
+from openpendant.runtime.links.hub import LINK_FAULTS
+from openpendant.runtime.robotics.avoidance import SAFETY
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.path_monitor import PathDeviation
+from openpendant.runtime.robotics.velocity import MANUAL_TCP_SPEED, Constraint, VelocityController
 
 log = logging.getLogger(__name__)
 

@@ -8,8 +8,8 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from runtime.interfaces.common import Strict
-from runtime.interfaces.variables import VARIABLE_NAME
+from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.interfaces.variables import VARIABLE_NAME
 
 PressId = Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_.:-]+$")]
 RobotName = Annotated[str, Field(min_length=1, max_length=32)]

@@ -9,21 +9,21 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, FastAPI, Header, WebSocket
 
-from runtime.cell.mirror import WorldMirror
-from runtime.clients.devices import Devices
-from runtime.interfaces.robot import RobotState, SpeedRatioRequest
-from runtime.interfaces.variables import Variable
-from runtime.jog.clearance import PathCheck
-from runtime.jog.directory import Directory
-from runtime.jog.models import SpeedRequest, TeachRequest
-from runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
-from runtime.jog.waypoints import robot_waypoints, teach
-from runtime.kit.app import create_app
-from runtime.kit.settings import RuntimeSettings
-from runtime.motion.client import MotionClient
-from runtime.paths import package_roots
-from runtime.robotics.velocity import MANUAL_TCP_SPEED
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.cell.mirror import WorldMirror
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.interfaces.robot import RobotState, SpeedRatioRequest
+from openpendant.runtime.interfaces.variables import Variable
+from openpendant.runtime.jog.clearance import PathCheck
+from openpendant.runtime.jog.directory import Directory
+from openpendant.runtime.jog.models import SpeedRequest, TeachRequest
+from openpendant.runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
+from openpendant.runtime.jog.waypoints import robot_waypoints, teach
+from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.motion.client import MotionClient
+from openpendant.runtime.paths import package_roots
+from openpendant.runtime.robotics.velocity import MANUAL_TCP_SPEED
+from openpendant.runtime.variable_storage.client import StorageClient
 
 LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 

@@ -17,8 +17,8 @@ import numpy as np
 import pinocchio as pin
 from pydantic import ValidationError
 
-from runtime.interfaces.limits import FloatArray, JointLimitChecker
-from runtime.jog.actions import (
+from openpendant.runtime.interfaces.limits import FloatArray, JointLimitChecker
+from openpendant.runtime.jog.actions import (
     Action,
     FreedriveHold,
     JointVelocityJog,
@@ -28,10 +28,10 @@ from runtime.jog.actions import (
     override,
     scaled_cap,
 )
-from runtime.jog.clearance import PathCheck
-from runtime.jog.directory import Directory
-from runtime.jog.jogger import Ended, Jogger
-from runtime.jog.models import (
+from openpendant.runtime.jog.clearance import PathCheck
+from openpendant.runtime.jog.directory import Directory
+from openpendant.runtime.jog.jogger import Ended, Jogger
+from openpendant.runtime.jog.models import (
     CARTESIAN_AXES,
     FreedrivePress,
     HaltRequest,
@@ -42,15 +42,15 @@ from runtime.jog.models import (
     Release,
     TeachRequest,
 )
-from runtime.jog.waypoints import joint_goal, teach
-from runtime.kit.app import describe_validation_errors
-from runtime.kit.errors import InvalidValue, OpenPendantError, RobotError
-from runtime.kit.settings import MotionSettings
-from runtime.kit.websocket import Fanout
-from runtime.kit.words import Words, words
-from runtime.robotics.joint_move import plan_joint_move
-from runtime.robotics.path_monitor import PathMonitor
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.jog.waypoints import joint_goal, teach
+from openpendant.runtime.kit.app import describe_validation_errors
+from openpendant.runtime.kit.errors import InvalidValue, OpenPendantError, RobotError
+from openpendant.runtime.kit.settings import MotionSettings
+from openpendant.runtime.kit.websocket import Fanout
+from openpendant.runtime.kit.words import Words, words
+from openpendant.runtime.robotics.joint_move import plan_joint_move
+from openpendant.runtime.robotics.path_monitor import PathMonitor
+from openpendant.runtime.variable_storage.client import StorageClient
 
 log = logging.getLogger(__name__)
 

@@ -8,15 +8,15 @@ from typing import Any
 
 import numpy as np
 
-from runtime.cell.bases import base_in_world
-from runtime.interfaces.common import Pose
-from runtime.interfaces.limits import FloatArray, JointLimitChecker
-from runtime.interfaces.robot import RobotState
-from runtime.interfaces.variables import Variable
-from runtime.jog.models import TeachRequest
-from runtime.kit.errors import Conflict, InvalidValue
-from runtime.robotics.kinematics import Kinematics, pose_to_se3, se3_to_pose
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.cell.bases import base_in_world
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.limits import FloatArray, JointLimitChecker
+from openpendant.runtime.interfaces.robot import RobotState
+from openpendant.runtime.interfaces.variables import Variable
+from openpendant.runtime.jog.models import TeachRequest
+from openpendant.runtime.kit.errors import Conflict, InvalidValue
+from openpendant.runtime.robotics.kinematics import Kinematics, pose_to_se3, se3_to_pose
+from openpendant.runtime.variable_storage.client import StorageClient
 
 WAYPOINT_TYPES = ("joint_waypoint", "pose_waypoint")
 

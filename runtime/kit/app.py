@@ -16,9 +16,9 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from runtime import __version__
-from runtime.kit.deadline import DeadlineMiddleware
-from runtime.kit.errors import OpenPendantError
+from openpendant.runtime import __version__
+from openpendant.runtime.kit.deadline import DeadlineMiddleware
+from openpendant.runtime.kit.errors import OpenPendantError
 
 log = logging.getLogger(__name__)
 
@@ -95,7 +95,7 @@ def _freeze_startup_objects() -> None:
 
 def plugin_failures() -> list[dict[str, str]]:
     """What of the plugins this process could not load (the System panel shows them)."""
-    from plugins.registry import registry
+    from openpendant.plugins.registry import registry
 
     return [asdict(failure) for failure in registry().failures]
 

@@ -7,8 +7,8 @@ from typing import Any, TypeVar, overload
 import httpx
 from pydantic import BaseModel
 
-from runtime.kit.errors import OpenPendantError, Unavailable
-from runtime.kit.internal import internal_headers
+from openpendant.runtime.kit.errors import OpenPendantError, Unavailable
+from openpendant.runtime.kit.internal import internal_headers
 
 M = TypeVar("M", bound=BaseModel)
 

@@ -1,7 +1,7 @@
 """Which announced devices to ask to confirm themselves, and when one is gone (issue 31).
 
 Pure bookkeeping over what the DNS-SD cache holds, so it can be followed step by step;
-`runtime.kit.discovery.Browser` sends the questions and reports the changes. Times are
+`openpendant.runtime.kit.discovery.Browser` sends the questions and reports the changes. Times are
 zeroconf's milliseconds.
 
 A name whose service record lapsed is not forgotten: its confirmations may have been lost

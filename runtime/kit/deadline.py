@@ -14,7 +14,7 @@ from contextvars import ContextVar
 
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from runtime.kit.errors import OpenPendantError
+from openpendant.runtime.kit.errors import OpenPendantError
 
 HEADER = "X-Deadline"
 _HEADER_KEY = HEADER.lower().encode()

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import httpx
 
-from runtime.kit.constant_time import same_secret
+from openpendant.runtime.kit.constant_time import same_secret
 
 HEADER = "X-Device-Auth"
 PROOF_PATH = "/pair/proof"

@@ -33,8 +33,8 @@ from zeroconf._dns import DNSQuestion
 from zeroconf._protocol.outgoing import DNSOutgoing
 from zeroconf.asyncio import AsyncServiceBrowser, AsyncServiceInfo, AsyncZeroconf
 
-from runtime.kit.api_version import API_VERSION
-from runtime.kit.confirmations import Confirmations
+from openpendant.runtime.kit.api_version import API_VERSION
+from openpendant.runtime.kit.confirmations import Confirmations
 
 log = logging.getLogger(__name__)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from runtime.kit.words import Words, words_of
+from openpendant.runtime.kit.words import Words, words_of
 
 
 class OpenPendantError(Exception):

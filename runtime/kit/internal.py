@@ -10,8 +10,8 @@ import os
 from functools import cache
 from urllib.parse import urlsplit
 
-from runtime.kit.constant_time import same_secret
-from runtime.kit.settings import is_loopback
+from openpendant.runtime.kit.constant_time import same_secret
+from openpendant.runtime.kit.settings import is_loopback
 
 ENV = "OPENPENDANT_INTERNAL_TOKEN"
 HEADER = "X-OpenPendant-Internal"

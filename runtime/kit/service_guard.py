@@ -12,13 +12,13 @@ from urllib.parse import parse_qs
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from runtime.auth.audit import AuditLog
-from runtime.auth.roles import Role
-from runtime.auth.standing import SignIns
-from runtime.kit import tickets
-from runtime.kit.internal import HEADER, internal_token, is_internal
-from runtime.kit.sign_in_watch import ENDED, EndsWithSignIn
-from runtime.kit.words import Words
+from openpendant.runtime.auth.audit import AuditLog
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.standing import SignIns
+from openpendant.runtime.kit import tickets
+from openpendant.runtime.kit.internal import HEADER, internal_token, is_internal
+from openpendant.runtime.kit.sign_in_watch import ENDED, EndsWithSignIn
+from openpendant.runtime.kit.words import Words
 
 OPEN_PATHS = frozenset({"/health"})
 # s between checks of an open jog socket's sign-in: it closes well within 2 s of its end.

@@ -17,8 +17,8 @@ import time
 from dataclasses import dataclass
 from typing import Literal
 
-from runtime.kit.constant_time import same_secret
-from runtime.kit.internal import derived_key
+from openpendant.runtime.kit.constant_time import same_secret
+from openpendant.runtime.kit.internal import derived_key
 
 LIFETIME = 60.0  # s to open the socket with it
 

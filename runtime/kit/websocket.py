@@ -12,7 +12,7 @@ from typing import Any
 
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from runtime.kit.errors import OpenPendantError
+from openpendant.runtime.kit.errors import OpenPendantError
 
 ACK = '{"type":"ack"}'
 ACK_WINDOW = 2  # frames a client may have unacknowledged

@@ -18,16 +18,16 @@ from types import FrameType
 
 import httpx
 
-from plugins.api import resolve
-from plugins.registry import registry
-from runtime import __version__
-from runtime.auth.setup import SETUP_CODE_ENV, needs_setup
-from runtime.kit.internal import ENV as INTERNAL_ENV
-from runtime.kit.internal import FILE as INTERNAL_FILE
-from runtime.kit.serve import listening_socket
-from runtime.kit.settings import DeviceSpec, RuntimeSettings, settings_for_child
-from runtime.launcher.supervisor import Child, Main, Supervisor, process_env
-from runtime.services import URLS_ENV, WEBUI, all_services, services
+from openpendant.plugins.api import resolve
+from openpendant.plugins.registry import registry
+from openpendant.runtime import __version__
+from openpendant.runtime.auth.setup import SETUP_CODE_ENV, needs_setup
+from openpendant.runtime.kit.internal import ENV as INTERNAL_ENV
+from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
+from openpendant.runtime.kit.serve import listening_socket
+from openpendant.runtime.kit.settings import DeviceSpec, RuntimeSettings, settings_for_child
+from openpendant.runtime.launcher.supervisor import Child, Main, Supervisor, process_env
+from openpendant.runtime.services import URLS_ENV, WEBUI, all_services, services
 
 log = logging.getLogger("openpendant.launcher")
 
@@ -61,7 +61,10 @@ def preload(settings: RuntimeSettings) -> None:
         driver = drivers.get(device.driver)
         if driver is not None:
             modules += [r for r in (driver.factory, driver.options, driver.routes) if r]
-    modules += ["runtime.drivers.run:run_driver", "runtime.services:run_service"]
+    modules += [
+        "openpendant.runtime.drivers.run:run_driver",
+        "openpendant.runtime.services:run_service",
+    ]
     for reference in modules:
         try:
             resolve(reference)
@@ -80,7 +83,7 @@ def _service_child(
     main: Main | None = None,
 ) -> Child:
     fd = sock.fileno()
-    argv = [sys.executable, "-m", "runtime.cli", "service", name, "--fd", str(fd)]
+    argv = [sys.executable, "-m", "openpendant.runtime.cli", "service", name, "--fd", str(fd)]
     fds = [fd]
     if public is not None:
         argv += ["--public-fd", str(public.fileno())]
@@ -148,7 +151,7 @@ def _device_children(
                 argv=[
                     sys.executable,
                     "-m",
-                    "runtime.cli",
+                    "openpendant.runtime.cli",
                     "driver",
                     spec.driver,
                     "--name",

@@ -88,8 +88,8 @@ def fork_child(
     log_path: Path,
     keep: tuple[int, ...],
 ) -> Forked:
-    """Fork, and in the child run `main(argv)` as `python -m runtime.cli` would, with `env`
-    as its environment, its output in `log_path` and only the `keep` descriptors open."""
+    """Fork, and in the child run `main(argv)` as `python -m openpendant.runtime.cli` would,
+    with `env` as its environment, its output in `log_path` and only the `keep` descriptors open."""
     for stream in (sys.stdout, sys.stderr):
         stream.flush()  # nothing buffered here is written twice
     # No signal may reach the child's copy of the launcher's handlers.
@@ -116,7 +116,7 @@ def fork_child(
                     os.close(fd)
         os.environ.clear()
         os.environ.update(env)
-        sys.argv = ["runtime.cli", *argv]
+        sys.argv = ["openpendant.runtime.cli", *argv]
         code = main(argv)
     except SystemExit as exc:
         code = 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 1
@@ -138,7 +138,9 @@ def _open_fds() -> list[int]:
 @dataclass
 class Child:
     name: str
-    argv: list[str]  # `python -m runtime.cli …`: what an exec'd child runs, or a forked one
+    argv: list[
+        str
+    ]  # `python -m openpendant.runtime.cli …`: what an exec'd child runs, or a forked one
     env: dict[str, str]
     log_path: Path
     pass_fds: tuple[int, ...] = ()

@@ -22,10 +22,10 @@ from typing import Any
 import websockets
 from websockets.asyncio.client import ClientConnection
 
-from runtime.kit.errors import OpenPendantError, Unavailable
-from runtime.kit.internal import internal_headers
-from runtime.kit.words import link_words, words
-from runtime.links.freshness import Freshness, state_stamp
+from openpendant.runtime.kit.errors import OpenPendantError, Unavailable
+from openpendant.runtime.kit.internal import internal_headers
+from openpendant.runtime.kit.words import link_words, words
+from openpendant.runtime.links.freshness import Freshness, state_stamp
 
 log = logging.getLogger(__name__)
 

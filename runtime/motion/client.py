@@ -2,9 +2,16 @@
 
 from __future__ import annotations
 
-from runtime.device_manager.client import LEASE_HEADER
-from runtime.kit.client import ServiceClient
-from runtime.motion.models import MoveKind, MoveRequest, MoveState, MoveStatus, PlanReport, Target
+from openpendant.runtime.device_manager.client import LEASE_HEADER
+from openpendant.runtime.kit.client import ServiceClient
+from openpendant.runtime.motion.models import (
+    MoveKind,
+    MoveRequest,
+    MoveState,
+    MoveStatus,
+    PlanReport,
+    Target,
+)
 
 __all__ = [
     "MotionClient",

@@ -9,8 +9,8 @@ import contextlib
 
 import numpy as np
 
-from runtime.clients.robot import RobotClient
-from runtime.interfaces.robot import (
+from openpendant.runtime.clients.robot import RobotClient
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
     JointTrajectory,
@@ -19,10 +19,10 @@ from runtime.interfaces.robot import (
     TrajectoryState,
     TrajectoryWaypoint,
 )
-from runtime.kit.errors import OpenPendantError, RobotError
-from runtime.kit.words import words
-from runtime.robotics.path_monitor import PathDeviation, PathMonitor
-from runtime.robotics.timing import TimedPath
+from openpendant.runtime.kit.errors import OpenPendantError, RobotError
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.robotics.path_monitor import PathDeviation, PathMonitor
+from openpendant.runtime.robotics.timing import TimedPath
 
 WATCH_PERIOD = 0.02  # s
 # The robot's position and its setpoint this far apart means it is not following.

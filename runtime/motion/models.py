@@ -7,9 +7,9 @@ from typing import Literal
 
 from pydantic import BaseModel, Field, model_validator
 
-from runtime.interfaces.common import JointVector, Pose, Strict
-from runtime.interfaces.variables import VARIABLE_NAME
-from runtime.kit.words import Words
+from openpendant.runtime.interfaces.common import JointVector, Pose, Strict
+from openpendant.runtime.interfaces.variables import VARIABLE_NAME
+from openpendant.runtime.kit.words import Words
 
 Ratio = Field(default=0.5, gt=0, le=1)
 

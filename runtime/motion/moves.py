@@ -9,18 +9,24 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from runtime.interfaces.limits import FloatArray, JointLimitChecker
-from runtime.kit.errors import InvalidValue, OpenPendantError
-from runtime.kit.words import words
-from runtime.motion.models import CollisionReport, MoveKind, MoveRequest, PlanReport, Target
-from runtime.robotics.checker import Collision, PathChecker
-from runtime.robotics.joint_move import plan_joint_move
-from runtime.robotics.kinematics import pose_to_se3
-from runtime.robotics.paths import sample_joint_polyline, sample_tcp_path
-from runtime.robotics.planner import plan_around
-from runtime.robotics.reference import Limits
-from runtime.robotics.timing import SAMPLE_PERIOD, TimedPath, at_rest, time_scale
-from runtime.robotics.world import World
+from openpendant.runtime.interfaces.limits import FloatArray, JointLimitChecker
+from openpendant.runtime.kit.errors import InvalidValue, OpenPendantError
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.motion.models import (
+    CollisionReport,
+    MoveKind,
+    MoveRequest,
+    PlanReport,
+    Target,
+)
+from openpendant.runtime.robotics.checker import Collision, PathChecker
+from openpendant.runtime.robotics.joint_move import plan_joint_move
+from openpendant.runtime.robotics.kinematics import pose_to_se3
+from openpendant.runtime.robotics.paths import sample_joint_polyline, sample_tcp_path
+from openpendant.runtime.robotics.planner import plan_around
+from openpendant.runtime.robotics.reference import Limits
+from openpendant.runtime.robotics.timing import SAMPLE_PERIOD, TimedPath, at_rest, time_scale
+from openpendant.runtime.robotics.world import World
 
 PREVIEW_POINTS = 300
 ALTERNATIVES = 8  # a pose's other joint solutions tried when the nearest collides there

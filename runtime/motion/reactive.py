@@ -11,11 +11,11 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from runtime.cell.mirror import MAX_AGE, MirrorConstraint
-from runtime.clients.robot import RobotClient
-from runtime.interfaces.robot import CommandMode, CommandModeRequest, VelocityCommand
-from runtime.motion.executor import MoveFailed, check_faults
-from runtime.robotics.velocity import VelocityController
+from openpendant.runtime.cell.mirror import MAX_AGE, MirrorConstraint
+from openpendant.runtime.clients.robot import RobotClient
+from openpendant.runtime.interfaces.robot import CommandMode, CommandModeRequest, VelocityCommand
+from openpendant.runtime.motion.executor import MoveFailed, check_faults
+from openpendant.runtime.robotics.velocity import VelocityController
 
 PERIOD = 0.01  # s
 GAIN = 3.0  # 1/s: how fast the remaining error is closed near the goal

@@ -10,13 +10,13 @@ from collections.abc import AsyncIterator
 import numpy as np
 import pinocchio as pin
 
-from runtime.cell.mirror import CellWorld
-from runtime.clients.devices import Devices
-from runtime.clients.robot import RobotClient
-from runtime.interfaces.common import Pose
-from runtime.kit.errors import NotFound
-from runtime.robotics.world import World
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.cell.mirror import CellWorld
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.clients.robot import RobotClient
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.kit.errors import NotFound
+from openpendant.runtime.robotics.world import World
+from openpendant.runtime.variable_storage.client import StorageClient
 
 
 class Robots:

@@ -13,17 +13,17 @@ from typing import Annotated, Any
 import numpy as np
 from fastapi import APIRouter, FastAPI, Header
 
-from runtime.cell.mirror import WorldMirror
-from runtime.clients.devices import Devices
-from runtime.interfaces.limits import JointLimitChecker
-from runtime.interfaces.robot import CommandMode, CommandModeRequest, OperationalMode
-from runtime.interfaces.variables import JointWaypoint, PoseWaypoint
-from runtime.kit.app import create_app
-from runtime.kit.errors import Conflict, NotFound, OpenPendantError
-from runtime.kit.settings import MotionSettings, RuntimeSettings
-from runtime.kit.words import words
-from runtime.motion.executor import Execution
-from runtime.motion.models import (
+from openpendant.runtime.cell.mirror import WorldMirror
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.interfaces.limits import JointLimitChecker
+from openpendant.runtime.interfaces.robot import CommandMode, CommandModeRequest, OperationalMode
+from openpendant.runtime.interfaces.variables import JointWaypoint, PoseWaypoint
+from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.errors import Conflict, NotFound, OpenPendantError
+from openpendant.runtime.kit.settings import MotionSettings, RuntimeSettings
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.motion.executor import Execution
+from openpendant.runtime.motion.models import (
     MoveKind,
     MoveRequest,
     MoveState,
@@ -31,14 +31,14 @@ from runtime.motion.models import (
     PlanReport,
     Target,
 )
-from runtime.motion.moves import MovePlanner, Plan, Refused, resolve
-from runtime.motion.reactive import PERIOD as REACTIVE_PERIOD
-from runtime.motion.reactive import ReactiveExecution
-from runtime.motion.robots import Robots, world_pose
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.path_monitor import PathMonitor
-from runtime.robotics.velocity import MANUAL_TCP_SPEED, VelocityController
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.motion.moves import MovePlanner, Plan, Refused, resolve
+from openpendant.runtime.motion.reactive import PERIOD as REACTIVE_PERIOD
+from openpendant.runtime.motion.reactive import ReactiveExecution
+from openpendant.runtime.motion.robots import Robots, world_pose
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.path_monitor import PathMonitor
+from openpendant.runtime.robotics.velocity import MANUAL_TCP_SPEED, VelocityController
+from openpendant.runtime.variable_storage.client import StorageClient
 
 LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 # Who asks for a move (a program run): a stop naming it refuses its later moves too, so a

@@ -21,14 +21,19 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from blockly_blocks.generate import generate
-from blockly_blocks.generator import Generated
-from blockly_blocks.workspace import WorkspaceError, allow_deep_json, dump_json, parse_json
-from runtime.interfaces.variables import StoredProgram
-from runtime.kit.errors import InvalidValue, OpenPendantError
-from runtime.kit.words import words
-from runtime.program.models import ProblemInfo
-from sandbox.policy import ProgramCompileError, compile_program
+from openpendant.blockly_blocks.generate import generate
+from openpendant.blockly_blocks.generator import Generated
+from openpendant.blockly_blocks.workspace import (
+    WorkspaceError,
+    allow_deep_json,
+    dump_json,
+    parse_json,
+)
+from openpendant.runtime.interfaces.variables import StoredProgram
+from openpendant.runtime.kit.errors import InvalidValue, OpenPendantError
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.program.models import ProblemInfo
+from openpendant.sandbox.policy import ProgramCompileError, compile_program
 
 log = logging.getLogger(__name__)
 

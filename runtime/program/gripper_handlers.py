@@ -5,12 +5,12 @@ from __future__ import annotations
 import math
 from typing import Any, cast
 
-from runtime.clients.kinds import GripperClient
-from runtime.interfaces.gripper import GripperMotion
-from runtime.kit.errors import NotFound, OpenPendantError
-from runtime.program.handlers import DEVICE_NAME
-from runtime.program.host import RunHost
-from sandbox.supervisor import CallRefused
+from openpendant.runtime.clients.kinds import GripperClient
+from openpendant.runtime.interfaces.gripper import GripperMotion
+from openpendant.runtime.kit.errors import NotFound, OpenPendantError
+from openpendant.runtime.program.handlers import DEVICE_NAME
+from openpendant.runtime.program.host import RunHost
+from openpendant.sandbox.supervisor import CallRefused
 
 
 async def _gripper(run: RunHost, args: dict[str, Any], *, command: bool) -> GripperClient:

@@ -9,16 +9,16 @@ from typing import Any, TypeVar, cast
 
 from pydantic import BaseModel, ValidationError
 
-from runtime.clients.kinds import IOClient
-from runtime.interfaces.io import SignalWrite
-from runtime.interfaces.robot import DigitalOutputCommand, ToolCommand
-from runtime.kit.app import describe_validation_errors
-from runtime.kit.errors import InvalidValue, NotFound
-from runtime.kit.words import words
-from runtime.motion.client import MoveKind, MoveRequest, Target
-from runtime.program.host import RunHost
-from runtime.program.stored_values import checked_name, put_value
-from sandbox.supervisor import CallRefused
+from openpendant.runtime.clients.kinds import IOClient
+from openpendant.runtime.interfaces.io import SignalWrite
+from openpendant.runtime.interfaces.robot import DigitalOutputCommand, ToolCommand
+from openpendant.runtime.kit.app import describe_validation_errors
+from openpendant.runtime.kit.errors import InvalidValue, NotFound
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.motion.client import MoveKind, MoveRequest, Target
+from openpendant.runtime.program.host import RunHost
+from openpendant.runtime.program.stored_values import checked_name, put_value
+from openpendant.sandbox.supervisor import CallRefused
 
 M = TypeVar("M", bound=BaseModel)
 IO_NAME = re.compile(r"^([a-z][a-z0-9_]{0,31})\.(di|do)(\d{1,2})\Z")  # a robot's

@@ -17,16 +17,16 @@ from collections.abc import Awaitable, Callable
 from functools import cache
 from typing import Any
 
-from plugins.api import resolve
-from plugins.registry import registry
-from runtime.clients.base import DeviceClient
-from runtime.clients.devices import Devices
-from runtime.clients.robot import RobotClient
-from runtime.kit.errors import OpenPendantError
-from runtime.kit.words import words
-from runtime.motion.client import MotionClient, MoveRequest, MoveState
-from runtime.variable_storage.client import StorageClient
-from sandbox.supervisor import CallRefused
+from openpendant.plugins.api import resolve
+from openpendant.plugins.registry import registry
+from openpendant.runtime.clients.base import DeviceClient
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.clients.robot import RobotClient
+from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.motion.client import MotionClient, MoveRequest, MoveState
+from openpendant.runtime.variable_storage.client import StorageClient
+from openpendant.sandbox.supervisor import CallRefused
 
 log = logging.getLogger(__name__)
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from blockly_blocks.workspace import parse_json
-from runtime.interfaces.variables import StoredProgram, Variable
-from runtime.kit.errors import InvalidValue, NotFound
-from runtime.program.compiler import Compiler
-from runtime.program.models import (
+from openpendant.blockly_blocks.workspace import parse_json
+from openpendant.runtime.interfaces.variables import StoredProgram, Variable
+from openpendant.runtime.kit.errors import InvalidValue, NotFound
+from openpendant.runtime.program.compiler import Compiler
+from openpendant.runtime.program.models import (
     PREFIX,
     TAG,
     ProblemInfo,
@@ -19,7 +19,7 @@ from runtime.program.models import (
     Saved,
     check_program_name,
 )
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.variable_storage.client import StorageClient
 
 
 class ProgramLibrary:

@@ -7,9 +7,9 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
-from runtime.interfaces.common import Strict
-from runtime.kit.errors import InvalidValue
-from runtime.kit.words import Words, words
+from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.kit.words import Words, words
 
 NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]{0,63}\Z")
 PREFIX = "program."

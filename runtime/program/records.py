@@ -12,8 +12,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from runtime.kit.words import words
-from runtime.program.models import ErrorInfo, RunStatus
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.program.models import ErrorInfo, RunStatus
 
 log = logging.getLogger(__name__)
 

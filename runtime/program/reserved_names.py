@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from plugins.registry import registry
-from runtime.kit.words import words
-from sandbox.supervisor import CallRefused
+from openpendant.plugins.registry import registry
+from openpendant.runtime.kit.words import words
+from openpendant.sandbox.supervisor import CallRefused
 
 
 @dataclass(frozen=True)

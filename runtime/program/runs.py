@@ -9,17 +9,23 @@ import itertools
 import logging
 import time
 
-from runtime.clients.devices import Devices
-from runtime.kit.errors import Conflict, NotFound, OpenPendantError
-from runtime.kit.websocket import Fanout
-from runtime.kit.words import Words, words
-from runtime.motion.client import MotionClient
-from runtime.program.host import RunHost
-from runtime.program.library import ProgramLibrary
-from runtime.program.models import ErrorInfo, OutputEntry, ProblemInfo, RunRequest, RunStatus
-from runtime.program.records import RunRecords
-from runtime.variable_storage.client import StorageClient
-from sandbox.supervisor import ProgramRun, RunLimits, WorkerPool
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.kit.errors import Conflict, NotFound, OpenPendantError
+from openpendant.runtime.kit.websocket import Fanout
+from openpendant.runtime.kit.words import Words, words
+from openpendant.runtime.motion.client import MotionClient
+from openpendant.runtime.program.host import RunHost
+from openpendant.runtime.program.library import ProgramLibrary
+from openpendant.runtime.program.models import (
+    ErrorInfo,
+    OutputEntry,
+    ProblemInfo,
+    RunRequest,
+    RunStatus,
+)
+from openpendant.runtime.program.records import RunRecords
+from openpendant.runtime.variable_storage.client import StorageClient
+from openpendant.sandbox.supervisor import ProgramRun, RunLimits, WorkerPool
 
 log = logging.getLogger(__name__)
 

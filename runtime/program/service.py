@@ -10,18 +10,18 @@ from typing import Any
 
 from fastapi import APIRouter, FastAPI, Query, Request, Response, WebSocket
 
-from blockly_blocks.catalog import definitions, toolbox, words
-from blockly_blocks.workspace import MAX_WORKSPACE_BYTES, allow_deep_json
-from runtime.clients.devices import Devices
-from runtime.kit.app import create_app
-from runtime.kit.errors import InvalidValue
-from runtime.kit.request_start import RequestStart, received_at
-from runtime.kit.settings import RuntimeSettings
-from runtime.kit.websocket import Fanout
-from runtime.motion.client import MotionClient
-from runtime.program.compiler import Compiler, problem_infos
-from runtime.program.library import ProgramLibrary
-from runtime.program.models import (
+from openpendant.blockly_blocks.catalog import definitions, toolbox, words
+from openpendant.blockly_blocks.workspace import MAX_WORKSPACE_BYTES, allow_deep_json
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.kit.request_start import RequestStart, received_at
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.kit.websocket import Fanout
+from openpendant.runtime.motion.client import MotionClient
+from openpendant.runtime.program.compiler import Compiler, problem_infos
+from openpendant.runtime.program.library import ProgramLibrary
+from openpendant.runtime.program.models import (
     BreakpointsRequest,
     Program,
     ProgramSummary,
@@ -30,9 +30,9 @@ from runtime.program.models import (
     RunStatus,
     Saved,
 )
-from runtime.program.records import RunRecords
-from runtime.program.runs import Runs
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.program.records import RunRecords
+from openpendant.runtime.program.runs import Runs
+from openpendant.runtime.variable_storage.client import StorageClient
 
 
 async def read_body(request: Request) -> bytes:

@@ -14,12 +14,12 @@ from __future__ import annotations
 import json
 from typing import Any
 
-from runtime.interfaces.variables import NAME_PATTERN
-from runtime.kit.errors import Conflict, NotFound
-from runtime.kit.words import words
-from runtime.program.reserved_names import refuse_reserved
-from runtime.variable_storage.client import StorageClient
-from sandbox.supervisor import CallRefused
+from openpendant.runtime.interfaces.variables import NAME_PATTERN
+from openpendant.runtime.kit.errors import Conflict, NotFound
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.program.reserved_names import refuse_reserved
+from openpendant.runtime.variable_storage.client import StorageClient
+from openpendant.sandbox.supervisor import CallRefused
 
 MAX_VALUE_BYTES = 64 * 1024
 MAX_PROGRAM_BYTES = 1024 * 1024

@@ -5,14 +5,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from runtime.cell.bases import base_in_world
-from runtime.interfaces.detector import DetectRequest
-from runtime.kit.errors import OpenPendantError
-from runtime.program.handlers import DEVICE_NAME
-from runtime.program.host import RunHost
-from runtime.robotics.kinematics import pose_to_se3, se3_to_pose
-from runtime.vision.client import vision_client
-from sandbox.supervisor import CallRefused
+from openpendant.runtime.cell.bases import base_in_world
+from openpendant.runtime.interfaces.detector import DetectRequest
+from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.program.handlers import DEVICE_NAME
+from openpendant.runtime.program.host import RunHost
+from openpendant.runtime.robotics.kinematics import pose_to_se3, se3_to_pose
+from openpendant.runtime.vision.client import vision_client
+from openpendant.sandbox.supervisor import CallRefused
 
 
 async def vision_detect(run: RunHost, args: dict[str, Any]) -> list[dict[str, Any]]:

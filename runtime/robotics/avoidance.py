@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from runtime.interfaces.limits import FloatArray
-from runtime.robotics.world import Contact, World
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.robotics.world import Contact, World
 
 INFLUENCE = 0.15  # m: pairs further apart than this add no constraint
 SAFETY = 0.02  # m: the distance kept

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from runtime.interfaces.limits import FloatArray
-from runtime.robotics.geometry import Shape
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.robotics.geometry import Shape
 
 
 def sphere_gaps(

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from runtime.interfaces.limits import FloatArray
-from runtime.robotics.world import Contact, World
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.robotics.world import Contact, World
 
 RESOLUTION = 0.004  # m of travel of any body point between checks, at worst
 # A part whose bounds put it nearer than this beyond the margin gets its exact distance:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.limits import FloatArray
 
 BUDGET = 2_000_000  # floats of work space at a time: bounded memory on long paths
 

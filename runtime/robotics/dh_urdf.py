@@ -25,7 +25,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 from pydantic import Field
 
-from runtime.interfaces.common import Strict
+from openpendant.runtime.interfaces.common import Strict
 
 GENERATED_PACKAGE = "openpendant-urdf"  # the `package://` name of generated URDFs
 COVER_COLOR = "0.72 0.78 0.84 1"  # a light grey-blue, like the arms' covers

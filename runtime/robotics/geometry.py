@@ -11,8 +11,8 @@ import fcl
 import numpy as np
 import pinocchio as pin
 
-from runtime.interfaces.limits import FloatArray
-from runtime.robotics.meshes import convex_hull
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.robotics.meshes import convex_hull
 
 Faces = list[tuple[int, int, int]]
 

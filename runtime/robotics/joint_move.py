@@ -10,9 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 from ruckig import InputParameter, Result, Ruckig, Trajectory
 
-from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import RobotInfo
-from runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.robot import RobotInfo
+from openpendant.runtime.robotics.kinematics import Kinematics
 
 # Planned moves run at most at this fraction of the joints' limits (at 100 % override).
 MOVE_SPEED_FRACTION = 0.5

@@ -8,11 +8,11 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from runtime.interfaces.common import Pose
-from runtime.interfaces.robot import RobotInfo
-from runtime.kit.errors import InvalidValue
-from runtime.kit.words import words
-from runtime.paths import resolve_package_uri
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.robot import RobotInfo
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.paths import resolve_package_uri
 
 FloatArray = npt.NDArray[np.float64]
 

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from runtime.interfaces.limits import FloatArray
-from runtime.kit.errors import InvalidValue
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.kit.errors import InvalidValue
 
 MAX_STL_BYTES = 64 * 1024 * 1024
 

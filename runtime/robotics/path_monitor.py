@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from runtime.interfaces.limits import FloatArray
-from runtime.kit.errors import OpenPendantError
-from runtime.robotics.deviation import distances_to_polyline
-from runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.robotics.deviation import distances_to_polyline
+from openpendant.runtime.robotics.kinematics import Kinematics
 
 
 class PathDeviation(OpenPendantError):

@@ -9,10 +9,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from runtime.interfaces.limits import FloatArray
-from runtime.kit.errors import InvalidValue
-from runtime.kit.words import words
-from runtime.robotics.kinematics import Kinematics, Unreachable
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.robotics.kinematics import Kinematics, Unreachable
 
 LINEAR_STEP = 0.001  # m between IK samples along a TCP path
 ANGULAR_STEP = 0.005  # rad

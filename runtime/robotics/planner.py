@@ -15,12 +15,12 @@ from ompl import base as ob
 from ompl import geometric as og
 from ompl import util as ou
 
-from runtime.interfaces.limits import FloatArray
-from runtime.kit.errors import InvalidValue
-from runtime.kit.words import words
-from runtime.robotics.checker import Collision, PathChecker
-from runtime.robotics.screen import Screen
-from runtime.robotics.shortcut import shortcut
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.kit.words import words
+from openpendant.runtime.robotics.checker import Collision, PathChecker
+from openpendant.runtime.robotics.screen import Screen
+from openpendant.runtime.robotics.shortcut import shortcut
 
 ou.setLogLevel(ou.LogLevel.LOG_WARN)
 # The same searches in the same order find the same paths (OMPL seeds each planner from this).

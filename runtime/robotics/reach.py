@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from runtime.interfaces.limits import FloatArray
-from runtime.robotics.geometry import BodyPart
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.robotics.geometry import BodyPart
 
 Axis = tuple[FloatArray, FloatArray]  # a point and a unit direction
 

@@ -14,9 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from runtime.interfaces.limits import CheckedTrajectory, FloatArray
-from runtime.interfaces.robot import JointLimits, TrajectoryState, TrajectoryStatus
-from runtime.robotics.time_scaling import TimeScaling
+from openpendant.runtime.interfaces.limits import CheckedTrajectory, FloatArray
+from openpendant.runtime.interfaces.robot import JointLimits, TrajectoryState, TrajectoryStatus
+from openpendant.runtime.robotics.time_scaling import TimeScaling
 
 # Points checked per segment between waypoints (8 ms apart from the planner: every 1 ms).
 SAMPLES_PER_SEGMENT = 8

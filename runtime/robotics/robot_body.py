@@ -10,13 +10,13 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from runtime.interfaces.limits import FloatArray
-from runtime.kit.errors import InvalidValue
-from runtime.paths import resolve_package_uri
-from runtime.robotics import geometry
-from runtime.robotics.geometry import BodyPart, Shape
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.reach import Reach
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.paths import resolve_package_uri
+from openpendant.runtime.robotics import geometry
+from openpendant.runtime.robotics.geometry import BodyPart, Shape
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.reach import Reach
 
 
 def _origin(element: ET.Element | None) -> pin.SE3:

@@ -7,11 +7,11 @@ from typing import Any
 
 import yaml
 
-from runtime.interfaces.robot import RobotInfo
-from runtime.kit.errors import InvalidValue, NotFound
-from runtime.paths import ROBOTS_DIR, resolve_package_uri
-from runtime.robotics.dh_urdf import DHArm, dh_urdf, write_generated
-from runtime.robotics.kinematics import load_urdf_model, urdf_joint_limits
+from openpendant.runtime.interfaces.robot import RobotInfo
+from openpendant.runtime.kit.errors import InvalidValue, NotFound
+from openpendant.runtime.paths import ROBOTS_DIR, resolve_package_uri
+from openpendant.runtime.robotics.dh_urdf import DHArm, dh_urdf, write_generated
+from openpendant.runtime.robotics.kinematics import load_urdf_model, urdf_joint_limits
 
 
 def available_models(directory: Path = ROBOTS_DIR) -> list[str]:

@@ -17,9 +17,9 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from runtime.interfaces.limits import FloatArray
-from runtime.robotics.geometry import Shape
-from runtime.robotics.world import World
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.robotics.geometry import Shape
+from openpendant.runtime.robotics.world import World
 
 PAD = 0.01  # m
 

@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.limits import FloatArray
 
 Motion = Callable[[FloatArray, FloatArray], bool]  # whether the straight line a → b is clear
 

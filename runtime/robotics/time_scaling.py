@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 
-from runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.limits import FloatArray
 
 # Share of a joint's jerk limit a change of rate may add; and of its acceleration limit the
 # scaled reference may use (the tracker needs some room to follow).

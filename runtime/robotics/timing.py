@@ -2,7 +2,7 @@
 from rest to rest under bounds on u̇, ü and the jerk of u, chosen from the path's
 derivatives (a C² spline through the samples) so that no joint can exceed its velocity,
 acceleration or jerk limit; the result is checked as the drivers will interpolate it
-(`runtime.robotics.reference`), and slowed as a whole when needed."""
+(`openpendant.runtime.robotics.reference`), and slowed as a whole when needed."""
 
 from __future__ import annotations
 
@@ -13,10 +13,10 @@ import numpy as np
 from ruckig import InputParameter, Result, Ruckig, Trajectory
 from scipy.interpolate import CubicSpline
 
-from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import RobotInfo
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.reference import STRETCH_MARGIN, Limits, TrajectoryReference
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.robot import RobotInfo
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.reference import STRETCH_MARGIN, Limits, TrajectoryReference
 
 SAMPLE_PERIOD = 0.008  # s between the trajectory points sent to the driver
 MAX_SLOWDOWNS = 12

@@ -20,8 +20,8 @@ from ruckig import (
     Trajectory,
 )
 
-from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import JointLimits
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.robot import JointLimits
 
 _POSITION = ControlInterface.Position
 _VELOCITY = ControlInterface.Velocity

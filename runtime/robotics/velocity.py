@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from qpsolvers import solve_qp
 
-from runtime.interfaces.limits import FloatArray
-from runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.robotics.kinematics import Kinematics
 
 MANUAL_TCP_SPEED = 0.25  # m/s
 # Angular errors are weighed as the motion they cause at this distance from the TCP.

@@ -10,16 +10,16 @@ import numpy as np
 import numpy.typing as npt
 import pinocchio as pin
 
-from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import RobotInfo
-from runtime.interfaces.scene import SceneObject
-from runtime.kit.errors import NotFound
-from runtime.paths import resolve_package_uri
-from runtime.robotics import geometry
-from runtime.robotics.broadphase import FixedShapes, sphere_gaps
-from runtime.robotics.geometry import BodyPart, Proximity, Shape, proximity
-from runtime.robotics.kinematics import Kinematics, pose_to_se3
-from runtime.robotics.robot_body import RobotBody
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.robot import RobotInfo
+from openpendant.runtime.interfaces.scene import SceneObject
+from openpendant.runtime.kit.errors import NotFound
+from openpendant.runtime.paths import resolve_package_uri
+from openpendant.runtime.robotics import geometry
+from openpendant.runtime.robotics.broadphase import FixedShapes, sphere_gaps
+from openpendant.runtime.robotics.geometry import BodyPart, Proximity, Shape, proximity
+from openpendant.runtime.robotics.kinematics import Kinematics, pose_to_se3
+from openpendant.runtime.robotics.robot_body import RobotBody
 
 IntArray = npt.NDArray[np.intp]
 

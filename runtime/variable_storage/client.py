@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Any
 from urllib.parse import quote
 
-from runtime.interfaces.variables import Variable
-from runtime.kit.client import ServiceClient
+from openpendant.runtime.interfaces.variables import Variable
+from openpendant.runtime.kit.client import ServiceClient
 
 
 def _path(name: str) -> str:

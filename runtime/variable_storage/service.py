@@ -11,14 +11,14 @@ import yaml
 from fastapi import APIRouter, FastAPI, Query, Request, Response, WebSocket
 from pydantic import Field
 
-from runtime.interfaces.common import Strict
-from runtime.interfaces.variables import Variable
-from runtime.kit.app import create_app
-from runtime.kit.errors import InvalidValue
-from runtime.kit.settings import RuntimeSettings
-from runtime.kit.websocket import Fanout
-from runtime.variable_storage.store import HistoryEntry, VariableStore
-from runtime.variable_storage.types import types
+from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.interfaces.variables import Variable
+from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.kit.websocket import Fanout
+from openpendant.runtime.variable_storage.store import HistoryEntry, VariableStore
+from openpendant.runtime.variable_storage.types import types
 
 MAX_IMPORT_BYTES = 64 * 1024 * 1024
 

@@ -21,10 +21,10 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from runtime.interfaces.variables import NAME_PATTERN, Variable
-from runtime.kit import deadline
-from runtime.kit.errors import Conflict, InvalidValue, NotFound
-from runtime.variable_storage.types import validate_value
+from openpendant.runtime.interfaces.variables import NAME_PATTERN, Variable
+from openpendant.runtime.kit import deadline
+from openpendant.runtime.kit.errors import Conflict, InvalidValue, NotFound
+from openpendant.runtime.variable_storage.types import validate_value
 
 TAG_PATTERN = re.compile(r"^[A-Za-z0-9_.:\-]{1,64}\Z")
 WRITER_PATTERN = re.compile(r"^[A-Za-z0-9_.:\-]{1,128}\Z")

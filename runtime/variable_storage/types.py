@@ -13,11 +13,11 @@ from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
-from plugins.api import resolve
-from plugins.registry import registry
-from runtime.interfaces.common import all_finite
-from runtime.kit.app import describe_validation_errors
-from runtime.kit.errors import InvalidValue
+from openpendant.plugins.api import resolve
+from openpendant.plugins.registry import registry
+from openpendant.runtime.interfaces.common import all_finite
+from openpendant.runtime.kit.app import describe_validation_errors
+from openpendant.runtime.kit.errors import InvalidValue
 
 MAX_VALUE_BYTES = 4 * 1024 * 1024
 MAX_DEPTH = 64

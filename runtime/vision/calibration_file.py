@@ -11,9 +11,9 @@ import cv2
 import numpy as np
 import yaml
 
-from runtime.interfaces.camera import Intrinsics
-from runtime.kit.errors import InvalidValue
-from runtime.vision.models import CameraCalibration
+from openpendant.runtime.interfaces.camera import Intrinsics
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.vision.models import CameraCalibration
 
 MAX_FILE = 256 * 1024
 

@@ -13,17 +13,17 @@ from typing import Any
 import cv2
 import numpy as np
 
-from runtime.clients.devices import Devices
-from runtime.clients.kinds import CameraClient
-from runtime.imaging.boards import Board, BoardSpec, NotSeen
-from runtime.interfaces.camera import CaptureRequest, Image
-from runtime.interfaces.common import Pose
-from runtime.interfaces.variables import Frame
-from runtime.kit.errors import Conflict, DeviceError, InvalidValue, NotFound
-from runtime.variable_storage.client import StorageClient
-from runtime.vision.extrinsics import average, board_in_camera, camera_in_world
-from runtime.vision.intrinsics import MIN_FRAMES, IntrinsicSession
-from runtime.vision.models import (
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.clients.kinds import CameraClient
+from openpendant.runtime.imaging.boards import Board, BoardSpec, NotSeen
+from openpendant.runtime.interfaces.camera import CaptureRequest, Image
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.variables import Frame
+from openpendant.runtime.kit.errors import Conflict, DeviceError, InvalidValue, NotFound
+from openpendant.runtime.variable_storage.client import StorageClient
+from openpendant.runtime.vision.extrinsics import average, board_in_camera, camera_in_world
+from openpendant.runtime.vision.intrinsics import MIN_FRAMES, IntrinsicSession
+from openpendant.runtime.vision.models import (
     CameraCalibration,
     ExtrinsicRequest,
     ExtrinsicResult,
@@ -32,8 +32,8 @@ from runtime.vision.models import (
     RobotOriginResult,
     calibration_variable,
 )
-from runtime.vision.operations import Operation, Operations
-from runtime.vision.transforms import matrix_of, pose_of
+from openpendant.runtime.vision.operations import Operation, Operations
+from openpendant.runtime.vision.transforms import matrix_of, pose_of
 
 BOARD_SETTING = "vision.board"
 KEEP_SESSIONS = 8

@@ -5,10 +5,10 @@ from __future__ import annotations
 from functools import cache
 from urllib.parse import quote
 
-from runtime.interfaces.detector import DetectRequest
-from runtime.kit.client import ServiceClient
-from runtime.services import urls_from_env
-from runtime.vision.models import LocatedDetections
+from openpendant.runtime.interfaces.detector import DetectRequest
+from openpendant.runtime.kit.client import ServiceClient
+from openpendant.runtime.services import urls_from_env
+from openpendant.runtime.vision.models import LocatedDetections
 
 DETECT_TIMEOUT = 30.0  # s: a frame, a detection and the poses
 

@@ -10,20 +10,20 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from runtime.interfaces.detector import DetectRequest
-from runtime.kit.errors import Conflict, InvalidValue, NotFound
-from runtime.variable_storage.client import StorageClient
-from runtime.vision.calibrations import Calibrations
-from runtime.vision.detectors import (
+from openpendant.runtime.interfaces.detector import DetectRequest
+from openpendant.runtime.kit.errors import Conflict, InvalidValue, NotFound
+from openpendant.runtime.variable_storage.client import StorageClient
+from openpendant.runtime.vision.calibrations import Calibrations
+from openpendant.runtime.vision.detectors import (
     ArucoDetector,
     DetectorConfig,
     TemplateTeaching,
     detector_variable,
 )
-from runtime.vision.models import Located, LocatedDetections
-from runtime.vision.neural_detector import NeuralDetector
-from runtime.vision.template_detector import TemplateDetector
-from runtime.vision.transforms import matrix_of, pose_of
+from openpendant.runtime.vision.models import Located, LocatedDetections
+from openpendant.runtime.vision.neural_detector import NeuralDetector
+from openpendant.runtime.vision.template_detector import TemplateDetector
+from openpendant.runtime.vision.transforms import matrix_of, pose_of
 
 
 class Detection:

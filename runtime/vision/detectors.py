@@ -15,22 +15,22 @@ import cv2
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
-from runtime.imaging.boards import Dictionary
-from runtime.imaging.markers import find_markers
-from runtime.interfaces.camera import Intrinsics
-from runtime.interfaces.common import Pose, Strict
-from runtime.interfaces.detector import (
+from openpendant.runtime.imaging.boards import Dictionary
+from openpendant.runtime.imaging.markers import find_markers
+from openpendant.runtime.interfaces.camera import Intrinsics
+from openpendant.runtime.interfaces.common import Pose, Strict
+from openpendant.runtime.interfaces.detector import (
     Box,
     Detection,
     Detections,
     DetectorInfo,
     DetectRequest,
 )
-from runtime.interfaces.detector import Detector as DetectorInterface
-from runtime.vision.extrinsics import camera_matrix
-from runtime.vision.models import NAME
-from runtime.vision.robot_origin import tag_corners
-from runtime.vision.transforms import pose_of
+from openpendant.runtime.interfaces.detector import Detector as DetectorInterface
+from openpendant.runtime.vision.extrinsics import camera_matrix
+from openpendant.runtime.vision.models import NAME
+from openpendant.runtime.vision.robot_origin import tag_corners
+from openpendant.runtime.vision.transforms import pose_of
 
 Grab = Callable[[], Awaitable[tuple[np.ndarray, float]]]
 MAX_TEMPLATE_BASE64 = 700_000  # a 512 KB PNG

@@ -10,9 +10,9 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from runtime.imaging.boards import BoardView
-from runtime.interfaces.camera import Intrinsics
-from runtime.kit.errors import InvalidValue
+from openpendant.runtime.imaging.boards import BoardView
+from openpendant.runtime.interfaces.camera import Intrinsics
+from openpendant.runtime.kit.errors import InvalidValue
 
 
 def camera_matrix(k: Intrinsics) -> np.ndarray:

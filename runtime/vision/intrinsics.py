@@ -13,10 +13,10 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from runtime.imaging.boards import Board, BoardView, NotSeen
-from runtime.interfaces.camera import Intrinsics
-from runtime.kit.errors import Conflict, InvalidValue
-from runtime.vision.models import (
+from openpendant.runtime.imaging.boards import Board, BoardView, NotSeen
+from openpendant.runtime.interfaces.camera import Intrinsics
+from openpendant.runtime.kit.errors import Conflict, InvalidValue
+from openpendant.runtime.vision.models import (
     Advice,
     CameraCalibration,
     Coverage,

@@ -11,10 +11,10 @@ from pathlib import Path
 
 import cv2
 
-from runtime.kit import deadline
-from runtime.kit.errors import InvalidValue, NotFound
-from runtime.kit.uploads import MAX_MODEL_BYTES
-from runtime.vision.detectors import MODEL_FILE
+from openpendant.runtime.kit import deadline
+from openpendant.runtime.kit.errors import InvalidValue, NotFound
+from openpendant.runtime.kit.uploads import MAX_MODEL_BYTES
+from openpendant.runtime.vision.detectors import MODEL_FILE
 
 
 def _checked(name: str) -> str:

@@ -8,10 +8,10 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, Field
 
-from runtime.imaging.boards import BoardSpec, Dictionary
-from runtime.interfaces.camera import Intrinsics
-from runtime.interfaces.common import Pose, Strict, Vector3
-from runtime.interfaces.detector import Detection
+from openpendant.runtime.imaging.boards import BoardSpec, Dictionary
+from openpendant.runtime.interfaces.camera import Intrinsics
+from openpendant.runtime.interfaces.common import Pose, Strict, Vector3
+from openpendant.runtime.interfaces.detector import Detection
 
 NAME = r"^[a-z][a-z0-9_]{0,31}$"  # a device's local name
 

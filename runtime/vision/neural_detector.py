@@ -13,14 +13,20 @@ from typing import Any
 import cv2
 import numpy as np
 
-from runtime.imaging.yolo import Found, decode, letterbox
-from runtime.interfaces.camera import Intrinsics
-from runtime.interfaces.common import Pose
-from runtime.interfaces.detector import Box, Detection, Detections, DetectorInfo, DetectRequest
-from runtime.interfaces.detector import Detector as DetectorInterface
-from runtime.kit.errors import InvalidValue, NotFound
-from runtime.vision.detectors import DetectorConfig, Grab
-from runtime.vision.plane import on_plane, pose_on_plane
+from openpendant.runtime.imaging.yolo import Found, decode, letterbox
+from openpendant.runtime.interfaces.camera import Intrinsics
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.detector import (
+    Box,
+    Detection,
+    Detections,
+    DetectorInfo,
+    DetectRequest,
+)
+from openpendant.runtime.interfaces.detector import Detector as DetectorInterface
+from openpendant.runtime.kit.errors import InvalidValue, NotFound
+from openpendant.runtime.vision.detectors import DetectorConfig, Grab
+from openpendant.runtime.vision.plane import on_plane, pose_on_plane
 
 _nets: dict[tuple[Path, float], Any] = {}
 _lock = threading.Lock()  # a network runs one image at a time

@@ -12,8 +12,8 @@ from collections import OrderedDict
 from collections.abc import Awaitable, Callable
 from typing import Any, Literal
 
-from runtime.kit.errors import Conflict, NotFound, OpenPendantError
-from runtime.vision.models import OperationStatus
+from openpendant.runtime.kit.errors import Conflict, NotFound, OpenPendantError
+from openpendant.runtime.vision.models import OperationStatus
 
 KEEP = 50
 log = logging.getLogger(__name__)

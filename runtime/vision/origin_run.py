@@ -12,22 +12,22 @@ import time
 import numpy as np
 import pinocchio as pin
 
-from runtime.cell.bases import base_in_world
-from runtime.clients.devices import Devices
-from runtime.imaging.markers import find_markers
-from runtime.interfaces.common import Pose
-from runtime.interfaces.variables import JointWaypoint
-from runtime.kit.errors import Conflict, OpenPendantError
-from runtime.motion.client import MotionClient, MoveKind, MoveRequest, MoveState, Target
-from runtime.robotics.kinematics import Kinematics
-from runtime.variable_storage.client import StorageClient
-from runtime.vision.calibrations import Calibrations
-from runtime.vision.extrinsics import camera_matrix
-from runtime.vision.models import OriginPose, RobotOriginRequest, RobotOriginResult
-from runtime.vision.operations import Operation
-from runtime.vision.poses import flange_poses
-from runtime.vision.robot_origin import Camera, Sighting, solve_origin
-from runtime.vision.transforms import pose_of
+from openpendant.runtime.cell.bases import base_in_world
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.imaging.markers import find_markers
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.variables import JointWaypoint
+from openpendant.runtime.kit.errors import Conflict, OpenPendantError
+from openpendant.runtime.motion.client import MotionClient, MoveKind, MoveRequest, MoveState, Target
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.variable_storage.client import StorageClient
+from openpendant.runtime.vision.calibrations import Calibrations
+from openpendant.runtime.vision.extrinsics import camera_matrix
+from openpendant.runtime.vision.models import OriginPose, RobotOriginRequest, RobotOriginResult
+from openpendant.runtime.vision.operations import Operation
+from openpendant.runtime.vision.poses import flange_poses
+from openpendant.runtime.vision.robot_origin import Camera, Sighting, solve_origin
+from openpendant.runtime.vision.transforms import pose_of
 
 SETTLED = 1e-3  # rad/s: every joint slower than this, the arm is still
 SETTLE_TIMEOUT = 5.0  # s

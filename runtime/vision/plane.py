@@ -6,10 +6,10 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from runtime.interfaces.camera import Intrinsics
-from runtime.interfaces.common import Pose
-from runtime.vision.extrinsics import camera_matrix
-from runtime.vision.transforms import pose_of
+from openpendant.runtime.interfaces.camera import Intrinsics
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.vision.extrinsics import camera_matrix
+from openpendant.runtime.vision.transforms import pose_of
 
 
 def on_plane(

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from runtime.vision.models import PoseRegion
+from openpendant.runtime.vision.models import PoseRegion
 
 
 def _halton(index: int, base: int) -> float:

@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from runtime.kit.errors import InvalidValue
+from openpendant.runtime.kit.errors import InvalidValue
 
 MIN_POSES = 4
 OUTLIER_FACTOR, OUTLIER_FLOOR = 3.0, 1.0  # a pose's RMS beyond both (px): left out

@@ -11,19 +11,19 @@ from typing import Annotated, Any
 from fastapi import APIRouter, FastAPI, Header, Request
 from fastapi.responses import PlainTextResponse
 
-from runtime.clients.devices import Devices
-from runtime.interfaces.detector import DetectRequest
-from runtime.kit.app import create_app
-from runtime.kit.errors import InvalidValue
-from runtime.kit.settings import RuntimeSettings
-from runtime.motion.client import MotionClient
-from runtime.variable_storage.client import StorageClient
-from runtime.vision.calibration_file import MAX_FILE, from_yaml, to_yaml
-from runtime.vision.calibrations import Calibrations
-from runtime.vision.detection import Detection
-from runtime.vision.detectors import DetectorConfig, TemplateTeaching
-from runtime.vision.model_files import ModelFiles
-from runtime.vision.models import (
+from openpendant.runtime.clients.devices import Devices
+from openpendant.runtime.interfaces.detector import DetectRequest
+from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.motion.client import MotionClient
+from openpendant.runtime.variable_storage.client import StorageClient
+from openpendant.runtime.vision.calibration_file import MAX_FILE, from_yaml, to_yaml
+from openpendant.runtime.vision.calibrations import Calibrations
+from openpendant.runtime.vision.detection import Detection
+from openpendant.runtime.vision.detectors import DetectorConfig, TemplateTeaching
+from openpendant.runtime.vision.model_files import ModelFiles
+from openpendant.runtime.vision.models import (
     CameraCalibration,
     ExtrinsicRequest,
     FrameReport,
@@ -35,8 +35,8 @@ from runtime.vision.models import (
     RobotOriginResult,
     calibration_variable,
 )
-from runtime.vision.operations import Operation, Operations
-from runtime.vision.origin_run import OriginRun
+from openpendant.runtime.vision.operations import Operation, Operations
+from openpendant.runtime.vision.origin_run import OriginRun
 
 LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 CAMERA = re.compile(r"^[a-z][a-z0-9_]{0,31}\Z")

@@ -13,14 +13,20 @@ import base64
 import cv2
 import numpy as np
 
-from runtime.imaging.template import Match, find_template
-from runtime.interfaces.camera import Intrinsics
-from runtime.interfaces.common import Pose
-from runtime.interfaces.detector import Box, Detection, Detections, DetectorInfo, DetectRequest
-from runtime.interfaces.detector import Detector as DetectorInterface
-from runtime.kit.errors import InvalidValue
-from runtime.vision.detectors import DetectorConfig, Grab
-from runtime.vision.plane import on_plane, pose_on_plane
+from openpendant.runtime.imaging.template import Match, find_template
+from openpendant.runtime.interfaces.camera import Intrinsics
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.detector import (
+    Box,
+    Detection,
+    Detections,
+    DetectorInfo,
+    DetectRequest,
+)
+from openpendant.runtime.interfaces.detector import Detector as DetectorInterface
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.vision.detectors import DetectorConfig, Grab
+from openpendant.runtime.vision.plane import on_plane, pose_on_plane
 
 REACH = 20.0  # px along the pattern's x to a second point, for its direction on the plane
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.common import Pose
 
 
 def matrix_of(pose: Pose) -> np.ndarray:

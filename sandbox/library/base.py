@@ -7,8 +7,8 @@ import math
 from collections.abc import Callable
 from typing import Any, Protocol, TypeVar
 
-from sandbox.guards import SandboxError
-from sandbox.values import check_number
+from openpendant.sandbox.guards import SandboxError
+from openpendant.sandbox.values import check_number
 
 F = TypeVar("F", bound=Callable[..., Any])
 

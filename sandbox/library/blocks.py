@@ -9,8 +9,8 @@ import statistics
 from collections.abc import Callable
 from typing import Any
 
-from sandbox.guards import SandboxError
-from sandbox.library.base import sandbox_function
+from openpendant.sandbox.guards import SandboxError
+from openpendant.sandbox.library.base import sandbox_function
 
 MAX_RANGE = 10_000_000
 

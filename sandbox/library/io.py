@@ -6,14 +6,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from sandbox.library.base import (
+from openpendant.sandbox.library.base import (
     bool_arg,
     host,
     number_arg,
     sandbox_function,
     text_arg,
 )
-from sandbox.library.timing import poll_until
+from openpendant.sandbox.library.timing import poll_until
 
 
 @sandbox_function

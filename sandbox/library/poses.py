@@ -6,9 +6,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from sandbox.guards import SandboxError
-from sandbox.library.base import host, sandbox_function, text_arg
-from sandbox.values import Pose, Waypoint, check_number
+from openpendant.sandbox.guards import SandboxError
+from openpendant.sandbox.library.base import host, sandbox_function, text_arg
+from openpendant.sandbox.values import Pose, Waypoint, check_number
 
 COMPONENTS = ("x", "y", "z", "roll", "pitch", "yaw")
 

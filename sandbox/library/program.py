@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from sandbox.guards import SandboxError
-from sandbox.library.base import host, sandbox_function, text_arg
+from openpendant.sandbox.guards import SandboxError
+from openpendant.sandbox.library.base import host, sandbox_function, text_arg
 
 LEVELS = ("info", "warning", "error")
 

@@ -7,9 +7,9 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from sandbox.guards import SandboxError
-from sandbox.library.base import host, number_arg, sandbox_function, text_arg
-from sandbox.values import Pose, Waypoint, check_number
+from openpendant.sandbox.guards import SandboxError
+from openpendant.sandbox.library.base import host, number_arg, sandbox_function, text_arg
+from openpendant.sandbox.values import Pose, Waypoint, check_number
 
 MAX_JOINTS = 64
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from sandbox.library.base import host, sandbox_function, text_arg
-from sandbox.values import Pose
+from openpendant.sandbox.library.base import host, sandbox_function, text_arg
+from openpendant.sandbox.values import Pose
 
 
 @sandbox_function

@@ -6,8 +6,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from sandbox.guards import SandboxError
-from sandbox.library.base import ProgramError, host, number_arg, sandbox_function
+from openpendant.sandbox.guards import SandboxError
+from openpendant.sandbox.library.base import ProgramError, host, number_arg, sandbox_function
 
 MAX_WAIT = 24 * 3600.0
 POLL = 0.02

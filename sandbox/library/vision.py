@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from sandbox.guards import SandboxError, register_value_type
-from sandbox.library.base import host, number_arg, sandbox_function, text_arg
-from sandbox.values import Pose
+from openpendant.sandbox.guards import SandboxError, register_value_type
+from openpendant.sandbox.library.base import host, number_arg, sandbox_function, text_arg
+from openpendant.sandbox.values import Pose
 
 # Turned half round its x: the tool's z looks down into what the detection's z looks out of.
 FACING_IT = (1.0, 0.0, 0.0, 0.0)

@@ -20,8 +20,8 @@ from playwright.sync_api import (
     sync_playwright,
 )
 
-from runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
-from runtime.bench.harness.processes import Runtime, child_env, wait_for
+from openpendant.runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
+from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
 
 pytestmark = pytest.mark.browser
 

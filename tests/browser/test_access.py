@@ -8,10 +8,10 @@ from pathlib import Path
 
 from playwright.sync_api import Browser, Page, expect
 
-from runtime.auth.roles import Role
-from runtime.auth.setup import auth_path
-from runtime.auth.store import AuthStore
-from runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.setup import auth_path
+from openpendant.runtime.auth.store import AuthStore
+from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
 from tests.browser.conftest import TABLET, PageErrors, open_context
 
 HOSTILE = '<img src=x onerror="window.__pwned=1">'

@@ -11,8 +11,8 @@ import httpx
 import pytest
 from playwright.sync_api import BrowserContext, Locator, expect
 
-from runtime.bench.harness.processes import DriverProc, Runtime, SimRobotProc
-from runtime.kit.device_auth import DeviceAuth, known_secret
+from openpendant.runtime.bench.harness.processes import DriverProc, Runtime, SimRobotProc
+from openpendant.runtime.kit.device_auth import DeviceAuth, known_secret
 from tests.browser.conftest import PageErrors, add_robot, fits_the_screen, sign_in
 
 

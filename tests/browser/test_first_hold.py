@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, expect
 
-from runtime.bench.harness.jog import RobotView
-from runtime.bench.harness.processes import FULL_SPEED_ENV, Runtime, wait_for
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.bench.harness.jog import RobotView
+from openpendant.runtime.bench.harness.processes import FULL_SPEED_ENV, Runtime, wait_for
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
 from tests.browser.conftest import (
     Finger,
     PageErrors,

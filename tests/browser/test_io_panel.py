@@ -11,7 +11,7 @@ import httpx
 import pytest
 from playwright.sync_api import Browser, BrowserContext, Locator, ViewportSize, expect
 
-from runtime.bench.harness.processes import DriverProc, Runtime
+from openpendant.runtime.bench.harness.processes import DriverProc, Runtime
 from tests.browser.conftest import TABLET, PageErrors, fits_the_screen, signed_in_context
 
 

@@ -15,8 +15,14 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, Route, expect
 
-from device_drivers.ur_rtde.emulator import control as emulator_control
-from runtime.bench.harness.processes import STILL, DriverProc, Runtime, SimRobotProc, wait_for
+from openpendant.device_drivers.ur_rtde.emulator import control as emulator_control
+from openpendant.runtime.bench.harness.processes import (
+    STILL,
+    DriverProc,
+    Runtime,
+    SimRobotProc,
+    wait_for,
+)
 from tests.browser.conftest import (
     Finger,
     PageErrors,

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from playwright.sync_api import BrowserContext, Page, expect
 
-from runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
+from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
 from tests.browser.conftest import PageErrors, add_robot, fits_the_screen, robot_state
 
 DARK_BG = "rgb(16, 22, 29)"

@@ -15,8 +15,8 @@ import httpx
 import pytest
 from playwright.sync_api import BrowserContext, expect
 
-from runtime.bench.harness.blocks import block, number, stack, text, workspace
-from runtime.bench.harness.processes import DriverProc, Runtime, wait_for
+from openpendant.runtime.bench.harness.blocks import block, number, stack, text, workspace
+from openpendant.runtime.bench.harness.processes import DriverProc, Runtime, wait_for
 from tests.browser.conftest import (
     PageErrors,
     browser_env,
@@ -83,7 +83,7 @@ def test_an_installed_plugin_adds_a_device_a_panel_and_blocks(
     installed: None, belt: DriverProc, home: Path, tablet: BrowserContext
 ) -> None:
     drivers = subprocess.run(
-        [sys.executable, "-m", "runtime.cli", "driver", "--list"],
+        [sys.executable, "-m", "openpendant.runtime.cli", "driver", "--list"],
         capture_output=True,
         text=True,
         check=True,

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
 
-from runtime.bench.harness import blocks as make
-from runtime.bench.harness.blocks import ids_of
-from runtime.bench.harness.processes import STILL, DriverProc, Runtime, wait_for
+from openpendant.runtime.bench.harness import blocks as make
+from openpendant.runtime.bench.harness.blocks import ids_of
+from openpendant.runtime.bench.harness.processes import STILL, DriverProc, Runtime, wait_for
 from tests.browser.conftest import (
     Finger,
     PageErrors,

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from playwright.sync_api import Browser, BrowserContext, Route, expect
 
-from runtime.bench.harness.processes import Runtime, child_env, wait_for
+from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
 from tests.browser.conftest import (
     BROWSER_DEADMAN,
     TABLET,

@@ -13,9 +13,10 @@ from typing import Any
 import pytest
 from playwright.sync_api import Browser, BrowserContext, Locator, Page, expect
 
-from runtime.auth.roles import Role
-from runtime.bench.harness.processes import Runtime, child_env, wait_for
-from runtime.kit.settings import default_devices
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
+from openpendant.runtime.kit.settings import default_devices
+from openpendant.webui import policy
 from tests.browser.conftest import (
     BROWSER_LINK_TIMEOUT,
     TABLET,
@@ -26,7 +27,6 @@ from tests.browser.conftest import (
 )
 from tests.support.programs import ABOVE_PICK, pick_and_place, teach
 from tests.support.vision import CAMERA_SPEC, Cam
-from webui import policy
 
 # A slow camera: its controls are what is looked at here, not its pictures.
 CAMERA = CAMERA_SPEC.model_copy(update={"options": {**CAMERA_SPEC.options, "fps": 5}})

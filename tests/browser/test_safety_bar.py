@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from playwright.sync_api import Browser, BrowserContext, Locator, Page, ViewportSize, expect
 
-from runtime.bench.harness.processes import STILL, Runtime, SimRobotProc, wait_for
+from openpendant.runtime.bench.harness.processes import STILL, Runtime, SimRobotProc, wait_for
 from tests.browser.conftest import (
     PHONE,
     TABLET,
@@ -40,7 +40,7 @@ BAR_SHARE = 0.15  # of a phone's height
 # A plugin with four long panels, installed on PYTHONPATH as the plugin tests install one:
 # with them an administrator's navigation has twelve entries, and each panel scrolls.
 PLUGIN_SOURCE = f"""
-from plugins.api import Panel, Plugin
+from openpendant.plugins.api import Panel, Plugin
 
 PLUGIN = Plugin(
     name="long-panels",

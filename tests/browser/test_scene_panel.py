@@ -14,11 +14,11 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, expect
 
-from runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
-from runtime.interfaces.common import Pose
-from runtime.interfaces.robot import RobotInfo
-from runtime.robotics.kinematics import Kinematics, pose_to_se3
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.robot import RobotInfo
+from openpendant.runtime.robotics.kinematics import Kinematics, pose_to_se3
+from openpendant.runtime.robotics.robot_info import load_robot_info
 from tests.browser.conftest import (
     PageErrors,
     add_robot,

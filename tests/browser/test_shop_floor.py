@@ -16,8 +16,14 @@ import numpy as np
 import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
 
-from runtime.bench.harness.blocks import block, text, workspace
-from runtime.bench.harness.processes import STILL, Runtime, SimRobotProc, SpaceMouseProc, wait_for
+from openpendant.runtime.bench.harness.blocks import block, text, workspace
+from openpendant.runtime.bench.harness.processes import (
+    STILL,
+    Runtime,
+    SimRobotProc,
+    SpaceMouseProc,
+    wait_for,
+)
 from tests.browser.conftest import (
     PHONE,
     Finger,

@@ -18,10 +18,10 @@ import pytest
 from playwright.sync_api import BrowserContext, Locator, Page, expect
 from scipy.spatial.transform import Rotation
 
-from runtime.bench.harness.jog import RobotView
-from runtime.bench.harness.processes import Runtime, child_env, wait_for
-from runtime.bench.harness.views import board_views, in_world
-from runtime.kit.settings import default_devices
+from openpendant.runtime.bench.harness.jog import RobotView
+from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
+from openpendant.runtime.bench.harness.views import board_views, in_world
+from openpendant.runtime.kit.settings import default_devices
 from tests.browser.conftest import (
     BROWSER_LINK_TIMEOUT,
     Finger,

@@ -3,7 +3,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime.bench.harness.processes import SimRobotProc
+from openpendant.runtime.bench.harness.processes import SimRobotProc
 
 pytestmark = pytest.mark.integration
 

@@ -16,14 +16,14 @@ from fastapi import FastAPI
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import ClientConnection, connect
 
-from runtime.auth.roles import Role
-from runtime.auth.setup import auth_path, create_token
-from runtime.auth.store import AuthStore
-from runtime.bench.harness.processes import Runtime, wait_for
-from runtime.kit.settings import RuntimeSettings
-from runtime.services import all_services, load_factory
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.setup import auth_path, create_token
+from openpendant.runtime.auth.store import AuthStore
+from openpendant.runtime.bench.harness.processes import Runtime, wait_for
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.services import all_services, load_factory
+from openpendant.webui import policy
 from tests.support.sign_in import revoke_token, sign_out, signed_in
-from webui import policy
 
 # No real-time margins here: runs alongside the rest (tests/suite.py).
 pytestmark = pytest.mark.concurrent

@@ -20,7 +20,7 @@ from typing import Any
 import httpx
 import pytest
 
-from runtime.bench.harness.processes import Runtime
+from openpendant.runtime.bench.harness.processes import Runtime
 
 # No real-time margins here: runs alongside the rest (tests/suite.py).
 pytestmark = pytest.mark.concurrent

@@ -11,14 +11,14 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.bench.harness.jog import Cell, JogClient, RobotView
-from runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
-from runtime.interfaces.common import Pose
-from runtime.interfaces.scene import SceneObject
-from runtime.robotics.avoidance import SAFETY
-from runtime.robotics.kinematics import Kinematics, pose_to_se3
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.world import World
+from openpendant.runtime.bench.harness.jog import Cell, JogClient, RobotView
+from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.scene import SceneObject
+from openpendant.runtime.robotics.avoidance import SAFETY
+from openpendant.runtime.robotics.kinematics import Kinematics, pose_to_se3
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.world import World
 
 INFO = load_robot_info("ur5")
 KINEMATICS = Kinematics(INFO)

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from runtime.bench.harness.processes import child_env
+from openpendant.runtime.bench.harness.processes import child_env
 
 # No real-time margins here: runs alongside the rest (tests/suite.py).
 pytestmark = pytest.mark.concurrent
@@ -17,7 +17,7 @@ pytestmark = pytest.mark.concurrent
 
 def test_unknown_benchmark_is_an_error(home: Path) -> None:
     result = subprocess.run(
-        [sys.executable, "-m", "runtime.cli", "bench", "--only", "warp_speed"],
+        [sys.executable, "-m", "openpendant.runtime.cli", "bench", "--only", "warp_speed"],
         env=child_env(home),
         capture_output=True,
         text=True,

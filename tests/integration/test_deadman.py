@@ -10,8 +10,8 @@ from collections.abc import Iterator
 
 import pytest
 
-from runtime.bench.harness.jog import Cell, JogClient
-from runtime.bench.harness.processes import Runtime, wait_for
+from openpendant.runtime.bench.harness.jog import Cell, JogClient
+from openpendant.runtime.bench.harness.processes import Runtime, wait_for
 
 
 @pytest.fixture(scope="module")

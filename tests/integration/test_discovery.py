@@ -18,7 +18,7 @@ import pytest
 from websockets.sync.client import connect
 from zeroconf import ServiceInfo, Zeroconf
 
-from runtime.bench.harness.processes import (
+from openpendant.runtime.bench.harness.processes import (
     Proc,
     Runtime,
     SimRobotProc,
@@ -26,7 +26,7 @@ from runtime.bench.harness.processes import (
     stop_all,
     wait_for,
 )
-from runtime.kit.discovery import SERVICE_TYPE
+from openpendant.runtime.kit.discovery import SERVICE_TYPE
 from tests.support.fake_device import FakeDevice
 
 SHORT_TTL = {"OPENPENDANT_DISCOVERY__TTL": "3"}

@@ -13,7 +13,7 @@ from typing import Any
 
 import pytest
 
-from runtime.bench.harness.processes import (
+from openpendant.runtime.bench.harness.processes import (
     FULL_SPEED_ENV,
     Runtime,
     SimRobotProc,

@@ -1,27 +1,23 @@
-"""The runtime as a user installs it: `pip install .` (a wheel, not editable) into a new
-virtual environment, run from outside the source tree. It comes up healthy, serves the UI,
-finds its robot models, detects its simulated robot, and its benchmarks run.
-
-The new environment borrows the third-party packages of the project's own (a `.pth` line
-to its site-packages, listed after the new environment's own) instead of downloading them
-again; the runtime itself — code, UI build, robot models, entry points — comes only from
-the wheel built here."""
+"""The runtime as a user installs it: `pip install .` (a wheel, not editable) into a new,
+empty virtual environment, its dependencies from the package index (pip's cache), nothing
+borrowed from the project's own environment, run from outside the source tree. It installs
+one package, `openpendant` (and the example plugin one more of its own), comes up healthy,
+serves the UI, finds its robot models, detects its simulated robot, and its benchmarks run."""
 
 from __future__ import annotations
 
 import json
 import subprocess
 import sys
-import sysconfig
 import venv
 from pathlib import Path
 
 import httpx
 import pytest
 
-from runtime.bench.harness.processes import Proc, child_env, free_port, wait_for
-from runtime.kit.settings import default_devices
-from runtime.launcher.run import device_uuid
+from openpendant.runtime.bench.harness.processes import Proc, child_env, free_port, wait_for
+from openpendant.runtime.kit.settings import default_devices
+from openpendant.runtime.launcher.run import device_uuid
 
 # No real-time margins here: runs alongside the rest (tests/suite.py).
 pytestmark = pytest.mark.concurrent
@@ -52,28 +48,62 @@ def installed(tmp_path_factory: pytest.TempPathFactory) -> Path:
     )
     target = home / "venv"
     venv.create(target, with_pip=True)
-    python = target / "bin" / "python"
-    site = subprocess.run(
-        [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
-        check=True,
-        capture_output=True,
-        text=True,
-    ).stdout.strip()
-    borrowed = Path(sysconfig.get_paths()["purelib"])
-    # Listed first (.pth files run in name order), then the others' path hooks (cmeel's,
-    # which puts pinocchio on the path); the editable install's own is left out.
-    (Path(site) / "0-borrowed-dependencies.pth").write_text(f"{borrowed}\n")
-    for hook in borrowed.glob("*.pth"):
-        if not hook.name.startswith("__editable__"):
-            (Path(site) / hook.name).write_text(hook.read_text())
     (wheel,) = wheels.glob("openpendant-*.whl")
     subprocess.run(
-        [str(python), "-m", "pip", "install", "--quiet", "--no-deps", str(wheel)],
+        [str(target / "bin" / "python"), "-m", "pip", "install", "--quiet", str(wheel)],
+        check=True,
+        capture_output=True,
+        timeout=900,
+    )
+    return target
+
+
+# What the repository keeps as top-level folders; installed, each is under openpendant.
+BARE = ("runtime", "device_drivers", "sandbox", "blockly_blocks", "plugins", "webui", "deploy")
+
+
+def site_packages(python: Path) -> Path:
+    return Path(
+        subprocess.run(
+            [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout.strip()
+    )
+
+
+def installed_tops(site: Path, distribution: str) -> set[str]:
+    """What a distribution put at the top of site-packages (from its RECORD)."""
+    (record,) = site.glob(f"{distribution}-*.dist-info/RECORD")
+    paths = [line.split(",")[0] for line in record.read_text().splitlines() if line]
+    return {p.split("/")[0] for p in paths if not p.startswith("..")}
+
+
+def test_site_packages_get_one_package_and_the_plugin_one_more(installed: Path) -> None:
+    python = installed / "bin" / "python"
+    site = site_packages(python)
+    assert installed_tops(site, "openpendant") == {"openpendant", "openpendant-0.1.0.dist-info"}
+    assert [name for name in BARE if (site / name).exists()] == []
+    plugin = ROOT / "plugins" / "conveyor"
+    subprocess.run(
+        [str(python), "-m", "pip", "install", "--quiet", "--no-deps", str(plugin)],
         check=True,
         capture_output=True,
         timeout=300,
     )
-    return target
+    try:
+        assert installed_tops(site, "openpendant_conveyor") == {
+            "openpendant_conveyor",
+            "openpendant_conveyor-0.1.0.dist-info",
+        }
+    finally:
+        subprocess.run(
+            [str(python), "-m", "pip", "uninstall", "--quiet", "--yes", "openpendant-conveyor"],
+            check=True,
+            capture_output=True,
+            timeout=300,
+        )
 
 
 def test_the_installed_runtime_is_its_own(installed: Path) -> None:
@@ -81,8 +111,9 @@ def test_the_installed_runtime_is_its_own(installed: Path) -> None:
         [
             str(installed / "bin" / "python"),
             "-c",
-            "import runtime, webui.server, deploy; print(runtime.__file__); "
-            "print(webui.server.DIST); print(deploy.__file__)",
+            "import openpendant.runtime as runtime, openpendant.webui.server as server; "
+            "import openpendant.deploy as deploy; print(runtime.__file__); "
+            "print(server.DIST); print(deploy.__file__)",
         ],
         cwd=installed,
         capture_output=True,

@@ -18,11 +18,17 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.bench.harness.jog import Cell, JogClient
-from runtime.bench.harness.processes import STILL, Runtime, SpaceMouseProc, child_env, wait_for
-from runtime.robotics.deviation import distances_to_polyline
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.bench.harness.jog import Cell, JogClient
+from openpendant.runtime.bench.harness.processes import (
+    STILL,
+    Runtime,
+    SpaceMouseProc,
+    child_env,
+    wait_for,
+)
+from openpendant.runtime.robotics.deviation import distances_to_polyline
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
 from tests.support.posts import LEFT, RIGHT, clear_posts, put_posts
 
 INFO = load_robot_info("ur5")

@@ -15,10 +15,10 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.bench.harness.jog import Cell, JogClient
-from runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.bench.harness.jog import Cell, JogClient
+from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, wait_for
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
 from tests.integration.test_jog import add_mouse, bind_mouse, mouse_recording
 
 INFO = load_robot_info("panda")

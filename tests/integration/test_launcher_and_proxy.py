@@ -18,7 +18,7 @@ import httpx
 import pytest
 from websockets.sync.client import connect
 
-from runtime.bench.harness.processes import (
+from openpendant.runtime.bench.harness.processes import (
     Runtime,
     child_env,
     free_port,
@@ -163,7 +163,7 @@ def test_a_port_in_use_is_a_clear_error(home: Path) -> None:
             [
                 sys.executable,
                 "-m",
-                "runtime.cli",
+                "openpendant.runtime.cli",
                 "run",
                 "--port",
                 str(port),
@@ -202,7 +202,7 @@ def test_a_bad_config_file_stops_start_up_with_its_reason(home: Path) -> None:
     config = home / "bad.yaml"
     config.write_text("port: 8080\ndevices:\n  - {driver: sim-robot, nmae: typo}\n")
     result = subprocess.run(
-        [sys.executable, "-m", "runtime.cli", "run", "--config", str(config)],
+        [sys.executable, "-m", "openpendant.runtime.cli", "run", "--config", str(config)],
         env=whole_cell_env(home),
         capture_output=True,
         text=True,

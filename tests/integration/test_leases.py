@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from runtime.bench.harness.processes import Runtime, child_env, wait_for
+from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
 
 
 def test_control_lease_between_two_pendants(home: Path) -> None:

@@ -25,8 +25,8 @@ import httpx
 import numpy as np
 import pytest
 
-from runtime.bench.harness.jog import JogClient
-from runtime.bench.harness.processes import (
+from openpendant.runtime.bench.harness.jog import JogClient
+from openpendant.runtime.bench.harness.processes import (
     STILL,
     Proc,
     Runtime,
@@ -34,7 +34,7 @@ from runtime.bench.harness.processes import (
     child_env,
     wait_for,
 )
-from runtime.kit.device_auth import proof
+from openpendant.runtime.kit.device_auth import proof
 from tests.support import netns
 from tests.support.netns import Link, Network, inside
 

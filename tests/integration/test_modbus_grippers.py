@@ -11,17 +11,20 @@ from collections.abc import Awaitable, Callable
 
 import pytest
 
-from device_drivers.modbus_io import robotiq
-from device_drivers.modbus_io.digital_gripper import DigitalGripper, load_gripper_map
-from device_drivers.modbus_io.driver import ModbusIODriver
-from device_drivers.modbus_io.gripper_entry import DIGITAL_MAP
-from device_drivers.modbus_io.link import ModbusLink
-from device_drivers.modbus_io.robotiq import Request
-from device_drivers.modbus_io.robotiq_gripper import GripperFault, RobotiqGripper
-from device_drivers.modbus_io.sim_grippers import DigitalGripperSimulator, RobotiqSimulator
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.gripper import GripperMotion
-from runtime.kit.errors import InvalidValue
+from openpendant.device_drivers.modbus_io import robotiq
+from openpendant.device_drivers.modbus_io.digital_gripper import DigitalGripper, load_gripper_map
+from openpendant.device_drivers.modbus_io.driver import ModbusIODriver
+from openpendant.device_drivers.modbus_io.gripper_entry import DIGITAL_MAP
+from openpendant.device_drivers.modbus_io.link import ModbusLink
+from openpendant.device_drivers.modbus_io.robotiq import Request
+from openpendant.device_drivers.modbus_io.robotiq_gripper import GripperFault, RobotiqGripper
+from openpendant.device_drivers.modbus_io.sim_grippers import (
+    DigitalGripperSimulator,
+    RobotiqSimulator,
+)
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.gripper import GripperMotion
+from openpendant.runtime.kit.errors import InvalidValue
 from tests.integration.test_modbus_io import until
 
 pytestmark = pytest.mark.concurrent  # no runtime, no robot: nothing here is real-time

@@ -14,16 +14,16 @@ from typing import Any
 
 import pytest
 
-from device_drivers.modbus_io.driver import ModbusIODriver
-from device_drivers.modbus_io.entry import ModbusIOOptions, create
-from device_drivers.modbus_io.errors import EXCEPTIONS, ModbusRefused
-from device_drivers.modbus_io.link import ModbusLink
-from device_drivers.modbus_io.registers import RegisterMap
-from device_drivers.modbus_io.simulator import ModbusSimulator
-from runtime.drivers.host import build_driver_app
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.io import SignalWrite
-from runtime.kit.errors import InvalidValue, Unavailable
+from openpendant.device_drivers.modbus_io.driver import ModbusIODriver
+from openpendant.device_drivers.modbus_io.entry import ModbusIOOptions, create
+from openpendant.device_drivers.modbus_io.errors import EXCEPTIONS, ModbusRefused
+from openpendant.device_drivers.modbus_io.link import ModbusLink
+from openpendant.device_drivers.modbus_io.registers import RegisterMap
+from openpendant.device_drivers.modbus_io.simulator import ModbusSimulator
+from openpendant.runtime.drivers.host import build_driver_app
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.io import SignalWrite
+from openpendant.runtime.kit.errors import InvalidValue, Unavailable
 
 pytestmark = pytest.mark.concurrent  # no runtime, no robot: nothing here is real-time
 

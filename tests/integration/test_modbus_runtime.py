@@ -10,7 +10,7 @@ from typing import Any
 import httpx
 import pytest
 
-from runtime.bench.harness.processes import DriverProc, Runtime, wait_for
+from openpendant.runtime.bench.harness.processes import DriverProc, Runtime, wait_for
 
 
 @pytest.fixture(scope="module")

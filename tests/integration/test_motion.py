@@ -14,13 +14,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.bench.harness.jog import Cell
-from runtime.bench.harness.processes import Runtime, wait_for
-from runtime.interfaces.scene import SceneObject
-from runtime.robotics.deviation import distances_to_polyline
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.world import World
+from openpendant.runtime.bench.harness.jog import Cell
+from openpendant.runtime.bench.harness.processes import Runtime, wait_for
+from openpendant.runtime.interfaces.scene import SceneObject
+from openpendant.runtime.robotics.deviation import distances_to_polyline
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.world import World
 from tests.support.posts import LEFT, RIGHT, SCENE, clear_posts, put_posts
 
 INFO = load_robot_info("ur5")

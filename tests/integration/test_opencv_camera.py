@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 import pytest
 
-from runtime.bench.harness.processes import DriverProc, wait_for
+from openpendant.runtime.bench.harness.processes import DriverProc, wait_for
 
 # No real-time margins: it runs alongside the real-time tests (tests/suite.py).
 pytestmark = pytest.mark.concurrent

@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from runtime.bench.harness.jog import Cell, JogClient
-from runtime.bench.harness.processes import Runtime, child_env, wait_for
+from openpendant.runtime.bench.harness.jog import Cell, JogClient
+from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
 
 HALT_WITHIN = 0.2  # s from the kill to the halt at the driver (the bound)
 FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]

@@ -20,7 +20,7 @@ import pinocchio as pin
 import pytest
 from websockets.sync.client import connect
 
-from runtime.bench.harness.blocks import (
+from openpendant.runtime.bench.harness.blocks import (
     block,
     ids_of,
     number,
@@ -30,10 +30,10 @@ from runtime.bench.harness.blocks import (
     waypoint,
     workspace,
 )
-from runtime.bench.harness.jog import Cell
-from runtime.bench.harness.processes import STILL, Runtime, wait_for
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.bench.harness.jog import Cell
+from openpendant.runtime.bench.harness.processes import STILL, Runtime, wait_for
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
 from tests.support.programs import HOME, PICK_AND_PLACE_WAYPOINTS, PLACE, pick_and_place, teach
 
 FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]

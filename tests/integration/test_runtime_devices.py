@@ -12,7 +12,7 @@ from typing import Any
 
 from websockets.sync.client import connect
 
-from runtime.bench.harness.processes import Runtime, SimRobotProc, free_port, wait_for
+from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, free_port, wait_for
 
 
 def detected(runtime: Runtime, uuid: str) -> list[dict[str, Any]]:

@@ -17,7 +17,7 @@ import pytest
 from scipy.spatial.transform import Rotation
 from websockets.sync.client import connect
 
-from runtime.bench.harness.processes import DriverProc, wait_for
+from openpendant.runtime.bench.harness.processes import DriverProc, wait_for
 
 # Nothing here waits on a deadline: it runs alongside the real-time tests (tests/suite.py).
 pytestmark = pytest.mark.concurrent

@@ -12,12 +12,17 @@ from typing import Any
 import numpy as np
 import pytest
 
-from runtime.bench.harness.blocks import block, number, stack, waypoint, workspace
-from runtime.bench.harness.jog import Cell
-from runtime.bench.harness.processes import FAST_MOTION_ENV, Runtime, wait_for, whole_cell_env
-from runtime.kit.settings import default_devices
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.bench.harness.blocks import block, number, stack, waypoint, workspace
+from openpendant.runtime.bench.harness.jog import Cell
+from openpendant.runtime.bench.harness.processes import (
+    FAST_MOTION_ENV,
+    Runtime,
+    wait_for,
+    whole_cell_env,
+)
+from openpendant.runtime.kit.settings import default_devices
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
 from tests.support.programs import ABOVE_PICK, ABOVE_PLACE, HOME, PICK, PLACE, teach
 
 UR5 = Kinematics(load_robot_info("ur5"))

@@ -13,10 +13,10 @@ import pytest
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
-from runtime.bench.harness.processes import STILL, SimRobotProc, wait_for
-from runtime.kit.device_auth import HEADER as DEVICE_AUTH
-from runtime.kit.device_auth import DeviceAuth, proof, sign
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.bench.harness.processes import STILL, SimRobotProc, wait_for
+from openpendant.runtime.kit.device_auth import HEADER as DEVICE_AUTH
+from openpendant.runtime.kit.device_auth import DeviceAuth, proof, sign
+from openpendant.runtime.robotics.robot_info import load_robot_info
 
 INFO = load_robot_info("ur5")
 LOWER = np.array([j.lower for j in INFO.joints])

@@ -13,8 +13,14 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.bench.harness.jog import Cell, JogClient
-from runtime.bench.harness.processes import Runtime, SimRobotProc, child_env, free_port, wait_for
+from openpendant.runtime.bench.harness.jog import Cell, JogClient
+from openpendant.runtime.bench.harness.processes import (
+    Runtime,
+    SimRobotProc,
+    child_env,
+    free_port,
+    wait_for,
+)
 
 TOOL = {
     "tcp": {"position": [0.0, 0.0, 0.15], "orientation": [0.0, 0.0, 0.0, 1.0]},

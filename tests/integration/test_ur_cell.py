@@ -16,13 +16,19 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from device_drivers.sim_cell.link import CellClient
-from device_drivers.ur_rtde.emulator import control as emulator_control
-from runtime.bench.harness.blocks import block, number, stack, workspace
-from runtime.bench.harness.jog import JogClient
-from runtime.bench.harness.processes import DriverProc, Runtime, child_env, stop_all, wait_for
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.device_drivers.sim_cell.link import CellClient
+from openpendant.device_drivers.ur_rtde.emulator import control as emulator_control
+from openpendant.runtime.bench.harness.blocks import block, number, stack, workspace
+from openpendant.runtime.bench.harness.jog import JogClient
+from openpendant.runtime.bench.harness.processes import (
+    DriverProc,
+    Runtime,
+    child_env,
+    stop_all,
+    wait_for,
+)
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
 from tests.integration.test_sim_cell import pick_and_place_with_the_cells_devices, tcp_at
 from tests.support.programs import ABOVE_PICK, ABOVE_PLACE, PICK, PLACE, teach
 
@@ -41,7 +47,7 @@ def ask(runtime: Runtime, op: str, **args: Any) -> dict[str, Any]:
 def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Runtime, str]]:
     home: Path = tmp_path_factory.mktemp("ur-cell")
     emulator = subprocess.Popen(
-        [sys.executable, "-u", "-m", "device_drivers.ur_rtde.emulator"]
+        [sys.executable, "-u", "-m", "openpendant.device_drivers.ur_rtde.emulator"]
         + ["--host", HOST, "--cell", CELL],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,

@@ -19,12 +19,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from device_drivers.ur_rtde.driver import URDriver
-from device_drivers.ur_rtde.emulator import control as emulator_control
-from device_drivers.ur_rtde.link import PLAYING
-from runtime.bench.harness.processes import DriverProc, Runtime, stop_all
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.robot import (
+from openpendant.device_drivers.ur_rtde.driver import URDriver
+from openpendant.device_drivers.ur_rtde.emulator import control as emulator_control
+from openpendant.device_drivers.ur_rtde.link import PLAYING
+from openpendant.runtime.bench.harness.processes import DriverProc, Runtime, stop_all
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
     DigitalOutputCommand,
@@ -37,9 +37,9 @@ from runtime.interfaces.robot import (
     TrajectoryState,
     TrajectoryWaypoint,
 )
-from runtime.kit.errors import RobotError
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.kit.errors import RobotError
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
 
 HOST = "127.0.0.4"
 UR5E = load_robot_info("ur5e")
@@ -473,10 +473,10 @@ def test_a_controller_gone_is_a_steady_fault_in_the_runtime_not_a_flapping_link(
 
 DRIVER_THAT_DIES = f"""
 import asyncio, time
-from device_drivers.ur_rtde.driver import URDriver
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.robot import CommandMode, CommandModeRequest, JogJointCommand
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.device_drivers.ur_rtde.driver import URDriver
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.robot import CommandMode, CommandModeRequest, JogJointCommand
+from openpendant.runtime.robotics.robot_info import load_robot_info
 
 async def main():
     info = load_robot_info("ur5e")

@@ -20,8 +20,8 @@ import rtde_io
 import rtde_receive
 from dashboard_client import DashboardClient
 
-from device_drivers.ur_rtde.emulator import control as control_
-from runtime.bench.harness.processes import wait_for
+from openpendant.device_drivers.ur_rtde.emulator import control as control_
+from openpendant.runtime.bench.harness.processes import wait_for
 
 HOST = "127.0.0.2"  # the emulator's own address: ur-rtde's ports are fixed
 

@@ -15,11 +15,11 @@ from typing import Any
 import pytest
 import rtde_io
 
-from device_drivers.ur_rtde.emulator import control as emulator_control
-from device_drivers.ur_rtde.io_driver import URIODriver
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.io import SignalWrite
-from runtime.kit.errors import InvalidValue, NotFound, OpenPendantError
+from openpendant.device_drivers.ur_rtde.emulator import control as emulator_control
+from openpendant.device_drivers.ur_rtde.io_driver import URIODriver
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.io import SignalWrite
+from openpendant.runtime.kit.errors import InvalidValue, NotFound, OpenPendantError
 
 HOST = "127.0.0.6"
 

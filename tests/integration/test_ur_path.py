@@ -12,8 +12,8 @@ from collections.abc import Iterator
 
 import pytest
 
-from device_drivers.ur_rtde.emulator import control as emulator_control
-from runtime.bench.bench_ur import linear_deviations
+from openpendant.device_drivers.ur_rtde.emulator import control as emulator_control
+from openpendant.runtime.bench.bench_ur import linear_deviations
 
 HOST = "127.0.0.7"
 BOUND = 2e-3  # m: the figure path_deviation_ur_max_mm is held to (issue 31)

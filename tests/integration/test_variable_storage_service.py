@@ -16,7 +16,7 @@ import pytest
 import yaml
 from websockets.sync.client import connect
 
-from runtime.bench.harness.processes import Proc, child_env, free_port, wait_for
+from openpendant.runtime.bench.harness.processes import Proc, child_env, free_port, wait_for
 from tests.unit.test_variable_store import REJECT, ROUND_TRIP
 
 # A store over HTTP holds no real-time margin: it runs beside the real-time tests.
@@ -32,7 +32,7 @@ class Storage(Proc):
             [
                 sys.executable,
                 "-m",
-                "runtime.cli",
+                "openpendant.runtime.cli",
                 "service",
                 "variable_storage",
                 "--port",

@@ -18,9 +18,9 @@ from scipy.spatial.transform import Rotation
 from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
-from runtime.bench.harness.processes import Runtime, child_env, wait_for
-from runtime.bench.harness.views import board_views, in_world
-from runtime.kit.settings import DeviceSpec
+from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
+from openpendant.runtime.bench.harness.views import board_views, in_world
+from openpendant.runtime.kit.settings import DeviceSpec
 from tests.support.vision import YAML, Cam
 from tests.unit.test_neural_detector import CANDIDATES, model
 

@@ -22,10 +22,15 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from runtime.bench.harness.blocks import block, number, stack, var, workspace
-from runtime.bench.harness.jog import Cell
-from runtime.bench.harness.processes import FAST_MOTION_ENV, Runtime, child_env, wait_for
-from runtime.kit.settings import DeviceSpec, default_devices
+from openpendant.runtime.bench.harness.blocks import block, number, stack, var, workspace
+from openpendant.runtime.bench.harness.jog import Cell
+from openpendant.runtime.bench.harness.processes import (
+    FAST_MOTION_ENV,
+    Runtime,
+    child_env,
+    wait_for,
+)
+from openpendant.runtime.kit.settings import DeviceSpec, default_devices
 from tests.support.vision import CAMERA_SPEC, HOME, REGION, Cam, calibrate, off_by, place_the_camera
 
 ROW = [(0.62, -0.12), (0.62, 0.0), (0.62, 0.12)]  # where the program puts parts 1, 2, 3 (m)

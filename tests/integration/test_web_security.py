@@ -14,12 +14,12 @@ import pytest
 from websockets.exceptions import ConnectionClosed, InvalidStatus
 from websockets.sync.client import connect
 
-from runtime.auth.roles import Role
-from runtime.auth.setup import auth_path, create_token
-from runtime.auth.store import AuthStore
-from runtime.bench.harness.jog import Cell, JogClient
-from runtime.bench.harness.processes import Runtime, wait_for
-from runtime.kit.sign_in_watch import ENDED
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.setup import auth_path, create_token
+from openpendant.runtime.auth.store import AuthStore
+from openpendant.runtime.bench.harness.jog import Cell, JogClient
+from openpendant.runtime.bench.harness.processes import Runtime, wait_for
+from openpendant.runtime.kit.sign_in_watch import ENDED
 from tests.support.sign_in import revoke_token, sign_out, signed_in
 
 ATTACKER = "http://attacker.example"

@@ -13,7 +13,7 @@ import resource
 import sys
 import uuid
 
-from runtime.kit.discovery import Advertisement, make_zeroconf
+from openpendant.runtime.kit.discovery import Advertisement, make_zeroconf
 
 
 async def announce(count: int, interface: str) -> None:

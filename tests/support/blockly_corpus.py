@@ -8,7 +8,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from runtime.bench.harness import blocks as wb
+from openpendant.runtime.bench.harness import blocks as wb
 
 Block = dict[str, Any]
 Workspace = dict[str, Any]

@@ -3,7 +3,7 @@ planned around them."""
 
 from __future__ import annotations
 
-from runtime.bench.harness.processes import Runtime
+from openpendant.runtime.bench.harness.processes import Runtime
 
 LEFT = [1.0, -1.0, 1.8, -2.37, -1.57, 0.0]
 RIGHT = [-1.0, -1.0, 1.8, -2.37, -1.57, 0.0]

@@ -4,9 +4,17 @@ from __future__ import annotations
 
 from typing import Any
 
-from runtime.bench.harness.blocks import block, number, stack, text, var, waypoint, workspace
-from runtime.bench.harness.processes import Runtime
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.bench.harness.blocks import (
+    block,
+    number,
+    stack,
+    text,
+    var,
+    waypoint,
+    workspace,
+)
+from openpendant.runtime.bench.harness.processes import Runtime
+from openpendant.runtime.robotics.robot_info import load_robot_info
 
 HOME = load_robot_info("ur5").home
 ABOVE_PICK = [0.6, -1.3, 1.6, -1.87, -1.57, 0.0]

@@ -26,8 +26,8 @@ from starlette.responses import JSONResponse, Response
 from starlette.routing import Route, WebSocketRoute
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from runtime.kit.discovery import Advertisement, Advertiser
-from runtime.kit.serve import listening_socket
+from openpendant.runtime.kit.discovery import Advertisement, Advertiser
+from openpendant.runtime.kit.serve import listening_socket
 
 
 def build(host: str, upstream: str, port: int, identity: dict[str, Any]) -> Starlette:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import httpx
 
-from runtime.bench.harness.processes import Runtime
+from openpendant.runtime.bench.harness.processes import Runtime
 
 
 def signed_in(runtime: Runtime, role: str) -> dict[str, str]:

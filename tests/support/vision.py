@@ -9,10 +9,10 @@ import httpx
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from runtime.bench.harness.jog import Cell
-from runtime.bench.harness.processes import Runtime, wait_for
-from runtime.kit.device_auth import DeviceAuth, known_secret
-from runtime.kit.settings import DeviceSpec
+from openpendant.runtime.bench.harness.jog import Cell
+from openpendant.runtime.bench.harness.processes import Runtime, wait_for
+from openpendant.runtime.kit.device_auth import DeviceAuth, known_secret
+from openpendant.runtime.kit.settings import DeviceSpec
 
 YAML = {"Content-Type": "application/x-yaml"}
 # A board of 50 mm squares to place the camera by: the larger the board, the better its pose

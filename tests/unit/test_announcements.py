@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import pytest
 
-from runtime.device_manager import announcements
-from runtime.device_manager.announcements import Announcements, mark
-from runtime.kit.device_auth import key_id
-from runtime.kit.discovery import Detected
+from openpendant.runtime.device_manager import announcements
+from openpendant.runtime.device_manager.announcements import Announcements, mark
+from openpendant.runtime.kit.device_auth import key_id
+from openpendant.runtime.kit.discovery import Detected
 
 pytestmark = pytest.mark.concurrent
 

@@ -11,16 +11,16 @@ import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
-from runtime.auth.audit import AuditLog
-from runtime.auth.roles import Role
-from runtime.auth.store import AuthStore, LockedOut, Unauthenticated
-from runtime.kit import tickets
-from runtime.kit.app import install_error_handlers
-from runtime.kit.device_auth import WINDOW, Verifier, sign
-from runtime.kit.errors import Conflict, InvalidValue
-from webui import policy
-from webui.access import AccessGuard
-from webui.auth_routes import auth_router
+from openpendant.runtime.auth.audit import AuditLog
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.store import AuthStore, LockedOut, Unauthenticated
+from openpendant.runtime.kit import tickets
+from openpendant.runtime.kit.app import install_error_handlers
+from openpendant.runtime.kit.device_auth import WINDOW, Verifier, sign
+from openpendant.runtime.kit.errors import Conflict, InvalidValue
+from openpendant.webui import policy
+from openpendant.webui.access import AccessGuard
+from openpendant.webui.auth_routes import auth_router
 
 UI = "http://127.0.0.1:8080"
 JSON = "application/json"

@@ -19,9 +19,9 @@ import pytest
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.server import ServerConnection, serve
 
-from runtime.bench import bench_scale, runner
-from runtime.bench.harness.processes import child_env
-from runtime.bench.runner import Figure
+from openpendant.runtime.bench import bench_scale, runner
+from openpendant.runtime.bench.harness.processes import child_env
+from openpendant.runtime.bench.runner import Figure
 
 
 def fake(*names: str) -> SimpleNamespace:

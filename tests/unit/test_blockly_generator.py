@@ -14,12 +14,12 @@ from typing import Any
 
 import pytest
 
-from blockly_blocks.catalog import definition, toolbox_blocks
-from blockly_blocks.generate import generate, known_types
-from blockly_blocks.workspace import MAX_BLOCKS, MAX_NESTING, WorkspaceError
-from runtime.bench.harness import blocks as wb
-from sandbox.policy import compile_program
-from sandbox.supervisor import ProgramRun, RunLimits, RunState
+from openpendant.blockly_blocks.catalog import definition, toolbox_blocks
+from openpendant.blockly_blocks.generate import generate, known_types
+from openpendant.blockly_blocks.workspace import MAX_BLOCKS, MAX_NESTING, WorkspaceError
+from openpendant.runtime.bench.harness import blocks as wb
+from openpendant.sandbox.policy import compile_program
+from openpendant.sandbox.supervisor import ProgramRun, RunLimits, RunState
 from tests.unit.test_sandbox_attacks import RecordingHost
 
 # Blockly's standard blocks: each dropdown with its options (the first is the default).

@@ -22,12 +22,12 @@ from typing import Any
 
 import pytest
 
-from blockly_blocks.catalog import definition, toolbox_blocks
-from blockly_blocks.generate import generate
-from blockly_blocks.workspace import WorkspaceError
-from sandbox.guards import SandboxError
-from sandbox.library.blocks import math_is
-from sandbox.supervisor import ProgramRun, RunLimits, RunState
+from openpendant.blockly_blocks.catalog import definition, toolbox_blocks
+from openpendant.blockly_blocks.generate import generate
+from openpendant.blockly_blocks.workspace import WorkspaceError
+from openpendant.sandbox.guards import SandboxError
+from openpendant.sandbox.library.blocks import math_is
+from openpendant.sandbox.supervisor import ProgramRun, RunLimits, RunState
 from tests.support.blockly_corpus import CORPUS, Workspace
 from tests.unit.test_blockly_generator import STANDARD_FIELDS
 from tests.unit.test_sandbox_attacks import RecordingHost

@@ -9,7 +9,7 @@ import asyncio
 import json
 from typing import Any, cast
 
-from runtime.device_manager.links import LinkClient, LinkServer
+from openpendant.runtime.device_manager.links import LinkClient, LinkServer
 
 
 class FakeConnection:

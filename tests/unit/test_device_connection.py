@@ -17,13 +17,13 @@ import uvicorn
 from fastapi import FastAPI, Request, Response, WebSocket
 from starlette.websockets import WebSocketDisconnect
 
-from runtime.device_manager.addresses import RecentAddresses
-from runtime.device_manager.connection import DeviceConnection
-from runtime.interfaces.variables import DeviceRecord
-from runtime.kit.device_auth import HEADER, Verifier
-from runtime.kit.errors import OpenPendantError
-from runtime.kit.serve import listening_socket
-from runtime.kit.settings import LinkSettings
+from openpendant.runtime.device_manager.addresses import RecentAddresses
+from openpendant.runtime.device_manager.connection import DeviceConnection
+from openpendant.runtime.interfaces.variables import DeviceRecord
+from openpendant.runtime.kit.device_auth import HEADER, Verifier
+from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.kit.serve import listening_socket
+from openpendant.runtime.kit.settings import LinkSettings
 
 UUID = "robot-1"
 TIMING = LinkSettings(stale_after=0.1, driver_timeout=0.2)

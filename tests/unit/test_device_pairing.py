@@ -22,18 +22,18 @@ from starlette.responses import JSONResponse, Response
 from starlette.routing import Route
 from starlette.types import ASGIApp
 
-from runtime.device_manager.addresses import unsettled
-from runtime.device_manager.connection import DeviceConnection
-from runtime.device_manager.models import AddDeviceRequest
-from runtime.device_manager.registry import DeviceRegistry
-from runtime.drivers.guard import CommandGuard
-from runtime.interfaces.variables import DeviceRecord
-from runtime.kit.device_auth import address_text, disproof, keep_secret, proof
-from runtime.kit.discovery import Detected
-from runtime.kit.errors import Conflict, OpenPendantError
-from runtime.kit.serve import listening_socket
-from runtime.kit.websocket import Fanout
-from runtime.variable_storage.client import StorageClient
+from openpendant.runtime.device_manager.addresses import unsettled
+from openpendant.runtime.device_manager.connection import DeviceConnection
+from openpendant.runtime.device_manager.models import AddDeviceRequest
+from openpendant.runtime.device_manager.registry import DeviceRegistry
+from openpendant.runtime.drivers.guard import CommandGuard
+from openpendant.runtime.interfaces.variables import DeviceRecord
+from openpendant.runtime.kit.device_auth import address_text, disproof, keep_secret, proof
+from openpendant.runtime.kit.discovery import Detected
+from openpendant.runtime.kit.errors import Conflict, OpenPendantError
+from openpendant.runtime.kit.serve import listening_socket
+from openpendant.runtime.kit.websocket import Fanout
+from openpendant.runtime.variable_storage.client import StorageClient
 
 UUID = "paired-robot-1"
 SECRET = "the-boards-own-pairing-secret"

@@ -16,10 +16,10 @@ from zeroconf._protocol.incoming import DNSIncoming
 from zeroconf._protocol.outgoing import DNSOutgoing
 from zeroconf.asyncio import AsyncServiceInfo
 
-from runtime.kit import confirmations
-from runtime.kit.confirmations import Confirmations, NewestRecord, Step
-from runtime.kit.device_auth import key_id
-from runtime.kit.discovery import (
+from openpendant.runtime.kit import confirmations
+from openpendant.runtime.kit.confirmations import Confirmations, NewestRecord, Step
+from openpendant.runtime.kit.device_auth import key_id
+from openpendant.runtime.kit.discovery import (
     DNS_IN,
     DNS_SRV,
     SERVICE_TYPE,

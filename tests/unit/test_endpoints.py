@@ -12,16 +12,16 @@ from fastapi import FastAPI
 from fastapi.testclient import TestClient
 from pydantic import BaseModel
 
-from runtime.clients.base import DeviceClient
-from runtime.clients.kinds import GripperClient, IOClient
-from runtime.clients.robot import STREAM_TYPES, RobotClient
-from runtime.drivers.command_log import CommandLog
-from runtime.drivers.routes import interface_router
-from runtime.interfaces.common import Strict
-from runtime.interfaces.endpoints import endpoint, endpoints
-from runtime.interfaces.gripper import Gripper, GripperMotion
-from runtime.interfaces.io import IOBlock, SignalWrite
-from runtime.interfaces.robot import (
+from openpendant.runtime.clients.base import DeviceClient
+from openpendant.runtime.clients.kinds import GripperClient, IOClient
+from openpendant.runtime.clients.robot import STREAM_TYPES, RobotClient
+from openpendant.runtime.drivers.command_log import CommandLog
+from openpendant.runtime.drivers.routes import interface_router
+from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.interfaces.endpoints import endpoint, endpoints
+from openpendant.runtime.interfaces.gripper import Gripper, GripperMotion
+from openpendant.runtime.interfaces.io import IOBlock, SignalWrite
+from openpendant.runtime.interfaces.robot import (
     CommandModeRequest,
     FreedriveCommand,
     JogJointCommand,
@@ -30,9 +30,9 @@ from runtime.interfaces.robot import (
     ToolCommand,
     VelocityCommand,
 )
-from runtime.kit.app import install_error_handlers
-from runtime.kit.errors import NotFound, OpenPendantError, RobotError
-from runtime.links.hub import DeviceView, LinkHub
+from openpendant.runtime.kit.app import install_error_handlers
+from openpendant.runtime.kit.errors import NotFound, OpenPendantError, RobotError
+from openpendant.runtime.links.hub import DeviceView, LinkHub
 
 
 class Level(Strict):

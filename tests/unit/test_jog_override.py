@@ -12,13 +12,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import CommandMode, OperationalMode, RobotFlags, RobotState
-from runtime.jog.actions import JointVelocityJog, TwistJog
-from runtime.jog.session import JOINT_SPEED, LINEAR_SPEED
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import available_models, load_robot_info
-from runtime.robotics.velocity import MANUAL_TCP_SPEED, VelocityController
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.robot import (
+    CommandMode,
+    OperationalMode,
+    RobotFlags,
+    RobotState,
+)
+from openpendant.runtime.jog.actions import JointVelocityJog, TwistJog
+from openpendant.runtime.jog.session import JOINT_SPEED, LINEAR_SPEED
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import available_models, load_robot_info
+from openpendant.runtime.robotics.velocity import MANUAL_TCP_SPEED, VelocityController
 
 MODELS = available_models()
 PERIOD = 0.01

@@ -20,23 +20,23 @@ import pytest
 import websockets
 from websockets.asyncio.server import ServerConnection
 
-from runtime.clients.input import InputClient
-from runtime.clients.robot import RobotClient
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.input import InputState
-from runtime.interfaces.robot import (
+from openpendant.runtime.clients.input import InputClient
+from openpendant.runtime.clients.robot import RobotClient
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.input import InputState
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     OperationalMode,
     RobotDescription,
     RobotFlags,
     RobotState,
 )
-from runtime.jog.actions import JointVelocityJog, MouseJog
-from runtime.jog.jogger import Ended, Jogger
-from runtime.kit.errors import Conflict, RobotError
-from runtime.links.hub import LinkHub
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.jog.actions import JointVelocityJog, MouseJog
+from openpendant.runtime.jog.jogger import Ended, Jogger
+from openpendant.runtime.kit.errors import Conflict, RobotError
+from openpendant.runtime.links.hub import LinkHub
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
 
 ROBOT = "arm"
 GENERATION = 7

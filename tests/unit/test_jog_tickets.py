@@ -16,17 +16,17 @@ from starlette.routing import WebSocketRoute
 from starlette.testclient import TestClient, WebSocketDenialResponse, WebSocketTestSession
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-import webui.access
-from runtime.auth.audit import AuditLog
-from runtime.auth.roles import Role
-from runtime.auth.standing import SignIns, Standing
-from runtime.auth.store import AuthStore, digest
-from runtime.kit import tickets
-from runtime.kit.service_guard import TicketRequired
-from runtime.kit.sign_in_watch import ENDED
+from openpendant.runtime.auth.audit import AuditLog
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.standing import SignIns, Standing
+from openpendant.runtime.auth.store import AuthStore, digest
+from openpendant.runtime.kit import tickets
+from openpendant.runtime.kit.service_guard import TicketRequired
+from openpendant.runtime.kit.sign_in_watch import ENDED
+from openpendant.webui import access as webui_access
+from openpendant.webui.access import SESSION_COOKIE, AccessGuard
+from openpendant.webui.auth_routes import auth_router
 from tests.unit.test_auth import Clock
-from webui.access import SESSION_COOKIE, AccessGuard
-from webui.auth_routes import auth_router
 
 UI = "http://127.0.0.1:8080"
 PASSWORD = "operator password"
@@ -258,7 +258,7 @@ def test_a_busy_socket_through_the_gateway_closes_when_its_session_ends(
 ) -> None:
     """A held jog through the gateway sends heartbeats all the time: they must not put off
     the check of its session (they did: it ran only after 2 s without a message)."""
-    monkeypatch.setattr(webui.access, "RECHECK_EVERY", 0.05)
+    monkeypatch.setattr(webui_access, "RECHECK_EVERY", 0.05)
     audit = AuditLog(tmp_path / "audit.sqlite")
     app = FastAPI()
     app.include_router(auth_router(store, audit, setup_code=None))

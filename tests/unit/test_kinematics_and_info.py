@@ -8,9 +8,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.kit.errors import InvalidValue, NotFound
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import available_models, load_robot_info
+from openpendant.runtime.kit.errors import InvalidValue, NotFound
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import available_models, load_robot_info
 
 
 def test_required_models_are_available() -> None:

@@ -11,12 +11,16 @@ import sys
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 
-from runtime.services import services
+from openpendant.runtime.services import services
 
 ROOT = Path(__file__).resolve().parents[2]
 SERVICE_PACKAGES = {spec.factory.split(":")[0].rsplit(".", 1)[0] for spec in services()}
 WEB = ("fastapi", "starlette", "uvicorn", "httpx", "websockets")
-PURE = ("runtime.robotics", "runtime.interfaces", "runtime.imaging")
+PURE = (
+    "openpendant.runtime.robotics",
+    "openpendant.runtime.interfaces",
+    "openpendant.runtime.imaging",
+)
 
 
 def modules(package_dir: Path) -> Iterator[tuple[str, Path]]:
@@ -41,7 +45,7 @@ def imports(path: Path, module: str) -> Iterator[tuple[int, str]]:
                 anchor = anchor[: len(anchor) - node.level + 1]
                 base = ".".join([*anchor, base] if base else anchor)
             yield node.lineno, base
-            for alias in node.names:  # `from runtime.motion import client`
+            for alias in node.names:  # `from openpendant.runtime.motion import client`
                 yield node.lineno, f"{base}.{alias.name}"
 
 
@@ -54,18 +58,22 @@ def service_of(module: str) -> str | None:
 
 # The benchmarks time a service's inner loops in-process (the velocity QP step, planning),
 # as tests do: like tests, they are not a layer.
-MEASURING = "runtime.bench"
+MEASURING = "openpendant.runtime.bench"
 
 
 def every_module() -> Iterator[tuple[str, Path]]:
     for top in ("runtime", "device_drivers", "sandbox", "blockly_blocks", "plugins", "webui"):
-        for module, path in modules(ROOT / top):
+        for module, path in modules(ROOT / "openpendant" / top):
             if not module.startswith(MEASURING):
                 yield module, path
 
 
 def test_the_service_packages_are_known() -> None:
-    assert {"runtime.jog", "runtime.motion", "runtime.program"} <= SERVICE_PACKAGES
+    assert {
+        "openpendant.runtime.jog",
+        "openpendant.runtime.motion",
+        "openpendant.runtime.program",
+    } <= SERVICE_PACKAGES
 
 
 def test_a_service_reaches_another_only_through_its_client() -> None:
@@ -89,7 +97,11 @@ def test_the_core_imports_no_service_and_no_web_framework() -> None:
             continue
         for line, imported in imports(path, module):
             top = imported.split(".")[0]
-            if service_of(imported) or top in WEB or imported.startswith(("runtime.links",)):
+            if (
+                service_of(imported)
+                or top in WEB
+                or imported.startswith(("openpendant.runtime.links",))
+            ):
                 found.append(f"{path.relative_to(ROOT)}:{line} imports {imported}")
     assert not found, "\n".join(found)
 
@@ -97,17 +109,17 @@ def test_the_core_imports_no_service_and_no_web_framework() -> None:
 def test_the_walk_sees_a_forbidden_import(tmp_path: Path) -> None:
     """The checks above read real imports: a file that breaks the rule is caught."""
     bad = tmp_path / "bad.py"
-    bad.write_text("from runtime.motion.moves import MovePlanner\nimport fastapi\n")
-    seen = [name for _, name in imports(bad, "runtime.jog.bad")]
-    assert "runtime.motion.moves" in seen
-    assert service_of("runtime.motion.moves") == "runtime.motion"
+    bad.write_text("from openpendant.runtime.motion.moves import MovePlanner\nimport fastapi\n")
+    seen = [name for _, name in imports(bad, "openpendant.runtime.jog.bad")]
+    assert "openpendant.runtime.motion.moves" in seen
+    assert service_of("openpendant.runtime.motion.moves") == "openpendant.runtime.motion"
     assert "fastapi" in seen
 
 
 def test_the_robotics_core_loads_no_web_framework_or_network_library_even_indirectly() -> None:
     """What importing every module of the core pulls in, in a fresh interpreter: the
     import walk above reads only each file's own imports."""
-    core = [m for m, _ in modules(ROOT / "runtime" / "robotics")]
+    core = [m for m, _ in modules(ROOT / "openpendant" / "runtime" / "robotics")]
     script = (
         "import importlib, sys\n"
         f"for m in {core!r}: importlib.import_module(m)\n"
@@ -125,36 +137,36 @@ def test_the_robotics_core_loads_no_web_framework_or_network_library_even_indire
 FOUNDATION, CORE, CLIENTS, SERVICES, TOP = range(5)
 LAYERS = {
     # What everything stands on: the service kit, sign-in, where services are, the plugin API.
-    "runtime": FOUNDATION,  # the package itself (its version)
-    "runtime.kit": FOUNDATION,
-    "runtime.auth": FOUNDATION,
-    "runtime.services": FOUNDATION,
-    "plugins": FOUNDATION,
-    "plugins.api": FOUNDATION,
-    "plugins.registry": FOUNDATION,
+    "openpendant.runtime": FOUNDATION,  # the package itself (its version)
+    "openpendant.runtime.kit": FOUNDATION,
+    "openpendant.runtime.auth": FOUNDATION,
+    "openpendant.runtime.services": FOUNDATION,
+    "openpendant.plugins": FOUNDATION,
+    "openpendant.plugins.api": FOUNDATION,
+    "openpendant.plugins.registry": FOUNDATION,
     # The interfaces and the robotics core.
-    "runtime.interfaces": CORE,
-    "runtime.robotics": CORE,
-    "runtime.imaging": CORE,
-    "runtime.paths": CORE,
+    "openpendant.runtime.interfaces": CORE,
+    "openpendant.runtime.robotics": CORE,
+    "openpendant.runtime.imaging": CORE,
+    "openpendant.runtime.paths": CORE,
     # Typed clients and links (a service's `client` and `models` too), the driver kit and the
     # drivers, the sandbox and the blocks, the cell model the services share.
-    "runtime.links": CLIENTS,
-    "runtime.clients": CLIENTS,
-    "runtime.cell": CLIENTS,
-    "runtime.drivers": CLIENTS,
-    "device_drivers": CLIENTS,
-    "sandbox": CLIENTS,
-    "blockly_blocks": CLIENTS,
+    "openpendant.runtime.links": CLIENTS,
+    "openpendant.runtime.clients": CLIENTS,
+    "openpendant.runtime.cell": CLIENTS,
+    "openpendant.runtime.drivers": CLIENTS,
+    "openpendant.device_drivers": CLIENTS,
+    "openpendant.sandbox": CLIENTS,
+    "openpendant.blockly_blocks": CLIENTS,
     # Above everything: the gateway, the launcher and command, the built-ins' registrations
     # (plugins: nothing imports them) and the example plugin.
-    "webui": TOP,
-    "runtime.launcher": TOP,
-    "runtime.cli": TOP,
-    "runtime.plugin": TOP,
-    "device_drivers.plugin": TOP,
-    "blockly_blocks.plugin": TOP,
-    "plugins.conveyor": TOP,
+    "openpendant.webui": TOP,
+    "openpendant.runtime.launcher": TOP,
+    "openpendant.runtime.cli": TOP,
+    "openpendant.runtime.plugin": TOP,
+    "openpendant.device_drivers.plugin": TOP,
+    "openpendant.blockly_blocks.plugin": TOP,
+    "openpendant.plugins.conveyor": TOP,
 }
 
 
@@ -246,39 +258,47 @@ def test_the_layer_and_cycle_checks_catch_what_they_are_for() -> None:
     importing the launcher, two blocks modules importing each other (as generator.py and
     standard.py did), and a longer loop."""
     graph = {
-        "runtime.robotics.kinematics": {"runtime.motion.service"},
-        "device_drivers.sim_robot.core": {"runtime.launcher.run", "runtime.interfaces.robot"},
-        "runtime.motion.service": {"runtime.jog.client", "runtime.interfaces.robot"},
-        "blockly_blocks.generator": {"blockly_blocks.standard"},
-        "blockly_blocks.standard": {"blockly_blocks.generator"},
-        "sandbox.a": {"sandbox.b"},
-        "sandbox.b": {"sandbox.c"},
-        "sandbox.c": {"sandbox.a"},
+        "openpendant.runtime.robotics.kinematics": {"openpendant.runtime.motion.service"},
+        "openpendant.device_drivers.sim_robot.core": {
+            "openpendant.runtime.launcher.run",
+            "openpendant.runtime.interfaces.robot",
+        },
+        "openpendant.runtime.motion.service": {
+            "openpendant.runtime.jog.client",
+            "openpendant.runtime.interfaces.robot",
+        },
+        "openpendant.blockly_blocks.generator": {"openpendant.blockly_blocks.standard"},
+        "openpendant.blockly_blocks.standard": {"openpendant.blockly_blocks.generator"},
+        "openpendant.sandbox.a": {"openpendant.sandbox.b"},
+        "openpendant.sandbox.b": {"openpendant.sandbox.c"},
+        "openpendant.sandbox.c": {"openpendant.sandbox.a"},
     }
     assert upward(graph) == [
-        "device_drivers.sim_robot.core (layer 2) imports runtime.launcher.run (layer 4)",
-        "runtime.robotics.kinematics (layer 1) imports runtime.motion.service (layer 3)",
+        "openpendant.device_drivers.sim_robot.core (layer 2) imports "
+        "openpendant.runtime.launcher.run (layer 4)",
+        "openpendant.runtime.robotics.kinematics (layer 1) imports "
+        "openpendant.runtime.motion.service (layer 3)",
     ]
     assert sorted(cycles(graph)) == [
-        ["blockly_blocks.generator", "blockly_blocks.standard"],
-        ["sandbox.a", "sandbox.b", "sandbox.c"],
+        ["openpendant.blockly_blocks.generator", "openpendant.blockly_blocks.standard"],
+        ["openpendant.sandbox.a", "openpendant.sandbox.b", "openpendant.sandbox.c"],
     ]
 
 
 # The simulated cell (its parts and frames) that every simulator shares: not a driver.
-SHARED_BY_DRIVERS = "device_drivers.sim_cell"
+SHARED_BY_DRIVERS = "openpendant.device_drivers.sim_cell"
 
 
 def drivers_borrowing(graph: Mapping[str, Iterable[str]]) -> list[str]:
     """A driver's imports of another driver's package (the UR emulator's arm controller was
     the simulated robot's tracker; what several drivers need is in the robotics core or the
-    driver kit, runtime.drivers)."""
+    driver kit, openpendant.runtime.drivers)."""
 
     def driver(module: str) -> str | None:
         parts = module.split(".")
-        if parts[0] != "device_drivers" or len(parts) < 2 or parts[1] == "plugin":
+        if parts[:2] != ["openpendant", "device_drivers"] or len(parts) < 3 or parts[2] == "plugin":
             return None
-        return ".".join(parts[:2])
+        return ".".join(parts[:3])
 
     return sorted(
         f"{module} imports {name}"
@@ -292,9 +312,54 @@ def drivers_borrowing(graph: Mapping[str, Iterable[str]]) -> list[str]:
 def test_a_driver_takes_nothing_from_another_driver() -> None:
     assert drivers_borrowing(import_graph()) == []
     fed = {
-        "device_drivers.ur_rtde.emulator.controller": {"device_drivers.sim_robot.tracker"},
-        "device_drivers.sim_camera.driver": {"device_drivers.sim_cell.link"},
+        "openpendant.device_drivers.ur_rtde.emulator.controller": {
+            "openpendant.device_drivers.sim_robot.tracker"
+        },
+        "openpendant.device_drivers.sim_camera.driver": {
+            "openpendant.device_drivers.sim_cell.link"
+        },
     }
     assert drivers_borrowing(fed) == [
-        "device_drivers.ur_rtde.emulator.controller imports device_drivers.sim_robot.tracker"
+        "openpendant.device_drivers.ur_rtde.emulator.controller imports "
+        "openpendant.device_drivers.sim_robot.tracker"
     ]
+
+
+BARE = ("runtime", "device_drivers", "sandbox", "blockly_blocks", "plugins", "webui", "deploy")
+
+
+def test_the_project_is_imported_only_as_openpendant() -> None:
+    """One installed package (issue 33): code and tests import `openpendant.runtime`, never
+    `runtime` (which a checkout would also let them, and which would load a second copy of
+    every module it reaches)."""
+    found = []
+    for path in sorted(ROOT.glob("[!.]*/**/*.py")):
+        relative = path.relative_to(ROOT)
+        if relative.parts[0] in ("openpendant", "build") or "build" in relative.parts:
+            continue
+        for line, name in imports(path, ".".join(relative.with_suffix("").parts)):
+            if name.split(".")[0] in BARE:
+                found.append(f"{relative}:{line} imports {name}")
+    assert found == []
+
+
+def test_loading_every_plugin_loads_nothing_outside_openpendant() -> None:
+    """Every service, driver and block generator the plugins name, resolved in a fresh
+    interpreter started away from the checkout: not one module under a bare name."""
+    script = (
+        "import sys\n"
+        "from openpendant.plugins.api import resolve\n"
+        "from openpendant.plugins.registry import registry\n"
+        "plugins = registry()\n"
+        "names = [s.factory for s in plugins.services.values()]\n"
+        "names += [d.factory for d in plugins.drivers.values()]\n"
+        "names += [b.generator for b in plugins.blocks.values()]\n"
+        "for name in names: resolve(name)\n"
+        "print(len(names)); print('\\n'.join(sorted(sys.modules)))\n"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True, cwd="/"
+    )
+    count, *loaded = done.stdout.split()
+    assert int(count) > 50
+    assert [m for m in loaded if m.split(".")[0] in BARE] == []

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from runtime.device_manager.leases import LeaseBook, LeaseRefused
-from runtime.kit.errors import Conflict
+from openpendant.runtime.device_manager.leases import LeaseBook, LeaseRefused
+from openpendant.runtime.kit.errors import Conflict
 
 
 def test_one_holder_at_a_time_until_release() -> None:

@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from runtime.interfaces.limits import JointLimitChecker
-from runtime.interfaces.robot import JointTrajectory, TrajectoryWaypoint
-from runtime.kit.errors import RobotError
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.interfaces.limits import JointLimitChecker
+from openpendant.runtime.interfaces.robot import JointTrajectory, TrajectoryWaypoint
+from openpendant.runtime.kit.errors import RobotError
+from openpendant.runtime.robotics.robot_info import load_robot_info
 
 
 @pytest.fixture(scope="module")

@@ -8,8 +8,8 @@ import itertools
 import pytest
 from pydantic import ValidationError
 
-from device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
-from device_drivers.modbus_io.registers import RegisterMap
+from openpendant.device_drivers.modbus_io.codec import decode, encode, to_raw, to_unit
+from openpendant.device_drivers.modbus_io.registers import RegisterMap
 
 ORDERS = list(itertools.product(("big", "little"), repeat=2))
 

@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from runtime.interfaces.scene import SceneObject
-from runtime.robotics.avoidance import SAFETY, AvoidanceConstraint
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.velocity import VelocityController
-from runtime.robotics.world import World
+from openpendant.runtime.interfaces.scene import SceneObject
+from openpendant.runtime.robotics.avoidance import SAFETY, AvoidanceConstraint
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.velocity import VelocityController
+from openpendant.runtime.robotics.world import World
 
 INFO = load_robot_info("ur5")
 PERIOD = 0.01

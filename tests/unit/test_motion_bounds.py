@@ -10,11 +10,11 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from runtime.interfaces.scene import SceneObject
-from runtime.robotics.checker import PathChecker, _Travel
-from runtime.robotics.geometry import proximity
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.world import World
+from openpendant.runtime.interfaces.scene import SceneObject
+from openpendant.runtime.robotics.checker import PathChecker, _Travel
+from openpendant.runtime.robotics.geometry import proximity
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.world import World
 
 INFO = load_robot_info("ur5")
 LOWER = np.maximum([j.lower for j in INFO.joints], -3.2)

@@ -7,8 +7,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.robotics.kinematics import Kinematics, Unreachable
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.kinematics import Kinematics, Unreachable
+from openpendant.runtime.robotics.robot_info import load_robot_info
 
 
 @pytest.mark.parametrize("model", ["ur5", "panda"])

@@ -10,15 +10,15 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.interfaces.scene import SceneObject
-from runtime.motion.models import MoveRequest
-from runtime.motion.moves import MovePlanner, Point
-from runtime.robotics.checker import PathChecker
-from runtime.robotics.geometry import proximity
-from runtime.robotics.paths import PathError, sample_tcp_path
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.timing import time_scale
-from runtime.robotics.world import World
+from openpendant.runtime.interfaces.scene import SceneObject
+from openpendant.runtime.motion.models import MoveRequest
+from openpendant.runtime.motion.moves import MovePlanner, Point
+from openpendant.runtime.robotics.checker import PathChecker
+from openpendant.runtime.robotics.geometry import proximity
+from openpendant.runtime.robotics.paths import PathError, sample_tcp_path
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.timing import time_scale
+from openpendant.runtime.robotics.world import World
 
 INFO = load_robot_info("ur5")
 # Left and right of the robot (a UR's base x axis points backwards), arm folded over the table.

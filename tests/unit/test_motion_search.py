@@ -11,13 +11,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.interfaces.scene import SceneObject
-from runtime.robotics.checker import PathChecker
-from runtime.robotics.planner import NoPath, plan_around
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.screen import Screen
-from runtime.robotics.shortcut import shortcut
-from runtime.robotics.world import World
+from openpendant.runtime.interfaces.scene import SceneObject
+from openpendant.runtime.robotics.checker import PathChecker
+from openpendant.runtime.robotics.planner import NoPath, plan_around
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.screen import Screen
+from openpendant.runtime.robotics.shortcut import shortcut
+from openpendant.runtime.robotics.world import World
 
 INFO = load_robot_info("ur5")
 LEFT = np.array([1.0, -1.0, 1.8, -2.37, -1.57, 0.0])

@@ -14,22 +14,22 @@ from typing import cast
 
 import numpy as np
 
-from runtime.clients.input import InputClient
-from runtime.clients.robot import Halt, Streamed
-from runtime.interfaces.input import InputState
-from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import (
+from openpendant.runtime.clients.input import InputClient
+from openpendant.runtime.clients.robot import Halt, Streamed
+from openpendant.runtime.interfaces.input import InputState
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     OperationalMode,
     RobotFlags,
     RobotState,
     VelocityCommand,
 )
-from runtime.jog.actions import MouseJog
-from runtime.jog.session import ANGULAR_SPEED, LINEAR_SPEED
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.velocity import MANUAL_TCP_SPEED, VelocityController
+from openpendant.runtime.jog.actions import MouseJog
+from openpendant.runtime.jog.session import ANGULAR_SPEED, LINEAR_SPEED
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.velocity import MANUAL_TCP_SPEED, VelocityController
 
 PERIOD = 0.01
 PUSHED = [0.5, 0.0, 0.0, 0.0, 0.0, 0.0]  # half way to the right

@@ -14,10 +14,10 @@ import onnx
 import pytest
 from onnx import TensorProto, helper, numpy_helper
 
-from runtime.interfaces.detector import DetectRequest
-from runtime.kit.errors import InvalidValue, NotFound
-from runtime.vision.detectors import DetectorConfig
-from runtime.vision.neural_detector import NeuralDetector
+from openpendant.runtime.interfaces.detector import DetectRequest
+from openpendant.runtime.kit.errors import InvalidValue, NotFound
+from openpendant.runtime.vision.detectors import DetectorConfig
+from openpendant.runtime.vision.neural_detector import NeuralDetector
 
 SIZE = 64  # the network's input side
 # Candidates in the network's input pixels: centre x, y, width, height, objectness, then the

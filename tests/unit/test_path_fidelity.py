@@ -9,17 +9,17 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from runtime.bench.bench_path_fidelity import follow, linear, moves
-from runtime.interfaces.limits import FloatArray
-from runtime.interfaces.robot import JointTrajectory, TrajectoryWaypoint
-from runtime.motion.executor import trajectory as as_trajectory
-from runtime.motion.moves import MovePlanner, Point
-from runtime.robotics.deviation import distances_to_polyline
-from runtime.robotics.reference import Limits, TrajectoryReference
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.timing import TimedPath
-from runtime.robotics.velocity import MANUAL_TCP_SPEED
-from runtime.robotics.world import World
+from openpendant.runtime.bench.bench_path_fidelity import follow, linear, moves
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.interfaces.robot import JointTrajectory, TrajectoryWaypoint
+from openpendant.runtime.motion.executor import trajectory as as_trajectory
+from openpendant.runtime.motion.moves import MovePlanner, Point
+from openpendant.runtime.robotics.deviation import distances_to_polyline
+from openpendant.runtime.robotics.reference import Limits, TrajectoryReference
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.timing import TimedPath
+from openpendant.runtime.robotics.velocity import MANUAL_TCP_SPEED
+from openpendant.runtime.robotics.world import World
 
 
 def planned_line(

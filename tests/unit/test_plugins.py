@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from plugins.api import Block, DeviceKind, Driver, Panel, Plugin, Service, resolve
-from plugins.registry import CORE, Loaded, check, load, registry
+from openpendant.plugins.api import Block, DeviceKind, Driver, Panel, Plugin, Service, resolve
+from openpendant.plugins.registry import CORE, Loaded, check, load, registry
 
 BUILT_IN = {"core", "drivers", "blocks", "ui"}
 
@@ -63,10 +63,10 @@ def test_every_built_in_reference_resolves() -> None:
 def test_a_broken_plugin_is_reported_and_the_rest_load(fake_plugins: Path) -> None:
     (fake_plugins / "fake_plugin_raises.py").write_text("raise RuntimeError('boom')\n")
     entries = [
-        entry("good", "blockly_blocks.plugin:PLUGIN"),
+        entry("good", "openpendant.blockly_blocks.plugin:PLUGIN"),
         entry("missing", "fake_plugin_nowhere:PLUGIN"),
         entry("raises", "fake_plugin_raises:PLUGIN"),
-        entry("not_a_plugin", "plugins.api:resolve"),
+        entry("not_a_plugin", "openpendant.plugins.api:resolve"),
     ]
     plugins = load(entries)
     assert [loaded.plugin.name for loaded in plugins.loaded] == ["blocks"]
@@ -81,7 +81,7 @@ def test_a_plugin_that_declares_what_another_has_is_refused_whole(fake_plugins: 
     (fake_plugins / "fake_plugin_clash.py").write_text(
         textwrap.dedent(
             """
-            from plugins.api import Block, Driver, Plugin
+            from openpendant.plugins.api import Block, Driver, Plugin
 
             PLUGIN = Plugin(
                 name="clash",
@@ -92,7 +92,10 @@ def test_a_plugin_that_declares_what_another_has_is_refused_whole(fake_plugins: 
         )
     )
     plugins = load(
-        [entry("a", "blockly_blocks.plugin:PLUGIN"), entry("b", "fake_plugin_clash:PLUGIN")]
+        [
+            entry("a", "openpendant.blockly_blocks.plugin:PLUGIN"),
+            entry("b", "fake_plugin_clash:PLUGIN"),
+        ]
     )
     assert [f.plugin for f in plugins.failures] == ["b"]
     assert "robot_home" in plugins.failures[0].error
@@ -116,7 +119,10 @@ def test_a_plugin_cannot_take_over_a_name_the_core_answers(
     block: Block | None, service: Service | None, fault: str
 ) -> None:
     core = load(
-        [entry("core", "runtime.plugin:PLUGIN"), entry("b", "blockly_blocks.plugin:PLUGIN")]
+        [
+            entry("core", "openpendant.runtime.plugin:PLUGIN"),
+            entry("b", "openpendant.blockly_blocks.plugin:PLUGIN"),
+        ]
     )
     plugin = Plugin(
         name="takeover",
@@ -127,7 +133,11 @@ def test_a_plugin_cannot_take_over_a_name_the_core_answers(
         core.add(Loaded(plugin, "takeover", "takeover", "0.1", builtin=False))
     # The same function or call declared again with the same meaning is one more user of it.
     again = Block(
-        "x_move", "robot", {}, "a:b", handlers={"robot.move": "runtime.program.handlers:move"}
+        "x_move",
+        "robot",
+        {},
+        "a:b",
+        handlers={"robot.move": "openpendant.runtime.program.handlers:move"},
     )
     core.add(
         Loaded(Plugin(name="reuser", blocks=(again,)), "reuser", "reuser", "0.1", builtin=False)

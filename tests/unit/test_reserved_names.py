@@ -5,10 +5,10 @@ from __future__ import annotations
 
 import pytest
 
-from plugins.api import Plugin
-from plugins.registry import Loaded, Registry, registry
-from runtime.program.reserved_names import RUNTIME_NAMESPACES, refuse_reserved
-from sandbox.supervisor import CallRefused
+from openpendant.plugins.api import Plugin
+from openpendant.plugins.registry import Loaded, Registry, registry
+from openpendant.runtime.program.reserved_names import RUNTIME_NAMESPACES, refuse_reserved
+from openpendant.sandbox.supervisor import CallRefused
 
 PREFIXES = ("frames.", "calibration.", "tools.", "detectors.", "program.", "vision.", "devices.")
 
@@ -32,7 +32,7 @@ def test_each_plugins_name_is_its_namespace_loaded_or_not(monkeypatch: pytest.Mo
     plugins = Registry()
     plugins.add(Loaded(Plugin(name="conveyor"), "conveyor", "openpendant-conveyor", "1", False))
     plugins.fail("broken", "broken_plugin:PLUGIN", "ImportError")
-    monkeypatch.setattr("runtime.program.reserved_names.registry", lambda: plugins)
+    monkeypatch.setattr("openpendant.runtime.program.reserved_names.registry", lambda: plugins)
     for name in ("conveyor.speed", "broken.x"):
         with pytest.raises(CallRefused, match="plugin's variables"):
             refuse_reserved(name)

@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from device_drivers.sim_camera.entry import SimCameraOptions, camera_model
-from runtime.kit.errors import InvalidValue
-from runtime.vision.models import PoseRegion
-from runtime.vision.poses import flange_poses
-from runtime.vision.robot_origin import Camera, Sighting, solve_origin, tag_corners
+from openpendant.device_drivers.sim_camera.entry import SimCameraOptions, camera_model
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.vision.models import PoseRegion
+from openpendant.runtime.vision.poses import flange_poses
+from openpendant.runtime.vision.robot_origin import Camera, Sighting, solve_origin, tag_corners
 
 MODEL = camera_model(SimCameraOptions())
 CAMERA = Camera(MODEL.matrix, MODEL.coefficients, MODEL.pose)

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from runtime.program.models import RunStatus
-from runtime.program.records import RunRecords
+from openpendant.runtime.program.models import RunStatus
+from openpendant.runtime.program.records import RunRecords
 
 
 def test_a_run_live_at_a_crash_is_failed_with_the_reason_and_its_leases_returned(

@@ -9,9 +9,9 @@ from typing import Any
 
 import pytest
 
-from sandbox.policy import ProgramCompileError, compile_program
-from sandbox.protocol import MAX_OUTPUT_CHARS
-from sandbox.supervisor import KEEP_OUTPUT, CallRefused, ProgramRun, RunLimits, RunState
+from openpendant.sandbox.policy import ProgramCompileError, compile_program
+from openpendant.sandbox.protocol import MAX_OUTPUT_CHARS
+from openpendant.sandbox.supervisor import KEEP_OUTPUT, CallRefused, ProgramRun, RunLimits, RunState
 
 REFUSED_AT_COMPILE = {
     "import": "import os",

@@ -18,19 +18,19 @@ import pytest
 from fastapi import FastAPI
 from fastapi.testclient import TestClient
 
-from blockly_blocks.generate import generate
-from blockly_blocks.generator import INPUT_WORDS
-from blockly_blocks.workspace import WorkspaceError
-from runtime.auth.audit import AuditLog
-from runtime.auth.roles import Role
-from runtime.auth.store import AuthStore
-from runtime.device_manager.leases import LeaseBook
-from runtime.kit.errors import Conflict, OpenPendantError
-from runtime.kit.words import CODES, Words, words, words_of
-from runtime.program.compiler import prepare_save, workspace_error
-from runtime.program.reserved_names import refuse_reserved
-from sandbox.supervisor import CallRefused, ProgramRun, RunLimits
-from webui.access import AccessGuard
+from openpendant.blockly_blocks.generate import generate
+from openpendant.blockly_blocks.generator import INPUT_WORDS
+from openpendant.blockly_blocks.workspace import WorkspaceError
+from openpendant.runtime.auth.audit import AuditLog
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.store import AuthStore
+from openpendant.runtime.device_manager.leases import LeaseBook
+from openpendant.runtime.kit.errors import Conflict, OpenPendantError
+from openpendant.runtime.kit.words import CODES, Words, words, words_of
+from openpendant.runtime.program.compiler import prepare_save, workspace_error
+from openpendant.runtime.program.reserved_names import refuse_reserved
+from openpendant.sandbox.supervisor import CallRefused, ProgramRun, RunLimits
+from openpendant.webui.access import AccessGuard
 
 ROOT = Path(__file__).resolve().parents[2]
 SOURCES = ("runtime", "webui", "blockly_blocks", "sandbox", "plugins", "device_drivers")
@@ -48,7 +48,7 @@ def python_files() -> Iterator[Path]:
 def uses_words(tree: ast.Module) -> bool:
     return any(
         isinstance(node, ast.ImportFrom)
-        and node.module == "runtime.kit.words"
+        and node.module == "openpendant.runtime.kit.words"
         and any(alias.name == "words" for alias in node.names)
         for node in ast.walk(tree)
     )

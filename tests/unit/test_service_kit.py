@@ -11,11 +11,11 @@ import pytest
 from fastapi import FastAPI, WebSocket
 from fastapi.testclient import TestClient
 
-from runtime.interfaces.common import Pose, Strict
-from runtime.kit.app import create_app
-from runtime.kit.errors import Conflict
-from runtime.kit.request_start import received_at, stamp
-from runtime.kit.websocket import Fanout, OutboxOverflow, Subscriber
+from openpendant.runtime.interfaces.common import Pose, Strict
+from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.errors import Conflict
+from openpendant.runtime.kit.request_start import received_at, stamp
+from openpendant.runtime.kit.websocket import Fanout, OutboxOverflow, Subscriber
 
 
 class Body(Strict):
@@ -112,7 +112,7 @@ def test_a_subscriber_that_falls_far_behind_is_dropped() -> None:
 
 
 def test_errors_from_other_services_keep_their_kind() -> None:
-    from runtime.kit.errors import InvalidValue, NotFound, OpenPendantError
+    from openpendant.runtime.kit.errors import InvalidValue, NotFound, OpenPendantError
 
     missing = OpenPendantError.from_body(
         404, {"error": {"code": "variable_not_found", "message": "no variable"}}
@@ -131,8 +131,8 @@ def test_errors_from_other_services_keep_their_kind() -> None:
 def test_state_stream_repeats_a_quiet_state_and_skips_duplicates() -> None:
     from pydantic import BaseModel
 
-    from runtime.drivers.state_stream import KEEPALIVE, StateStream
-    from runtime.kit.websocket import Subscriber
+    from openpendant.runtime.drivers.state_stream import KEEPALIVE, StateStream
+    from openpendant.runtime.kit.websocket import Subscriber
 
     class Quiet(BaseModel):
         value: int = 1
@@ -161,8 +161,8 @@ def test_state_stream_sends_a_change_at_once_when_the_driver_says_so() -> None:
     for the tick."""
     from pydantic import BaseModel
 
-    from runtime.drivers.state_stream import StateStream
-    from runtime.kit.websocket import Subscriber
+    from openpendant.runtime.drivers.state_stream import StateStream
+    from openpendant.runtime.kit.websocket import Subscriber
 
     class Signal(BaseModel):
         value: int = 0

@@ -8,15 +8,15 @@ from pathlib import Path
 import pytest
 from pydantic import ValidationError
 
-from runtime.drivers.run import device_uuid as driver_uuid
-from runtime.kit.settings import (
+from openpendant.runtime.drivers.run import device_uuid as driver_uuid
+from openpendant.runtime.kit.settings import (
     RuntimeSettings,
     load_settings,
     resolve_interfaces,
     settings_for_child,
     settings_from_env,
 )
-from runtime.launcher.run import device_uuid as launcher_uuid
+from openpendant.runtime.launcher.run import device_uuid as launcher_uuid
 
 
 def test_precedence(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

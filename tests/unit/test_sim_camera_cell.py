@@ -12,13 +12,13 @@ from pathlib import Path
 
 import pytest
 
-from device_drivers.sim_camera.driver import SimCamera
-from device_drivers.sim_camera.entry import SimCameraOptions, create
-from device_drivers.sim_cell.link import CellServer
-from device_drivers.sim_cell.world import CellSetup, Part, World
-from runtime.interfaces.camera import CaptureRequest
-from runtime.interfaces.common import Pose
-from runtime.kit.errors import DeviceError
+from openpendant.device_drivers.sim_camera.driver import SimCamera
+from openpendant.device_drivers.sim_camera.entry import SimCameraOptions, create
+from openpendant.device_drivers.sim_cell.link import CellServer
+from openpendant.device_drivers.sim_cell.world import CellSetup, Part, World
+from openpendant.runtime.interfaces.camera import CaptureRequest
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.kit.errors import DeviceError
 
 SMALL = {"width": 64, "height": 48, "fps": 60.0}
 

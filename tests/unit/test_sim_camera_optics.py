@@ -11,7 +11,13 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from device_drivers.sim_camera.optics import BACKGROUND, CameraModel, Renderer, Target, look_at
+from openpendant.device_drivers.sim_camera.optics import (
+    BACKGROUND,
+    CameraModel,
+    Renderer,
+    Target,
+    look_at,
+)
 
 CAMERA = CameraModel(640, 400, 450.0, 452.0, 322.5, 197.0, (-0.12, 0.06, 0.0005, -0.0003, 0.0))
 DICTIONARY = cv2.aruco.getPredefinedDictionary(cv2.aruco.DICT_5X5_100)

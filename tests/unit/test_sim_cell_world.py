@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 from scipy.spatial.transform import Rotation
 
-from device_drivers.sim_cell.link import CellClient, CellServer, address
-from device_drivers.sim_cell.world import CellSetup, FlangeTag, Part, Sensor, World
-from runtime.interfaces.common import Pose
+from openpendant.device_drivers.sim_cell.link import CellClient, CellServer, address
+from openpendant.device_drivers.sim_cell.world import CellSetup, FlangeTag, Part, Sensor, World
+from openpendant.runtime.interfaces.common import Pose
 
 QUARTER_TURN = [0.0, 0.0, 0.7071068, 0.7071068]  # 90° about z
 

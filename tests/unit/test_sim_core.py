@@ -8,11 +8,11 @@ import math
 import numpy as np
 import pytest
 
-from device_drivers.sim_robot.core import CYCLE, SimCore
-from device_drivers.sim_robot.driver import SimRobot
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.limits import FloatArray, JointLimitChecker
-from runtime.interfaces.robot import (
+from openpendant.device_drivers.sim_robot.core import CYCLE, SimCore
+from openpendant.device_drivers.sim_robot.driver import SimRobot
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.limits import FloatArray, JointLimitChecker
+from openpendant.runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
     JogJointCommand,
@@ -22,10 +22,10 @@ from runtime.interfaces.robot import (
     TrajectoryState,
     TrajectoryWaypoint,
 )
-from runtime.kit.errors import InvalidValue, RobotError
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.tracker import JointTracker
+from openpendant.runtime.kit.errors import InvalidValue, RobotError
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.tracker import JointTracker
 
 
 @pytest.fixture(scope="module")
@@ -379,7 +379,7 @@ def straight_trajectory(
     """A time-optimal move along a straight line in joint space, sent as 8 ms waypoints with
     velocities and accelerations, as the motion service sends it; (trajectory id, start,
     goal)."""
-    from runtime.robotics.joint_move import plan_joint_move
+    from openpendant.runtime.robotics.joint_move import plan_joint_move
 
     start = core.tracker.position.copy()
     goal = start + np.array(offset)

@@ -12,18 +12,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from device_drivers.spacemouse.devices import MODELS, find_model
-from device_drivers.spacemouse.driver import SpaceMouseDriver
-from device_drivers.spacemouse.reports import (
+from openpendant.device_drivers.spacemouse.devices import MODELS, find_model
+from openpendant.device_drivers.spacemouse.driver import SpaceMouseDriver
+from openpendant.device_drivers.spacemouse.reports import (
     AxisFilter,
     AxisSettings,
     RawInput,
     ReportError,
     parse_report,
 )
-from device_drivers.spacemouse.sources import DeviceGone, ReplaySource, SpacenavdSource
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.input import InputInfo
+from openpendant.device_drivers.spacemouse.sources import DeviceGone, ReplaySource, SpacenavdSource
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.input import InputInfo
 
 
 def separate(translation: tuple[int, int, int], rotation: tuple[int, int, int]) -> list[bytes]:
@@ -49,7 +49,7 @@ def test_reports_captured_from_a_space_navigator() -> None:
 
 @pytest.mark.parametrize("model", MODELS, ids=lambda m: m.name)
 def test_every_supported_model_parses_in_its_layout(model: object) -> None:
-    from device_drivers.spacemouse.devices import SpaceMouseModel
+    from openpendant.device_drivers.spacemouse.devices import SpaceMouseModel
 
     assert isinstance(model, SpaceMouseModel)
     assert find_model(model.vendor_id, model.product_id) is model

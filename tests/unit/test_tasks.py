@@ -7,7 +7,7 @@ import asyncio
 
 import pytest
 
-from runtime.kit.tasks import cancel_for_sure
+from openpendant.runtime.kit.tasks import cancel_for_sure
 
 pytestmark = pytest.mark.concurrent
 

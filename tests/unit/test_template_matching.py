@@ -7,7 +7,7 @@ import cv2
 import numpy as np
 import pytest
 
-from runtime.imaging.template import find_template, turned
+from openpendant.runtime.imaging.template import find_template, turned
 
 PLACED = [(300.0, 250.0, 37.0, 1.0), (900.0, 500.0, 200.0, 1.08), (640.0, 650.0, 95.0, 0.93)]
 
@@ -63,10 +63,10 @@ def test_a_region_outside_the_image_is_a_clear_error() -> None:
     import asyncio
     import base64
 
-    from runtime.interfaces.detector import DetectRequest
-    from runtime.kit.errors import InvalidValue
-    from runtime.vision.detectors import DetectorConfig
-    from runtime.vision.template_detector import TemplateDetector
+    from openpendant.runtime.interfaces.detector import DetectRequest
+    from openpendant.runtime.kit.errors import InvalidValue
+    from openpendant.runtime.vision.detectors import DetectorConfig
+    from openpendant.runtime.vision.template_detector import TemplateDetector
 
     ok, png = cv2.imencode(".png", pattern())
     assert ok

@@ -10,11 +10,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from runtime.robotics.deviation import distances_to_polyline
-from runtime.robotics.joint_move import plan_joint_move
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.tracker import JointTracker
+from openpendant.runtime.robotics.deviation import distances_to_polyline
+from openpendant.runtime.robotics.joint_move import plan_joint_move
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.tracker import JointTracker
 
 CYCLE = 0.002  # s: the simulator's
 PERIOD = 0.01  # s: the jog service's

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.tracker import JointTracker
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.tracker import JointTracker
 
 pytestmark = pytest.mark.concurrent
 

@@ -16,12 +16,12 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
-from runtime.auth.roles import Role
-from runtime.auth.setup import create_token
-from runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.setup import create_token
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.webui import policy
+from openpendant.webui.server import build_app
 from tests.support.ts_requests import CHANGING, Source, sources
-from webui import policy
-from webui.server import build_app
 
 SRC = Path(__file__).resolve().parents[2] / "webui" / "frontend" / "src"
 

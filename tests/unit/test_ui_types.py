@@ -11,10 +11,10 @@ from typing import Any
 
 import pytest
 
-from plugins.api import resolve
-from plugins.registry import registry
-from runtime.kit.settings import RuntimeSettings
-from runtime.services import load_factory, services
+from openpendant.plugins.api import resolve
+from openpendant.plugins.registry import registry
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.services import load_factory, services
 
 TYPES = Path(__file__).resolve().parents[2] / "webui" / "frontend" / "src" / "types.ts"
 MUST_CHECK = {"RobotState", "AddedDevice", "DetectedDevice", "DeviceDetails", "InputState"}

@@ -10,8 +10,8 @@ import pytest
 import rtde_control
 import rtde_receive
 
-from device_drivers.ur_rtde.link import URLink
-from runtime.kit.errors import RobotError
+from openpendant.device_drivers.ur_rtde.link import URLink
+from openpendant.runtime.kit.errors import RobotError
 
 
 class Recorded:

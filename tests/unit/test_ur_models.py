@@ -12,14 +12,14 @@ import pinocchio as pin
 import pytest
 import yaml
 
-from device_drivers.ur_rtde.models import model_mismatch
-from runtime.kit.errors import InvalidValue
-from runtime.paths import ROBOTS_DIR, resolve_package_uri
-from runtime.robotics import geometry
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.robot_body import RobotBody
-from runtime.robotics.robot_info import load_robot_info
-from webui.server import robot_file_path
+from openpendant.device_drivers.ur_rtde.models import model_mismatch
+from openpendant.runtime.kit.errors import InvalidValue
+from openpendant.runtime.paths import ROBOTS_DIR, resolve_package_uri
+from openpendant.runtime.robotics import geometry
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.robot_body import RobotBody
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.webui.server import robot_file_path
 
 # UR's DH parameters (d1, a2, a3, d4, d5, d6 in m; "DH parameters for calculations of
 # kinematics and dynamics", universal-robots.com), the manuals' joint speeds (°/s), rated

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from device_drivers.ur_rtde.emulator.controller import (
+from openpendant.device_drivers.ur_rtde.emulator.controller import (
     CYCLE,
     NORMAL,
     PROTECTIVE_STOP,
@@ -16,15 +16,15 @@ from device_drivers.ur_rtde.emulator.controller import (
     STOPPED,
     Controller,
 )
-from runtime.bench.bench_path_fidelity import linear
-from runtime.interfaces.limits import FloatArray, JointLimitChecker
-from runtime.motion.executor import trajectory as as_trajectory
-from runtime.motion.moves import MovePlanner, Point
-from runtime.robotics.deviation import distances_to_polyline
-from runtime.robotics.reference import Limits, RunningTrajectory, TrajectoryReference
-from runtime.robotics.robot_info import load_robot_info
-from runtime.robotics.time_scaling import TimeScaling
-from runtime.robotics.world import World
+from openpendant.runtime.bench.bench_path_fidelity import linear
+from openpendant.runtime.interfaces.limits import FloatArray, JointLimitChecker
+from openpendant.runtime.motion.executor import trajectory as as_trajectory
+from openpendant.runtime.motion.moves import MovePlanner, Point
+from openpendant.runtime.robotics.deviation import distances_to_polyline
+from openpendant.runtime.robotics.reference import Limits, RunningTrajectory, TrajectoryReference
+from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.runtime.robotics.time_scaling import TimeScaling
+from openpendant.runtime.robotics.world import World
 
 UR5E = load_robot_info("ur5e")
 PERIOD = 0.008  # the driver's servoJ t

@@ -20,15 +20,15 @@ from collections.abc import AsyncIterator, Callable, Iterator
 
 import uvicorn
 
-from device_drivers.ur_rtde.driver import URDriver
-from runtime.device_manager.connection import DeviceConnection
-from runtime.drivers.host import build_driver_app
-from runtime.interfaces.device import DeviceIdentity
-from runtime.interfaces.robot import RobotState
-from runtime.interfaces.variables import DeviceRecord
-from runtime.kit.serve import listening_socket
-from runtime.kit.settings import LinkSettings
-from runtime.robotics.robot_info import load_robot_info
+from openpendant.device_drivers.ur_rtde.driver import URDriver
+from openpendant.runtime.device_manager.connection import DeviceConnection
+from openpendant.runtime.drivers.host import build_driver_app
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.interfaces.robot import RobotState
+from openpendant.runtime.interfaces.variables import DeviceRecord
+from openpendant.runtime.kit.serve import listening_socket
+from openpendant.runtime.kit.settings import LinkSettings
+from openpendant.runtime.robotics.robot_info import load_robot_info
 
 # The dashboard's port is fixed: an address of this run's own, so that two runs of the
 # suite on one machine do not meet there.

@@ -10,9 +10,9 @@ from typing import Any
 
 import pytest
 
-from runtime.kit.errors import Conflict, InvalidValue, NotFound
-from runtime.variable_storage.store import VariableStore, version_bytes
-from runtime.variable_storage.types import types
+from openpendant.runtime.kit.errors import Conflict, InvalidValue, NotFound
+from openpendant.runtime.variable_storage.store import VariableStore, version_bytes
+from openpendant.runtime.variable_storage.types import types
 
 UNIT_Q = [0.0, 0.0, 0.7071067811865476, 0.7071067811865476]
 

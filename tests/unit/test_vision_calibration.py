@@ -11,14 +11,14 @@ import pytest
 from pydantic import ValidationError
 from scipy.spatial.transform import Rotation
 
-from device_drivers.sim_camera.optics import CameraModel, Renderer, Target, look_at
-from runtime.bench.harness.views import board_views
-from runtime.imaging.boards import Board, BoardSpec, BoardView
-from runtime.kit.errors import Conflict, InvalidValue
-from runtime.vision.calibration_file import from_yaml, to_yaml
-from runtime.vision.extrinsics import average, board_in_camera, camera_in_world
-from runtime.vision.intrinsics import MIN_FRAMES, IntrinsicSession
-from runtime.vision.models import CameraCalibration
+from openpendant.device_drivers.sim_camera.optics import CameraModel, Renderer, Target, look_at
+from openpendant.runtime.bench.harness.views import board_views
+from openpendant.runtime.imaging.boards import Board, BoardSpec, BoardView
+from openpendant.runtime.kit.errors import Conflict, InvalidValue
+from openpendant.runtime.vision.calibration_file import from_yaml, to_yaml
+from openpendant.runtime.vision.extrinsics import average, board_in_camera, camera_in_world
+from openpendant.runtime.vision.intrinsics import MIN_FRAMES, IntrinsicSession
+from openpendant.runtime.vision.models import CameraCalibration
 
 EYE = look_at(np.array([0.4, 0.1, 0.9]), np.array([0.45, 0.0, 0.0]), np.array([1.0, 0, 0]))
 CAMERA = CameraModel(640, 400, 520.0, 522.0, 318.5, 203.0, (-0.1, 0.04, 0.0004, -0.0002, 0.0), EYE)

@@ -10,21 +10,21 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from device_drivers.sim_camera.entry import SimCameraOptions, camera_model
-from device_drivers.sim_camera.optics import Renderer, Target
-from device_drivers.sim_camera.scene import flange_target
-from runtime.interfaces.camera import Intrinsics
-from runtime.interfaces.detector import DetectRequest
-from runtime.vision.detectors import ArucoDetector, DetectorConfig
-from sandbox.guards import SandboxError
-from sandbox.library.vision import (
+from openpendant.device_drivers.sim_camera.entry import SimCameraOptions, camera_model
+from openpendant.device_drivers.sim_camera.optics import Renderer, Target
+from openpendant.device_drivers.sim_camera.scene import flange_target
+from openpendant.runtime.interfaces.camera import Intrinsics
+from openpendant.runtime.interfaces.detector import DetectRequest
+from openpendant.runtime.vision.detectors import ArucoDetector, DetectorConfig
+from openpendant.sandbox.guards import SandboxError
+from openpendant.sandbox.library.vision import (
     Detection,
     detection_above,
     detection_count,
     detection_find,
     detection_grip_pose,
 )
-from sandbox.values import Pose
+from openpendant.sandbox.values import Pose
 
 # Looking along the world's z from the origin: the camera frame is the world's.
 MODEL = camera_model(SimCameraOptions(x=0, y=0, z=0, look_x=0, look_y=0, look_z=1))

@@ -11,8 +11,8 @@ from fastapi import FastAPI, Request, WebSocket
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
-from runtime.kit.web_guard import WebGuard, WebPolicy, split_host
-from webui.proxy import PathRefused, below_prefix, service_path
+from openpendant.runtime.kit.web_guard import WebGuard, WebPolicy, split_host
+from openpendant.webui.proxy import PathRefused, below_prefix, service_path
 
 UI = "http://127.0.0.1:8080"
 

@@ -7,10 +7,10 @@ from pathlib import Path
 
 from fastapi.testclient import TestClient
 
-from runtime.auth.setup import create_token
-from runtime.bench.harness.processes import free_port
-from runtime.kit.settings import RuntimeSettings
-from webui.server import build_app
+from openpendant.runtime.auth.setup import create_token
+from openpendant.runtime.bench.harness.processes import free_port
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.webui.server import build_app
 
 
 def gateway(data: Path, urls: dict[str, str], logs: Path | None = None) -> TestClient:

@@ -8,7 +8,7 @@ import asyncio
 import os
 from pathlib import Path
 
-from sandbox.supervisor import REFILL_DELAY, WorkerPool
+from openpendant.sandbox.supervisor import REFILL_DELAY, WorkerPool
 
 LIMITS = '{"cpu_seconds": 60, "memory_mb": 256}'
 

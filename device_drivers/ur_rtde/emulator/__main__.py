@@ -1,6 +1,7 @@
-"""`python -m device_drivers.ur_rtde.emulator --host 127.0.0.2 [--model ur5e]`: an emulated
-UR controller until interrupted. It runs in a process of its own: ur-rtde's calls block
-in C++ holding Python's interpreter lock, so a client and the emulator cannot share one."""
+"""An emulated UR controller until interrupted:
+`python -m openpendant.device_drivers.ur_rtde.emulator --host 127.0.0.2 [--model ur5e]`.
+It runs in a process of its own: ur-rtde's calls block in C++ holding Python's interpreter
+lock, so a client and the emulator cannot share one."""
 
 from __future__ import annotations
 
@@ -12,12 +13,12 @@ import logging
 import signal
 import sys
 
-from device_drivers.sim_cell.link import CellServer
-from device_drivers.sim_cell.world import World
-from device_drivers.ur_rtde.emulator.controller import Controller
-from device_drivers.ur_rtde.emulator.servers import Emulator
-from device_drivers.ur_rtde.models import CB3
-from runtime.robotics.robot_info import available_models, load_robot_info
+from openpendant.device_drivers.sim_cell.link import CellServer
+from openpendant.device_drivers.sim_cell.world import World
+from openpendant.device_drivers.ur_rtde.emulator.controller import Controller
+from openpendant.device_drivers.ur_rtde.emulator.servers import Emulator
+from openpendant.device_drivers.ur_rtde.models import CB3
+from openpendant.runtime.robotics.robot_info import available_models, load_robot_info
 
 
 async def serve(host: str, model: str, cell: str) -> None:
@@ -44,7 +45,7 @@ async def serve(host: str, model: str, cell: str) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m device_drivers.ur_rtde.emulator")
+    parser = argparse.ArgumentParser(prog="python -m openpendant.device_drivers.ur_rtde.emulator")
     parser.add_argument("--host", default="127.0.0.2", help="the address to serve on")
     e_series = [m for m in available_models() if m.startswith("ur") and m not in CB3]
     parser.add_argument("--model", default="ur5e", help=", ".join(e_series))

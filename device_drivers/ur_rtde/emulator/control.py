@@ -13,7 +13,15 @@ from typing import Any
 def start(host: str, *options: str, env: dict[str, str] | None = None) -> subprocess.Popen[str]:
     """The emulator on `host`, once it listens."""
     proc = subprocess.Popen(
-        [sys.executable, "-u", "-m", "device_drivers.ur_rtde.emulator", "--host", host, *options],
+        [
+            sys.executable,
+            "-u",
+            "-m",
+            "openpendant.device_drivers.ur_rtde.emulator",
+            "--host",
+            host,
+            *options,
+        ],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,

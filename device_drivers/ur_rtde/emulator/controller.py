@@ -13,11 +13,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from device_drivers.ur_rtde.emulator.servo import ServoJ, ServoJump
-from runtime.interfaces.common import Pose
-from runtime.interfaces.robot import JointLimits, RobotInfo
-from runtime.robotics.kinematics import Kinematics
-from runtime.robotics.tracker import JointTracker, TrackerError
+from openpendant.device_drivers.ur_rtde.emulator.servo import ServoJ, ServoJump
+from openpendant.runtime.interfaces.common import Pose
+from openpendant.runtime.interfaces.robot import JointLimits, RobotInfo
+from openpendant.runtime.robotics.kinematics import Kinematics
+from openpendant.runtime.robotics.tracker import JointTracker, TrackerError
 
 log = logging.getLogger(__name__)
 CYCLE = 0.002  # s: an e-Series controller's 500 Hz

@@ -18,8 +18,8 @@ import time
 
 import numpy as np
 
-from device_drivers.ur_rtde.emulator import wire
-from device_drivers.ur_rtde.emulator.controller import (
+from openpendant.device_drivers.ur_rtde.emulator import wire
+from openpendant.device_drivers.ur_rtde.emulator.controller import (
     IDLE,
     NORMAL,
     PLAYING,

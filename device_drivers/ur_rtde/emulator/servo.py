@@ -43,8 +43,8 @@ import bisect
 
 import numpy as np
 
-from runtime.interfaces.limits import FloatArray
-from runtime.robotics.time_scaling import TimeScaling
+from openpendant.runtime.interfaces.limits import FloatArray
+from openpendant.runtime.robotics.time_scaling import TimeScaling
 
 # Targets either side of the segment played: the central differences of the accelerations
 # at both its ends reach two targets beyond each.

@@ -3,7 +3,7 @@ are named as "module:attribute" and loaded only by the process that needs them."
 
 from __future__ import annotations
 
-from plugins.api import Block, Category, DeviceKind, Driver, Panel, Plugin
+from openpendant.plugins.api import Block, Category, DeviceKind, Driver, Panel, Plugin
 
 P = "openpendant_conveyor"
 

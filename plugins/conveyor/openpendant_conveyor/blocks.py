@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import re
 
-from blockly_blocks.generator import Generator, py_string
-from blockly_blocks.workspace import Block, WorkspaceError
+from openpendant.blockly_blocks.generator import Generator, py_string
+from openpendant.blockly_blocks.workspace import Block, WorkspaceError
 
 LOCAL_NAME = re.compile(r"^[a-z][a-z0-9_]{0,31}\Z")
 

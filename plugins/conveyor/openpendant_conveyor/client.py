@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import ClassVar
 
+from openpendant.runtime.clients.base import DeviceClient
 from openpendant_conveyor.interface import Conveyor, ConveyorInfo, ConveyorState, SpeedCommand
-from runtime.clients.base import DeviceClient
 
 
 class ConveyorClient(DeviceClient[ConveyorState], Conveyor):

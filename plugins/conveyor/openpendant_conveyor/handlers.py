@@ -7,10 +7,10 @@ from __future__ import annotations
 import math
 from typing import Any
 
+from openpendant.plugins.api import RunContext
+from openpendant.runtime.kit.errors import DeviceError, InvalidValue
 from openpendant_conveyor.client import ConveyorClient
 from openpendant_conveyor.interface import SpeedCommand
-from plugins.api import RunContext
-from runtime.kit.errors import DeviceError, InvalidValue
 
 
 def _client(found: object) -> ConveyorClient:

@@ -12,14 +12,14 @@ import time
 from fastapi import APIRouter
 from pydantic import BaseModel, ConfigDict, Field
 
+from openpendant.runtime.interfaces.device import DeviceIdentity
+from openpendant.runtime.kit.errors import InvalidValue
 from openpendant_conveyor.interface import (
     ConveyorDriver,
     ConveyorInfo,
     ConveyorState,
     SpeedCommand,
 )
-from runtime.interfaces.device import DeviceIdentity
-from runtime.kit.errors import InvalidValue
 
 TICK = 0.02  # s
 ACCELERATION = 1.0  # m/s²: speed changes this fast, so parts do not slide

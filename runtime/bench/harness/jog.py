@@ -14,8 +14,8 @@ import httpx
 import numpy as np
 from websockets.sync.client import ClientConnection, connect
 
-from runtime.bench.harness.processes import Runtime, wait_for
-from runtime.kit.device_auth import DeviceAuth, known_secret
+from openpendant.runtime.bench.harness.processes import Runtime, wait_for
+from openpendant.runtime.kit.device_auth import DeviceAuth, known_secret
 
 _presses = itertools.count(1)
 

@@ -18,15 +18,15 @@ from typing import Any, TypeVar
 
 import httpx
 
-from runtime.auth.roles import Role
-from runtime.auth.setup import auth_path, create_token
-from runtime.auth.store import AuthStore
-from runtime.kit.device_auth import HEADER as DEVICE_AUTH
-from runtime.kit.device_auth import DeviceAuth, known_secret, sign
-from runtime.kit.internal import FILE as INTERNAL_FILE
-from runtime.kit.internal import HEADER as INTERNAL_HEADER
-from runtime.kit.settings import DeviceSpec, default_devices
-from runtime.launcher.run import device_uuid
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.setup import auth_path, create_token
+from openpendant.runtime.auth.store import AuthStore
+from openpendant.runtime.kit.device_auth import HEADER as DEVICE_AUTH
+from openpendant.runtime.kit.device_auth import DeviceAuth, known_secret, sign
+from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
+from openpendant.runtime.kit.internal import HEADER as INTERNAL_HEADER
+from openpendant.runtime.kit.settings import DeviceSpec, default_devices
+from openpendant.runtime.launcher.run import device_uuid
 
 T = TypeVar("T")
 
@@ -194,7 +194,7 @@ class Runtime(Proc):
         argv = [
             sys.executable,
             "-m",
-            "runtime.cli",
+            "openpendant.runtime.cli",
             "run",
             "--port",
             str(self.port),
@@ -308,7 +308,7 @@ class SimRobotProc(Proc):
         argv = [
             sys.executable,
             "-m",
-            "runtime.cli",
+            "openpendant.runtime.cli",
             "sim-robot",
             "--model",
             model,
@@ -354,7 +354,16 @@ class DriverProc(SimRobotProc):
     """`openpendant driver NAME …`: any installed driver, as its own advertised device."""
 
     def __init__(self, home: Path, driver: str, name: str, *options: str) -> None:
-        argv = [sys.executable, "-m", "runtime.cli", "driver", driver, "--name", name, *options]
+        argv = [
+            sys.executable,
+            "-m",
+            "openpendant.runtime.cli",
+            "driver",
+            driver,
+            "--name",
+            name,
+            *options,
+        ]
         Proc.__init__(self, argv, child_env(home), home / "logs" / f"{driver}-{name}.log")
         self.home = home
         self.url = ""
@@ -368,7 +377,7 @@ class SpaceMouseProc(SimRobotProc):
         argv = [
             sys.executable,
             "-m",
-            "runtime.cli",
+            "openpendant.runtime.cli",
             "spacemouse",
             "--source",
             "replay",
