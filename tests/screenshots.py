@@ -1,5 +1,5 @@
 """Screenshots of every panel, on a tablet and a phone, in the dark and the light theme, for
-docs/screenshots/ (docs/features.md shows them). Runs the real runtime with a simulated UR5,
+docs/screenshots/ (docs/user/features.md shows them). Runs the real runtime with a simulated UR5,
 waypoints, a program and an obstacle, and Debian's Chromium:
 
     make screenshots                      # all of them, into docs/screenshots/

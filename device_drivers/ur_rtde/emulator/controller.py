@@ -1,7 +1,7 @@
 """The emulated controller: an arm stepped at 500 Hz under its joint limits (the simulated
 robot's ruckig tracker), its modes, I/O and RTDE registers, and the state machine of
 ur-rtde's control script running on it (command code in input_int_register_0, status in
-output_int_register_0: 1 ready, 2 done; docs/ur-rtde-protocol.md §3)."""
+output_int_register_0: 1 ready, 2 done; docs/dev/ur-rtde-protocol.md §3)."""
 
 from __future__ import annotations
 
