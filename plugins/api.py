@@ -40,8 +40,14 @@ class DeviceKind:
     client: str  # "module:Class", a DeviceClient subclass implementing the interface
     description: str = ""
     # The device moves: the device manager holds an ordered command session on it, and the
-    # driver halts when that session closes or goes silent.
+    # driver halts when that session closes or goes silent; its state changes every control
+    # cycle, so it is stale once its newest state is old (others repeat theirs at rest).
     session: bool = False
+    # It carries a tool setup (TCP, payload), stored by the runtime and applied on every
+    # connect, and starts at the first speed override (an arm).
+    tool: bool = False
+    # It streams pictures, which the device manager relays to the UI (.../frames/ws).
+    frames: bool = False
     # "module:function" (driver, command log) -> APIRouter: routes the declarations cannot
     # say (a robot's command socket, a camera's frame stream).
     routes: str | None = None

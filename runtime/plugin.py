@@ -20,6 +20,7 @@ PLUGIN = Plugin(
             f"{C}.robot:RobotClient",
             "an industrial robot arm",
             session=True,
+            tool=True,
             routes="openpendant.runtime.drivers.robot_routes:command_router",
         ),
         DeviceKind(
@@ -35,6 +36,7 @@ PLUGIN = Plugin(
             f"{IF}.camera:CameraState",
             f"{C}.kinds:CameraClient",
             "a camera",
+            frames=True,
             routes="openpendant.runtime.drivers.camera_routes:frames_router",
         ),
         DeviceKind(

@@ -53,6 +53,18 @@ def has_session(kind: str) -> bool:
     return declared is not None and declared.session
 
 
+def has_tool(kind: str) -> bool:
+    """Devices of this kind carry a tool setup, applied on every connect, and start slow."""
+    declared = registry().kinds.get(kind)
+    return declared is not None and declared.tool
+
+
+def has_frames(kind: str) -> bool:
+    """Devices of this kind stream pictures the device manager relays."""
+    declared = registry().kinds.get(kind)
+    return declared is not None and declared.frames
+
+
 RETRY = (0.1, 0.25, 0.5)  # s between attempts; a returning device is met within 0.5 s
 CONNECT_TIMEOUT = 1.0
 CALL_TIMEOUT = 5.0
@@ -306,7 +318,7 @@ class DeviceConnection:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT * 2):
                     info = await self._fetch_info(http, url)
-                    if self.record.kind == "robot":
+                    if has_tool(self.record.kind):
                         info = await self._apply_tool(http, info)
                     state_ws = await self._open(url, "/state/ws", None)
                     if has_session(self.record.kind):
@@ -314,7 +326,7 @@ class DeviceConnection:
                         timeout = self.timing.driver_timeout
                         await command_ws.send(json.dumps({"type": "session", "timeout": timeout}))
                     first = await state_ws.recv()
-                    if self.record.kind == "robot":
+                    if has_tool(self.record.kind):
                         first = await self._start_slow(http, state_ws, first)
             except InvalidStatus as exc:
                 refused = exc.response.status_code == 401

@@ -21,6 +21,7 @@ from openpendant.runtime.device_manager.connection import (
     describe,
     fetch_info,
     has_session,
+    has_tool,
     short,
 )
 from openpendant.runtime.device_manager.leases import LeaseBook
@@ -452,8 +453,8 @@ class DeviceRegistry:
         """A robot's new tool setup, by whoever controls it: applied to the robot (which
         halts), then stored. Should storing fail, the robot is given back its old setup."""
         conn = self._get(local_name)
-        if conn.record.kind != "robot":
-            raise InvalidValue(f"{local_name} is a {conn.record.kind}, not a robot")
+        if not has_tool(conn.record.kind):
+            raise InvalidValue(f"{local_name} is a {conn.record.kind}, which carries no tool")
         self.leases.check(local_name, token)
         old = conn.info
         info = await conn.set_tool(setup.model_dump())

@@ -22,6 +22,7 @@ from typing import Any
 import websockets
 from websockets.asyncio.client import ClientConnection
 
+from openpendant.plugins.registry import registry
 from openpendant.runtime.kit.errors import OpenPendantError, Unavailable
 from openpendant.runtime.kit.internal import internal_headers
 from openpendant.runtime.kit.words import link_words, words
@@ -123,8 +124,10 @@ class LinkHub:
             detail = f": {view.error}" if view.error else ""
             said = link_words(view.name, view.status) if code != "device_not_found" else None
             raise Unavailable(f"{view.name} is {view.status}{detail}", code=code, words=said)
-        # Only a robot's state changes every cycle; other devices repeat theirs at rest.
-        age = view.freshness.age() if view.kind == "robot" else view.freshness.silence()
+        # Only a moving kind's state changes every cycle; other devices repeat theirs at rest.
+        declared = registry().kinds.get(view.kind)
+        moving = declared is not None and declared.session
+        age = view.freshness.age() if moving else view.freshness.silence()
         if age > self.stale_after:
             shown = (
                 "no state yet"

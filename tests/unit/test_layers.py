@@ -363,3 +363,36 @@ def test_loading_every_plugin_loads_nothing_outside_openpendant() -> None:
     count, *loaded = done.stdout.split()
     assert int(count) > 50
     assert [m for m in loaded if m.split(".")[0] in BARE] == []
+
+
+def kind_name_checks(path: Path) -> list[int]:
+    """Lines comparing a device's `.kind` with a kind's name (`record.kind == "robot"`)."""
+    found = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if not isinstance(node, ast.Compare):
+            continue
+        sides = [node.left, *node.comparators]
+        named = any(isinstance(s, ast.Attribute) and s.attr == "kind" for s in sides)
+        if named and any(isinstance(s, ast.Constant) and isinstance(s.value, str) for s in sides):
+            found.append(node.lineno)
+    return found
+
+
+def test_the_device_manager_and_links_ask_a_kind_what_it_can_do_not_its_name(
+    tmp_path: Path,
+) -> None:
+    """A kind declares its capabilities (a command session, a tool, frames: DeviceKind); the
+    device manager and the links read those, so a plugin's kind gets the same treatment as
+    a built-in one (issue 33: they tested `kind == "robot"`)."""
+    found = [
+        f"{path.relative_to(ROOT)}:{line}"
+        for folder in ("device_manager", "links")
+        for path in sorted((ROOT / "runtime" / folder).glob("*.py"))
+        for line in kind_name_checks(path)
+    ]
+    assert found == []
+    probe = tmp_path / "probe.py"
+    probe.write_text(
+        'if conn.record.kind != "camera":\n    pass\nif "robot" == view.kind:\n    pass\n'
+    )
+    assert kind_name_checks(probe) == [1, 3]
