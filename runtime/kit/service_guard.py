@@ -5,6 +5,7 @@ ticket of a role that may use the path, once, while the sign-in it was given to 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 from typing import Any
 from urllib.parse import parse_qs
@@ -36,8 +37,27 @@ async def deny(
         headers = [(b"content-type", b"application/json"), (b"content-length", b"%d" % len(body))]
         await send({"type": "websocket.http.response.start", "status": status, "headers": headers})
         await send({"type": "websocket.http.response.body", "body": body})
+        await _until_gone(receive)
         return
     await refuse(scope, receive, send, status, code, message)
+
+
+# s a denial waits for the server to see its connection end.
+GONE_WITHIN = 0.5
+
+
+async def _until_gone(receive: Receive) -> None:
+    """Returns once the server has seen the denied connection end. uvicorn's websockets-sansio
+    protocol logs "ASGI callable returned without completing handshake" at ERROR for every
+    denial whose app returns sooner (Kludex/uvicorn#3138): each refused jog ticket was an
+    error in the jog service's log. It queues a disconnect as the denial goes out and another
+    once the connection is closed (after the connect the app never read); a server that
+    sends fewer is waited for at most GONE_WITHIN."""
+    with contextlib.suppress(Exception):
+        async with asyncio.timeout(GONE_WITHIN):
+            disconnects = 0
+            while disconnects < 2:
+                disconnects += (await receive())["type"] == "websocket.disconnect"
 
 
 async def refuse(

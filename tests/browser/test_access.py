@@ -166,7 +166,7 @@ def test_an_administrator_changes_a_users_role_and_pin_by_touch(
         page.get_by_test_id("save-user").tap()
         expect(row).not_to_contain_text("PIN")
         assert listed()[operator] == ("programmer", False)
-        assert all("401" in e or "403" in e for e in errors.errors), errors.errors
+        assert all("401" in e or "403" in e for e in errors.errors), "\n".join(errors.errors)
     finally:
         context.close()
 
@@ -209,6 +209,6 @@ def test_a_tablet_signed_out_elsewhere_says_why_on_its_sign_in_screen(
             "an administrator changed your role", timeout=10_000
         )
         # A socket opening again after the end is refused (a handshake refused reads 403).
-        assert all("401" in e or "403" in e for e in errors.errors), errors.errors
+        assert all("401" in e or "403" in e for e in errors.errors), "\n".join(errors.errors)
     finally:
         context.close()

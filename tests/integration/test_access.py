@@ -38,6 +38,8 @@ def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
     proc.wait_ready()
     yield proc
     proc.stop()
+    # Refusing a socket is no error of the service's (each refused jog ticket logged one).
+    assert proc.service_errors() == []
 
 
 def service_apps() -> dict[str, FastAPI]:
