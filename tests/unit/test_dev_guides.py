@@ -1,0 +1,113 @@
+"""The developer's guides (docs/dev/) build what they say: each guide's files are taken from
+the guide as written (a fenced block whose first line is `# path`), and what it promises is
+checked against them. A guide that drifts from the code fails here."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import re
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+
+from openpendant.plugins.api import resolve
+from openpendant.plugins.registry import load
+from openpendant.runtime.drivers.host import build_driver_app
+from openpendant.runtime.drivers.run import options_model
+
+ROOT = Path(__file__).resolve().parents[2]
+BLOCK = re.compile(r"^```(\w+)\n# (\S+)\n(.*?)^```$", re.M | re.S)
+
+
+def guide_files(guide: Path) -> dict[str, str]:
+    """The files a guide writes: path -> text (the `# path` line dropped from code, kept
+    out of TOML too)."""
+    return {path: body for _, path, body in BLOCK.findall(guide.read_text())}
+
+
+def build(guide: Path, into: Path) -> list[str]:
+    files = guide_files(guide)
+    for path, text in files.items():
+        target = into / path
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(text)
+    return sorted(files)
+
+
+@pytest.fixture
+def loopback(tmp_path: Path) -> Iterator[Path]:
+    """The driver guide's package, importable (and, with a dist-info of its own, found by
+    entry points as an installed plugin would be)."""
+    written = build(ROOT / "docs" / "dev" / "driver.md", tmp_path)
+    assert written == [
+        "loopback_io/__init__.py",
+        "loopback_io/driver.py",
+        "loopback_io/entry.py",
+        "pyproject.toml",
+    ]
+    sys.path.insert(0, str(tmp_path))
+    try:
+        yield tmp_path
+    finally:
+        sys.path.remove(str(tmp_path))
+        for name in [m for m in sys.modules if m == "loopback_io" or m.startswith("loopback_io.")]:
+            del sys.modules[name]
+
+
+def test_the_driver_guide_builds_a_driver_that_serves_its_interface(loopback: Path) -> None:
+    entry_points = (loopback / "pyproject.toml").read_text()
+    assert 'loopback-io = "loopback_io:PLUGIN"' in entry_points
+    entry = importlib.metadata.EntryPoint(
+        name="loopback-io", value="loopback_io:PLUGIN", group="openpendant.plugins"
+    )
+    plugins = load([entry])
+    assert plugins.failures == []
+    spec = plugins.drivers["loopback-io"]
+    options = options_model(spec)(channels=2)
+    driver = resolve(spec.factory)("bench_io", "7e3a0c4e-0000-4000-8000-00000000b10c", options)
+    app = build_driver_app(driver, advertisement=None, interfaces=[], state_rate_hz=50)
+    with TestClient(app) as device:
+        info = device.get("/info").json()
+        assert info["identity"]["kind"] == "io"
+        assert [s["name"] for s in info["info"]["signals"]] == ["out_1", "in_1", "out_2", "in_2"]
+        written = device.put("/signals/out_2", json={"value": True})
+        assert written.status_code == 200 and written.json()["value"] is True
+        assert device.get("/signals/in_2").json()["value"] is True
+        assert device.get("/state").json()["values"] == {
+            "out_1": False,
+            "in_1": False,
+            "out_2": True,
+            "in_2": True,
+        }
+        # Bad writes get the runtime's error body and change nothing.
+        refused = device.put("/signals/in_1", json={"value": True})
+        assert refused.status_code == 422
+        assert "not an output" in refused.json()["error"]["message"]
+        assert device.put("/signals/out_1", json={"value": 0.5}).status_code == 422
+        assert device.get("/signals/nothing").status_code == 404
+        assert device.get("/state").json()["values"]["in_1"] is False
+
+
+def test_the_driver_guide_s_plugin_is_listed_by_the_command(loopback: Path) -> None:
+    """Installed, `openpendant driver --list` names it: here its package and a dist-info
+    with the guide's entry point stand on the path as pip would leave them."""
+    dist = loopback / "loopback_io-0.1.0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: loopback-io\nVersion: 0.1.0\n")
+    (dist / "entry_points.txt").write_text(
+        "[openpendant.plugins]\nloopback-io = loopback_io:PLUGIN\n"
+    )
+    listed = subprocess.run(
+        [sys.executable, "-m", "openpendant.runtime.cli", "driver", "--list"],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={"PYTHONPATH": str(loopback), "PATH": "/usr/bin:/bin"},
+        cwd=loopback,
+    ).stdout
+    line = next(line for line in listed.splitlines() if "loopback-io" in line)
+    assert "io" in line.split() and "outputs out_<n> wired to inputs in_<n>" in line
