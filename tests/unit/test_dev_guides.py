@@ -111,3 +111,21 @@ def test_the_driver_guide_s_plugin_is_listed_by_the_command(loopback: Path) -> N
     ).stdout
     line = next(line for line in listed.splitlines() if "loopback-io" in line)
     assert "io" in line.split() and "outputs out_<n> wired to inputs in_<n>" in line
+
+
+def test_the_plugin_guide_describes_the_example_plugin_as_it_is() -> None:
+    """The plugin guide walks through plugins/conveyor (which browser/test_plugins.py
+    installs and uses): every file its table names is there, with what it says it holds."""
+    guide = (ROOT / "docs" / "dev" / "plugin.md").read_text()
+    package = ROOT / "plugins" / "conveyor"
+    named = re.findall(r"^\| `([^`]+)` \|", guide, re.M)
+    assert len(named) == 9
+    for name in named:
+        top_level = name == "pyproject.toml" or name.startswith("openpendant_conveyor/")
+        path = package / name if top_level else package / "openpendant_conveyor" / name
+        assert path.is_file(), name
+    assert 'conveyor = "openpendant_conveyor:PLUGIN"' in (package / "pyproject.toml").read_text()
+    source = (package / "openpendant_conveyor" / "__init__.py").read_text()
+    for declared in ("DeviceKind(", "Driver(", "Category(", "Block(", "Panel("):
+        assert declared in source
+    assert '"op_options": "devices:conveyor"' in source
