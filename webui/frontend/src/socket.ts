@@ -14,8 +14,8 @@ export function socketUrl(path: string, port?: number): string {
 }
 
 /** Closes a socket. One still connecting is closed once open instead: closing it while it
- * connects drops its handshake half-way, which the browser reports as an error and the
- * server logs as one. Nothing it carries reaches the page after this. */
+ * connects drops its handshake half-way, which the browser reports as an error. Nothing it
+ * carries reaches the page after this. */
 export function closeSocket(socket: WebSocket | null | undefined): void {
   if (!socket) return;
   socket.onmessage = null;
