@@ -161,15 +161,14 @@ class JointTracker:
             or _across(self.velocity, d) > LINE_DRIFT
         ):
             return False
-        share = np.abs(d)
-        moving = share > 1e-12
+        top_speed, top_acceleration, top_jerk = self._line_limits(d)
         line = self._brake_line_in
         line.current_position = [0.0]
         line.current_velocity = [float(self.velocity @ d)]
         line.current_acceleration = [float(self.acceleration @ d)]
-        line.max_velocity = [float(np.min(self.max_velocity[moving] / share[moving]))]
-        line.max_acceleration = [float(np.min(self.max_acceleration[moving] / share[moving]))]
-        line.max_jerk = [float(np.min(self.max_jerk[moving] / share[moving]))]
+        line.max_velocity = [top_speed]
+        line.max_acceleration = [top_acceleration]
+        line.max_jerk = [top_jerk]
         try:
             result = self._brake_line.update(line, self._brake_line_out)
         except (RuckigError, ValueError):
@@ -182,10 +181,7 @@ class JointTracker:
         acceleration = d * out.new_acceleration[0]
         if self._cannot_stop_from(position, velocity, acceleration).any():
             return False
-        self.position, self.velocity, self.acceleration = position, velocity, acceleration
-        self._in.current_position = self.position.tolist()
-        self._in.current_velocity = self.velocity.tolist()
-        self._in.current_acceleration = self.acceleration.tolist()
+        self._take(position, velocity, acceleration)
         return True
 
     def step_velocity(self, velocity: FloatArray) -> None:
@@ -286,12 +282,7 @@ class JointTracker:
         )
         if not smooth or self._cannot_stop_from(position, velocity, acceleration).any():
             return False
-        self.position = position.astype(float)
-        self.velocity = velocity.astype(float)
-        self.acceleration = acceleration.astype(float)
-        self._in.current_position = self.position.tolist()
-        self._in.current_velocity = self.velocity.tolist()
-        self._in.current_acceleration = self.acceleration.tolist()
+        self._take(position, velocity, acceleration)
         return True
 
     def _step_along(
@@ -320,11 +311,7 @@ class JointTracker:
             return False
         if across(self.acceleration) > LINE_DRIFT * 100:
             return False
-        share = np.abs(d)
-        moving = share > 1e-12
-        top_speed = float(np.min(self.max_velocity[moving] / share[moving]))
-        top_acceleration = float(np.min(self.max_acceleration[moving] / share[moving]))
-        top_jerk = float(np.min(self.max_jerk[moving] / share[moving]))
+        top_speed, top_acceleration, top_jerk = self._line_limits(d)
         speed = float(np.clip(velocity @ d, -top_speed, top_speed))
         room = top_speed - abs(speed)
         reach = min(0.9 * top_acceleration, math.sqrt(2.0 * top_jerk * 0.9 * room))
@@ -350,11 +337,28 @@ class JointTracker:
         acceleration_now = d * out.new_acceleration[0]
         if self._cannot_stop_from(position, velocity_now, acceleration_now).any():
             return False  # the joint-limit guard decides, joint by joint
-        self.position, self.velocity, self.acceleration = position, velocity_now, acceleration_now
+        self._take(position, velocity_now, acceleration_now)
+        return True
+
+    def _line_limits(self, d: FloatArray) -> tuple[float, float, float]:
+        """The speed, acceleration and jerk along the unit joint-space direction `d` that keep
+        every joint within its own limits."""
+        share = np.abs(d)
+        moving = share > 1e-12
+        return (
+            float(np.min(self.max_velocity[moving] / share[moving])),
+            float(np.min(self.max_acceleration[moving] / share[moving])),
+            float(np.min(self.max_jerk[moving] / share[moving])),
+        )
+
+    def _take(self, position: FloatArray, velocity: FloatArray, acceleration: FloatArray) -> None:
+        """This state is the arm's, and the generator's next start."""
+        self.position = position.astype(float)
+        self.velocity = velocity.astype(float)
+        self.acceleration = acceleration.astype(float)
         self._in.current_position = self.position.tolist()
         self._in.current_velocity = self.velocity.tolist()
         self._in.current_acceleration = self.acceleration.tolist()
-        return True
 
     def _feasible_acceleration_bound(self, velocity: FloatArray) -> FloatArray:
         """Arriving with the reference's acceleration avoids a lag. But jerk is limited, so a

@@ -7,17 +7,57 @@ and with phase synchronization still by 0.006 rad)."""
 
 from __future__ import annotations
 
+import math
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
 from openpendant.runtime.robotics.deviation import distances_to_polyline
-from openpendant.runtime.robotics.joint_move import plan_joint_move
+from openpendant.runtime.robotics.joint_move import PlannedMove, plan_joint_move
 from openpendant.runtime.robotics.kinematics import Kinematics
 from openpendant.runtime.robotics.robot_info import load_robot_info
 from openpendant.runtime.robotics.tracker import JointTracker
 
 CYCLE = 0.002  # s: the simulator's
 PERIOD = 0.01  # s: the jog service's
+
+
+def stream(
+    move: PlannedMove,
+    tracker: JointTracker,
+    delay: Callable[[], float],
+    timeout: float = math.inf,
+) -> tuple[np.ndarray, int]:
+    """The simulator following a move streamed every PERIOD s, each sample `delay()` s later
+    still: the latest sample, its velocity, and an acceleration from the two latest
+    velocities, extrapolated to the end of each cycle (as core.StreamCommand); held where
+    no sample came for `timeout` s. The arm's positions, and the cycles it was held."""
+    sample: tuple[np.ndarray, np.ndarray, np.ndarray, float] | None = None
+    next_sample, followed, halted = 0.0, [], 0
+    for step in range(int((move.duration + 1.0) / CYCLE)):
+        now = step * CYCLE
+        if now >= next_sample:
+            position, velocity = move.sample(now)
+            acceleration = np.zeros(len(position))
+            if sample is not None:
+                acceleration = (velocity - sample[1]) / (now - sample[3])
+            sample = (position, velocity, acceleration, now)
+            next_sample = now + PERIOD + delay()
+        assert sample is not None
+        position, velocity, acceleration, received = sample
+        if now > received + timeout:
+            tracker.hold()
+            halted += 1
+        else:
+            h = now - received + CYCLE
+            tracker.step_position(
+                position + velocity * h + 0.5 * acceleration * h * h,
+                velocity + acceleration * h,
+                acceleration,
+            )
+        followed.append(tracker.position.copy())
+    return np.array(followed), halted
 
 
 @pytest.mark.parametrize("model", ["ur5", "panda"])
@@ -37,29 +77,8 @@ def test_a_streamed_joint_move_stays_on_its_joint_line(model: str, late: float) 
     assert float(np.max(distances_to_polyline(line, planned))) < 1e-12
     tracker = JointTracker(info.joints, CYCLE, start)
     rng = np.random.default_rng(3)
-    # The simulator's stream: the latest sample, its velocity, and an acceleration from the
-    # two latest velocities; extrapolated to the end of each cycle (as core.StreamCommand).
-    sample: tuple[np.ndarray, np.ndarray, np.ndarray, float] | None = None
-    next_sample, followed = 0.0, []
-    for step in range(int((move.duration + 1.0) / CYCLE)):
-        now = step * CYCLE
-        if now >= next_sample:
-            position, velocity = move.sample(now)
-            acceleration = np.zeros(info.dof)
-            if sample is not None:
-                acceleration = (velocity - sample[1]) / (now - sample[3])
-            sample = (position, velocity, acceleration, now)
-            next_sample = now + PERIOD + rng.uniform(0.0, late)
-        assert sample is not None
-        position, velocity, acceleration, received = sample
-        h = now - received + CYCLE
-        tracker.step_position(
-            position + velocity * h + 0.5 * acceleration * h * h,
-            velocity + acceleration * h,
-            acceleration,
-        )
-        followed.append(tracker.position.copy())
-    off = float(np.max(distances_to_polyline(line, np.array(followed))))
+    followed, _ = stream(move, tracker, lambda: rng.uniform(0.0, late))
+    off = float(np.max(distances_to_polyline(line, followed)))
     assert off < 1e-9, f"{off:.2e} rad off the joint line"
     assert np.abs(tracker.position - goal).max() < 1e-6  # it got there
 
@@ -91,33 +110,11 @@ def test_a_joint_move_whose_stream_stalls_halts_on_its_line_and_goes_on_along_it
     move = plan_joint_move(Kinematics(info), info, start, goal, 1.0, None)
     tracker = JointTracker(info.joints, CYCLE, start)
     rng = np.random.default_rng(seed)
-    timeout = 0.05  # s: past it without a sample the simulator halts (core.StreamCommand)
-    sample: tuple[np.ndarray, np.ndarray, np.ndarray, float] | None = None
-    next_sample, followed, halted = 0.0, [], 0
-    for step in range(int((move.duration + 1.0) / CYCLE)):
-        now = step * CYCLE
-        if now >= next_sample:
-            position, velocity = move.sample(now)
-            acceleration = np.zeros(info.dof)
-            if sample is not None:
-                acceleration = (velocity - sample[1]) / (now - sample[3])
-            sample = (position, velocity, acceleration, now)
-            stalled = rng.uniform() < 0.05  # one sample in 20 comes 0.12 s late
-            next_sample = now + PERIOD + (0.12 if stalled else 0.0)
-        assert sample is not None
-        position, velocity, acceleration, received = sample
-        if now > received + timeout:
-            tracker.hold()
-            halted += 1
-        else:
-            h = now - received + CYCLE
-            tracker.step_position(
-                position + velocity * h + 0.5 * acceleration * h * h,
-                velocity + acceleration * h,
-                acceleration,
-            )
-        followed.append(tracker.position.copy())
+    # One sample in 20 comes 0.12 s late; past 0.05 s without one the simulator halts.
+    followed, halted = stream(
+        move, tracker, lambda: 0.12 if rng.uniform() < 0.05 else 0.0, timeout=0.05
+    )
     assert halted > 50  # the stream did stall, and often
-    off = off_line(start, goal, np.array(followed))
+    off = off_line(start, goal, followed)
     assert off < 1e-9, f"{off:.2e} rad off the joint line"
     assert np.abs(tracker.position - goal).max() < 1e-6
