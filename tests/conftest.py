@@ -6,11 +6,16 @@ from pathlib import Path
 import pytest
 
 from openpendant.runtime.bench.harness.processes import LOOPBACK_ENV
+from openpendant.runtime.bench.harness.zygote import ENV as ZYGOTE_ENV
 
 # Anything started from a test (directly or by the runtime) does discovery on loopback only.
 os.environ.update(LOOPBACK_ENV)
 # URDFs made from DH parameters are cached (runtime/robotics/dh_urdf.py): not in the user's.
 os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="openpendant-test-cache-")
+# The runtimes and drivers the tests start are forked from one process that has imported
+# them (runtime/bench/harness/zygote.py), not each a fresh interpreter spending 2.6
+# CPU-seconds on its imports. OPENPENDANT_TEST_ZYGOTE=0 starts each afresh.
+os.environ.setdefault(ZYGOTE_ENV, "1")
 
 
 @pytest.fixture

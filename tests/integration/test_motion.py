@@ -47,6 +47,14 @@ def ready(cell: Cell) -> Cell:
     return cell
 
 
+@pytest.fixture
+def fast(ready: Cell) -> Iterator[Cell]:
+    """The simulated robot plays its moves five times faster: for a test that needs its
+    moves only to end, or reads their setpoints (the same at any speed)."""
+    with ready.robot.faster():
+        yield ready
+
+
 def start(cell: Cell, request: dict[str, Any]) -> dict[str, Any]:
     response = cell.runtime.api(
         "POST", "/motion/robots/robot/moves", json=request, headers=cell.headers()
@@ -71,12 +79,14 @@ def finish(cell: Cell, status: dict[str, Any]) -> dict[str, Any]:
 
 def setpoints_during(cell: Cell, request: dict[str, Any]) -> np.ndarray[Any, Any]:
     before = int(cell.robot.state()["seqno"])
+    at_rest = cell.robot.q()
     status = start(cell, request)
     # The trajectory began a moment ago (planning, which can take a while, came first): the
     # history from 0.2 s back holds all of it, and a little rest before. But not from before
     # the request: when planning was quick, those 0.2 s reach back into the end of the
     # previous move (the fixture's move home, up to 0.85 mm off a line through home).
-    after = max(before, int(cell.robot.state()["seqno"]) - 100)
+    # 500 cycles: 1 s at real speed, 0.2 s where the robot plays its moves 5x faster.
+    after = max(before, int(cell.robot.state()["seqno"]) - 500)
     rows: list[list[float]] = []
 
     def collect() -> None:
@@ -95,6 +105,7 @@ def setpoints_during(cell: Cell, request: dict[str, Any]) -> np.ndarray[Any, Any
     assert status["state"] == "finished", status
     cell.robot.wait_stopped()
     collect()
+    assert np.abs(np.array(rows[0]) - at_rest).max() < 1e-6, "the move's beginning is missing"
     return np.array(rows)
 
 
@@ -115,7 +126,8 @@ def pose_of(q: list[float] | np.ndarray[Any, Any]) -> dict[str, list[float]]:
     }
 
 
-def test_move_joint_reaches_its_target_within_the_limits(ready: Cell) -> None:
+def test_move_joint_reaches_its_target_within_the_limits(fast: Cell) -> None:
+    ready = fast
     goal = [0.6, -1.2, 1.2, -1.4, -1.2, 0.5]
     positions = setpoints_during(
         ready, {"kind": "joint", "target": {"joints": goal}, "speed": 1.0, "acceleration": 1.0}
@@ -125,7 +137,8 @@ def test_move_joint_reaches_its_target_within_the_limits(ready: Cell) -> None:
     assert np.linalg.norm(reached - KINEMATICS.tcp(np.array(goal)).translation) < 1e-4
 
 
-def test_move_linear_stays_on_the_line(ready: Cell) -> None:
+def test_move_linear_stays_on_the_line(fast: Cell) -> None:
+    ready = fast
     start = KINEMATICS.tcp(ready.robot.q()).copy()
     goal = pin.SE3(
         start.rotation @ pin.rpy.rpyToMatrix(0.0, 0.0, 0.4),
@@ -151,7 +164,8 @@ def test_move_linear_stays_on_the_line(ready: Cell) -> None:
     assert np.linalg.norm(pin.log3(reached.rotation.T @ goal.rotation)) < 1e-4
 
 
-def test_move_through_waypoints_with_blends_reaches_the_last(ready: Cell) -> None:
+def test_move_through_waypoints_with_blends_reaches_the_last(fast: Cell) -> None:
+    ready = fast
     home = np.array(INFO.home)
     here = KINEMATICS.tcp(home)
     corners = [here.translation + d for d in ([0.1, 0.0, 0.0], [0.1, 0.15, 0.0], [0.0, 0.15, -0.1])]
@@ -177,7 +191,8 @@ def test_move_through_waypoints_with_blends_reaches_the_last(ready: Cell) -> Non
     assert np.linalg.norm(reached - corners[2]) < 1e-4
 
 
-def test_relative_moves_in_base_and_tool_frames(ready: Cell) -> None:
+def test_relative_moves_in_base_and_tool_frames(fast: Cell) -> None:
+    ready = fast
     before = KINEMATICS.tcp(ready.robot.q()).copy()
     offset = {"position": [0.0, 0.0, 0.05], "orientation": [0, 0, 0, 1]}
     move(ready, {"kind": "relative", "offset": offset, "offset_frame": "base"})
@@ -188,7 +203,8 @@ def test_relative_moves_in_base_and_tool_frames(ready: Cell) -> None:
     assert np.allclose(tool.translation - after.translation, after.rotation[:, 2] * 0.05, atol=1e-4)
 
 
-def test_a_colliding_move_is_refused_and_nothing_moves(ready: Cell) -> None:
+def test_a_colliding_move_is_refused_and_nothing_moves(fast: Cell) -> None:
+    ready = fast
     move(ready, {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0})
     put_posts(ready.runtime)
     before = ready.robot.q()
@@ -204,7 +220,8 @@ def test_a_colliding_move_is_refused_and_nothing_moves(ready: Cell) -> None:
     assert np.allclose(ready.robot.q(), before)
 
 
-def test_a_move_around_the_posts_never_touches_them(ready: Cell) -> None:
+def test_a_move_around_the_posts_never_touches_them(fast: Cell) -> None:
+    ready = fast
     move(ready, {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0})
     put_posts(ready.runtime)
     positions = setpoints_during(
@@ -219,7 +236,8 @@ def test_a_move_around_the_posts_never_touches_them(ready: Cell) -> None:
         assert contact is not None and contact.proximity.distance > 0, contact
 
 
-def test_a_stop_while_a_move_is_planned_means_it_never_starts(ready: Cell) -> None:
+def test_a_stop_while_a_move_is_planned_means_it_never_starts(fast: Cell) -> None:
+    ready = fast
     """Stop wins even over a move still being planned: a path through many waypoints, each
     line sampled, checked and timed (seconds; planning around the posts has become too
     quick to stop on the way)."""
@@ -245,7 +263,8 @@ def test_a_stop_while_a_move_is_planned_means_it_never_starts(ready: Cell) -> No
     assert np.allclose(ready.robot.q(), LEFT, atol=1e-6)
 
 
-def test_a_stop_naming_a_caller_refuses_its_later_moves(ready: Cell) -> None:
+def test_a_stop_naming_a_caller_refuses_its_later_moves(fast: Cell) -> None:
+    ready = fast
     """A program's move request still on its way when its stop arrives must not run: the
     stop names the run (X-Caller) and every later move of that run is refused."""
     stopped = ready.runtime.api(

@@ -21,6 +21,7 @@ import httpx
 from openpendant.runtime.auth.roles import Role
 from openpendant.runtime.auth.setup import auth_path, create_token
 from openpendant.runtime.auth.store import AuthStore
+from openpendant.runtime.bench.harness.zygote import ZYGOTE, Spawned
 from openpendant.runtime.kit.device_auth import HEADER as DEVICE_AUTH
 from openpendant.runtime.kit.device_auth import DeviceAuth, known_secret, sign
 from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
@@ -104,14 +105,19 @@ class Proc:
         log_path.parent.mkdir(parents=True, exist_ok=True)
         self._log = log_path.open("ab")
         self.lines: queue.Queue[str] = queue.Queue()
-        self.popen = subprocess.Popen(
-            argv,
-            env=env,
-            stdout=subprocess.PIPE,
-            stderr=self._log,
-            stdin=subprocess.DEVNULL,
-            preexec_fn=(lambda: os.nice(nice)) if nice else None,
-        )
+        spawned = ZYGOTE.spawn(argv, env, self._log, nice)
+        self.popen: subprocess.Popen[bytes] | Spawned
+        if spawned is not None:
+            self.popen = spawned
+        else:
+            self.popen = subprocess.Popen(
+                argv,
+                env=env,
+                stdout=subprocess.PIPE,
+                stderr=self._log,
+                stdin=subprocess.DEVNULL,
+                preexec_fn=(lambda: os.nice(nice)) if nice else None,
+            )
         self._terminated = False
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
@@ -153,10 +159,10 @@ class Proc:
                 self.popen.wait(timeout)
             except subprocess.TimeoutExpired:
                 self.popen.kill()
-                self.popen.wait()
+        code = self.popen.wait()
         self._reader.join(timeout=2)
         self._log.close()
-        return int(self.popen.returncode)
+        return code
 
     def terminate(self) -> None:
         """SIGTERM, once (a second one may cut a process's orderly shutdown short)."""
