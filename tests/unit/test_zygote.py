@@ -12,6 +12,7 @@ import pytest
 
 from openpendant.runtime.bench.harness import zygote
 from openpendant.runtime.bench.harness.zygote import Spawned, ZygoteClient
+from tests.support import netns
 
 pytestmark = pytest.mark.concurrent
 
@@ -26,12 +27,15 @@ def client(monkeypatch: pytest.MonkeyPatch) -> Iterator[ZygoteClient]:
     made._stop()
 
 
+def spawned(client: ZygoteClient, tmp_path: Path, *args: str, **env: str) -> Spawned | None:
+    with (tmp_path / "stderr.log").open("ab") as log:
+        return client.spawn([*CLI, *args], {**os.environ, **env}, log)
+
+
 def spawn(client: ZygoteClient, tmp_path: Path, *args: str, **env: str) -> Spawned:
-    log = (tmp_path / "stderr.log").open("ab")
-    spawned = client.spawn([*CLI, *args], {**os.environ, **env}, log)
-    log.close()
-    assert spawned is not None
-    return spawned
+    made = spawned(client, tmp_path, *args, **env)
+    assert made is not None
+    return made
 
 
 def test_a_command_runs_with_its_arguments_and_reports_its_exit(
@@ -76,6 +80,22 @@ def test_what_a_fork_cannot_be_is_left_to_a_fresh_interpreter(
     monkeypatch.setenv(zygote.ENV, "0")
     assert client.spawn([*CLI, "--version"], dict(os.environ), log) is None
     log.close()
+
+
+@pytest.mark.skipif(netns.available() is not None, reason=str(netns.available()))
+def test_a_thread_in_a_network_of_its_own_gets_a_fresh_interpreter(
+    client: ZygoteClient, tmp_path: Path
+) -> None:
+    """A fork of the zygote would be in the zygote's network, not the thread's."""
+    network = netns.Network()
+    try:
+        namespace = network.namespace("zyg")
+        with netns.inside(namespace):
+            assert spawned(client, tmp_path, "--version") is None
+        outside = spawned(client, tmp_path, "--version")
+        assert outside is not None and outside.wait(30) == 0
+    finally:
+        network.close()
 
 
 def test_a_package_installed_since_it_started_starts_it_afresh(

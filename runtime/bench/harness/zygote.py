@@ -198,6 +198,16 @@ def _interpreter(env: dict[str, str]) -> dict[str, str]:
 UNCHANGING = {"PYTHONUNBUFFERED"}  # the zygote's own streams are unbuffered too
 
 
+def _namespace() -> int:
+    """This thread's network namespace."""
+    return os.stat("/proc/thread-self/ns/net").st_ino
+
+
+# The network the tests start in, and the zygote with them: a thread that has entered
+# another (setns) gets a fresh interpreter, which starts in its network as a fork would not.
+HOME_NETWORK = _namespace()
+
+
 def _installed() -> tuple[tuple[str, int], ...]:
     """The import path's folders as they are now: a package installed since (pip, in a
     test) changes one, and the zygote, which imported the old set, is started afresh."""
@@ -251,6 +261,8 @@ class ZygoteClient:
         ask for one, or the interpreter's own environment differs from the zygote's)."""
         if os.environ.get(ENV) != "1" or argv[:3] != [sys.executable, "-m", CLI]:
             return None
+        if _namespace() != HOME_NETWORK:
+            return None  # this thread is in a network of a test's own (tests/support/netns.py)
         with self._lock:
             if (
                 self._proc is None
