@@ -1,5 +1,5 @@
 """The blocks as the editor and the generator see them: every plugin's blocks (the project's
-own are the built-in "blocks" plugin's, from definitions/<category>.json) placed into the
+own are the built-in "blocks" plugin's, one folder per category) placed into the
 toolbox (toolbox.json holds its categories and Blockly's standard blocks; a category with a
 `toolboxitemid` takes the blocks declared for it). Dropdowns marked with "op_options" are
 filled by the UI from the runtime (robots, waypoints, I/O names); their values are checked
@@ -93,8 +93,9 @@ def toolbox() -> dict[str, Any]:
 
 @cache
 def words() -> dict[str, dict[str, Any]]:
-    """The plugins' translations: per language, block words by type and category names by
-    their English name (the UI's own catalogue has the built-in blocks')."""
+    """The blocks' translations (the core's categories' words.json, the plugins' Block
+    declarations): per language, block words by type, and the plugins' category names by
+    their English name (the UI's own catalogue has the core toolbox's)."""
     found: dict[str, dict[str, Any]] = {}
     for block in blocks().values():
         for language, texts in block.words.items():

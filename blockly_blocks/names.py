@@ -4,16 +4,29 @@ functions) and with each other."""
 
 from __future__ import annotations
 
+import contextlib
 import keyword
 import re
 
+from openpendant.plugins.api import resolve
 from openpendant.plugins.registry import registry
 from openpendant.sandbox.builtins import SAFE_NAMES
 from openpendant.sandbox.library import REGISTRY
 from openpendant.sandbox.policy import FORBIDDEN_NAMES
 
-# The sandbox functions: the library's and every plugin block's.
-FUNCTIONS = {*REGISTRY, *(name for b in registry().blocks.values() for name in b.functions)}
+
+def sandbox_functions() -> set[str]:
+    """The names programs call: the library's, every block's, and those the blocks'
+    functions modules mark without a block naming them (importing a module registers them
+    all, as it does in the worker)."""
+    declared = {name: ref for b in registry().blocks.values() for name, ref in b.functions.items()}
+    for reference in set(declared.values()):
+        with contextlib.suppress(Exception):  # the worker leaves it out, and says why
+            resolve(reference)
+    return {*REGISTRY, *declared}
+
+
+FUNCTIONS = sandbox_functions()
 RESERVED = frozenset(
     {*keyword.kwlist, *keyword.softkwlist, *SAFE_NAMES, *FUNCTIONS, *FORBIDDEN_NAMES, "print"}
 )

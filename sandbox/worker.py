@@ -113,6 +113,7 @@ class Worker:
         self._calls: dict[int, tuple[threading.Event, list[dict[str, Any]]]] = {}
         self._next_call = 1
         self._output_window = (0.0, 0)
+        self.started = time.monotonic()
 
     # Pipe ----------------------------------------------------------------------------------
 
@@ -189,6 +190,9 @@ class Worker:
         if len(text) > MAX_OUTPUT_CHARS:
             text = text[:MAX_OUTPUT_CHARS] + f"… ({len(text) - MAX_OUTPUT_CHARS} more)"
         self.send({"t": "output", "text": text, "stream": stream, "block": self.block})
+
+    def elapsed(self) -> float:
+        return time.monotonic() - self.started
 
     def at_block(self, block_id: str) -> None:
         self.block = block_id
@@ -305,6 +309,7 @@ def run(worker: Worker, start: dict[str, Any], isolation: list[str]) -> None:
         )
         return
     worker.send({"t": "ready", "isolation": isolation})
+    worker.started = time.monotonic()
     bind(worker)
     try:
         exec(compiled.code, program_globals(worker))

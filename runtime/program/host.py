@@ -4,8 +4,8 @@ caller's, or one it takes); moves go to the motion service (limits, collisions, 
 manual-mode speed cap). Stop halts every device the run commanded.
 
 The answers themselves are the blocks' handlers (`Block.handlers` of the plugins, the
-built-in ones in `runtime/program/handlers.py`): `async def handler(run, args)`, with `run`
-this host."""
+built-in ones in `blockly_blocks/<category>/handlers.py`): `async def handler(run, args)`,
+with `run` this host (`runtime/program/calls.py`)."""
 
 from __future__ import annotations
 

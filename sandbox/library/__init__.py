@@ -1,7 +1,8 @@
-"""The sandbox function library: one module per category. Importing this package registers
-every function in `base.REGISTRY`, the names programs can call."""
+"""The sandbox's own functions: the block markers and what Blockly's standard blocks need.
+Importing this package registers them in `base.REGISTRY`. The blocks' categories bring
+their own (blockly_blocks/<category>/functions.py, named by their blocks), as plugins do."""
 
-from openpendant.sandbox.library import blocks, gripper, io, poses, program, robot, store, timing
+from openpendant.sandbox.library import blocks, markers
 from openpendant.sandbox.library.base import REGISTRY
 
-__all__ = ["REGISTRY", "blocks", "gripper", "io", "poses", "program", "robot", "store", "timing"]
+__all__ = ["REGISTRY", "blocks", "markers"]

@@ -13,6 +13,8 @@ from openpendant.sandbox.values import check_number
 F = TypeVar("F", bound=Callable[..., Any])
 
 MAX_NAME = 128
+MAX_WAIT = 24 * 3600.0
+POLL = 0.02
 
 
 class ProgramError(Exception):
@@ -37,6 +39,10 @@ class Host(Protocol):
         """Pause until the operator resumes."""
 
     def at_block(self, block_id: str) -> None: ...
+
+    def elapsed(self) -> float:
+        """Seconds since the program started (not since its worker did: a spare worker
+        waits for its program)."""
 
     def finish(self) -> None:
         """End the run now, as finished."""
@@ -84,3 +90,14 @@ def bool_arg(value: Any, what: str) -> bool:
     if not isinstance(value, bool):
         raise SandboxError(f"{what} must be true or false, not {type(value).__name__}")
     return value
+
+
+def poll_until(condition: Callable[[], Any], timeout: Any, failure: str) -> None:
+    """Check every POLL s (pausable) until `condition()` is true; fail after `timeout` s."""
+    limit = number_arg(timeout, "timeout", low=0, high=MAX_WAIT)
+    waited = 0.0
+    while not condition():
+        if waited >= limit:
+            raise ProgramError(f"{failure} within {limit:g} s", "timeout")
+        host().sleep(POLL)
+        waited += POLL

@@ -4,7 +4,9 @@ checked against them. A guide that drifts from the code fails here."""
 
 from __future__ import annotations
 
+import asyncio
 import importlib.metadata
+import json
 import re
 import subprocess
 import sys
@@ -14,12 +16,17 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
+from openpendant.blockly_blocks.catalog import toolbox, words
+from openpendant.blockly_blocks.generate import generate
 from openpendant.plugins.api import resolve
 from openpendant.plugins.registry import load
 from openpendant.runtime.drivers.host import build_driver_app
 from openpendant.runtime.drivers.run import options_model
+from openpendant.sandbox.supervisor import ProgramRun, RunLimits, RunState, WorkerPool
+from tests.unit.test_sandbox_attacks import RecordingHost
 
 ROOT = Path(__file__).resolve().parents[2]
+SPARE_WAITS = 3.0  # s
 BLOCK = re.compile(r"^```(\w+)\n# (\S+)\n(.*?)^```$", re.M | re.S)
 
 
@@ -129,3 +136,76 @@ def test_the_plugin_guide_describes_the_example_plugin_as_it_is() -> None:
     for declared in ("DeviceKind(", "Driver(", "Category(", "Block(", "Panel("):
         assert declared in source
     assert '"op_options": "devices:conveyor"' in source
+
+
+def test_every_piece_of_the_block_guide_is_in_its_file() -> None:
+    """The guide adds its block by showing what goes into each file of the category's
+    folder: each piece is there, a Python one word for word, a JSON one as an entry (or,
+    for words, the language's texts) with exactly those values."""
+    pieces = BLOCK.findall((ROOT / "docs" / "dev" / "block.md").read_text())
+    assert [path for _, path, _ in pieces] == [
+        "blockly_blocks/time/blocks.json",
+        "blockly_blocks/time/generator.py",
+        "blockly_blocks/time/functions.py",
+        "blockly_blocks/robot/blocks.json",
+        "blockly_blocks/robot/functions.py",
+        "blockly_blocks/robot/handlers.py",
+        "blockly_blocks/time/words.json",
+    ]
+    for language, path, body in pieces:
+        text = (ROOT / path).read_text()
+        if language == "python":
+            assert body in text, f"{path} lacks the guide's code"
+            continue
+        piece = json.loads(body)
+        if path.endswith("blocks.json"):
+            entry = next(e for e in json.loads(text) if e["type"] == piece["type"])
+            assert {k: entry[k] for k in piece} == piece, path
+        else:
+            found = json.loads(text)
+            for language_code, texts in piece.items():
+                for block_type, words_ in texts.items():
+                    assert found[language_code][block_type] == words_, path
+
+
+def test_the_block_guide_s_block_generates_runs_and_stands_in_the_toolbox() -> None:
+    printed = {"type": "time_since_start", "id": "since"}
+    workspace = {
+        "blocks": {
+            "blocks": [
+                {"type": "text_print", "id": "print", "inputs": {"TEXT": {"block": printed}}}
+            ]
+        }
+    }
+    generated = generate(workspace)
+    assert generated.problems == []
+    assert "print(seconds_since_start())" in generated.python
+
+    async def run(pool: WorkerPool) -> list[str]:
+        program = ProgramRun(
+            generated.python, RecordingHost(), limits=RunLimits(wall_seconds=20), pool=pool
+        )
+        await program.start()
+        state = await program.wait(25)
+        await program.close()
+        assert state is RunState.finished, program.error
+        return [o.text for o in program.output]
+
+    async def twice() -> list[str]:
+        """The second run in a spare worker that waited 3 s for it."""
+        pool = WorkerPool()
+        try:
+            await run(pool)
+            assert pool._refill is not None
+            await pool._refill  # the spare is there
+            await asyncio.sleep(SPARE_WAITS)
+            return await run(pool)
+        finally:
+            await pool.close()
+
+    # Seconds since the program started, not since its worker did.
+    (line,) = asyncio.run(twice())
+    assert 0.0 <= float(line) < SPARE_WAITS / 3
+    time_category = next(c for c in toolbox()["contents"] if c.get("toolboxitemid") == "time")
+    assert {"kind": "block", "type": "time_since_start"} in time_category["contents"]
+    assert words()["de"]["blocks"]["time_since_start"]["message0"] == "Sekunden seit Start"

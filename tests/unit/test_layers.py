@@ -6,6 +6,7 @@ and no module imports itself back through others (no cycles, type-only imports i
 from __future__ import annotations
 
 import ast
+import re
 import subprocess
 import sys
 from collections.abc import Iterable, Iterator, Mapping
@@ -49,7 +50,14 @@ def imports(path: Path, module: str) -> Iterator[tuple[int, str]]:
                 yield node.lineno, f"{base}.{alias.name}"
 
 
+# A block category's handlers are the program service's answers to its blocks' calls, kept
+# in the category's folder with the blocks (blockly_blocks/<category>/handlers.py).
+BLOCK_HANDLERS = re.compile(r"openpendant\.blockly_blocks\.\w+\.handlers")
+
+
 def service_of(module: str) -> str | None:
+    if BLOCK_HANDLERS.fullmatch(module):
+        return "openpendant.runtime.program"
     for package in SERVICE_PACKAGES:
         if module == package or module.startswith(package + "."):
             return package

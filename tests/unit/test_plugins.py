@@ -137,7 +137,7 @@ def test_a_plugin_cannot_take_over_a_name_the_core_answers(
         "robot",
         {},
         "a:b",
-        handlers={"robot.move": "openpendant.runtime.program.handlers:move"},
+        handlers={"robot.move": "openpendant.blockly_blocks.robot.handlers:move"},
     )
     core.add(
         Loaded(Plugin(name="reuser", blocks=(again,)), "reuser", "reuser", "0.1", builtin=False)

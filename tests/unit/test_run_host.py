@@ -124,8 +124,8 @@ def test_a_stop_while_the_device_is_looked_up_sends_nothing(events: list[str]) -
 def test_a_devices_kind_is_asked_once_per_run() -> None:
     """An input waited on is read every few milliseconds: its device's kind is looked up
     once, and an unknown device is still refused by name."""
+    from openpendant.blockly_blocks.io.handlers import signal_of
     from openpendant.runtime.kit.errors import NotFound
-    from openpendant.runtime.program.handlers import signal_of
 
     asked: list[str] = []
 

@@ -10,6 +10,13 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from openpendant.blockly_blocks.vision.functions import (
+    Detection,
+    detection_above,
+    detection_count,
+    detection_find,
+    detection_grip_pose,
+)
 from openpendant.device_drivers.sim_camera.entry import SimCameraOptions, camera_model
 from openpendant.device_drivers.sim_camera.optics import Renderer, Target
 from openpendant.device_drivers.sim_camera.scene import flange_target
@@ -17,13 +24,6 @@ from openpendant.runtime.interfaces.camera import Intrinsics
 from openpendant.runtime.interfaces.detector import DetectRequest
 from openpendant.runtime.vision.detectors import ArucoDetector, DetectorConfig
 from openpendant.sandbox.guards import SandboxError
-from openpendant.sandbox.library.vision import (
-    Detection,
-    detection_above,
-    detection_count,
-    detection_find,
-    detection_grip_pose,
-)
 from openpendant.sandbox.values import Pose
 
 # Looking along the world's z from the origin: the camera frame is the world's.

@@ -5,8 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from openpendant.sandbox.library.base import host, number_arg, text_arg
-from openpendant.sandbox.library.timing import poll_until
+from openpendant.sandbox.library.base import host, number_arg, poll_until, text_arg
 
 MAX_SPEED = 10_000.0  # mm/s: anything faster is a typo (the conveyor refuses over its own)
 

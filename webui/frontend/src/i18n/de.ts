@@ -1,5 +1,5 @@
 // Deutsch. Every key of en.ts; {name} placeholders kept as they are.
-import type { BlockWords, Catalogue } from "./index";
+import type { Catalogue, CategoryWords } from "./index";
 
 export const de: Catalogue = {
   // --- The shell, status bar, Devices and System panels ---
@@ -737,8 +737,9 @@ export const de: Catalogue = {
   "vision.detector.classes": "Klassen in der Reihenfolge des Netzes (durch Kommas getrennt)",
 };
 
-// The blocks (their English is in blockly_blocks/definitions/*.json).
-export const deBlocks: BlockWords = {
+// The toolbox's categories (the blocks' own words are with them: blockly_blocks/<category>/
+// words.json, and a plugin's in its Block declarations; the runtime serves them).
+export const deBlocks: CategoryWords = {
   categories: {
     Logic: "Logik",
     Loops: "Schleifen",
@@ -755,157 +756,5 @@ export const deBlocks: BlockWords = {
     Program: "Programm",
     Variables: "Variablen",
     Functions: "Funktionen",
-  },
-  blocks: {
-    io_set_output: {
-      message0: "Ausgang %1 = %2",
-      tooltip: "Schaltet einen digitalen Ausgang ein (wahr) oder aus (falsch).",
-    },
-    io_get_input: { message0: "Eingang %1", tooltip: "Ein digitaler Eingang: wahr, wenn ein." },
-    io_get_output: { message0: "Ausgang %1", tooltip: "Ein digitaler Ausgang, wie zuletzt gesetzt." },
-    io_wait_input: {
-      message0: "warte auf Eingang %1 = %2 %3 max. %4 s",
-      tooltip: "Wartet auf einen digitalen Eingang; nach der Zeit schlägt das Programm fehl.",
-      options: { STATE: { TRUE: "an", FALSE: "aus" } },
-    },
-    io_set_analog: {
-      message0: "Analogausgang %1 = %2",
-      tooltip: "Setzt einen Analogausgang auf einen Wert in seiner Einheit (in seinem Bereich).",
-    },
-    io_get_analog: { message0: "Analogwert %1", tooltip: "Ein analoger Ein- oder Ausgang in seiner Einheit." },
-    gripper_activate: {
-      message0: "Greifer %1 aktivieren",
-      tooltip: "Macht den Greifer nach dem Einschalten bereit; ist er es schon, geschieht nichts.",
-    },
-    gripper_open: {
-      message0: "Greifer %1 öffnen",
-      tooltip: "Öffnet den Greifer ganz; das Programm läuft weiter, wenn die Finger stehen.",
-    },
-    gripper_close: {
-      message0: "Greifer %1 schließen",
-      tooltip: "Schließt den Greifer, bis er zu ist oder ein Teil hält; dann läuft das Programm weiter.",
-    },
-    gripper_set_force: {
-      message0: "Greifkraft von %1 = %2 N",
-      tooltip: "Die Kraft der folgenden Schließbewegungen dieses Greifers, in Newton.",
-    },
-    gripper_wait_grip: {
-      message0: "warte bis Greifer %1 ein Teil hält %2 max. %3 s",
-      tooltip: "Wartet, bis der Greifer ein Teil meldet; nach der Zeit schlägt das Programm fehl.",
-    },
-    gripper_holds_part: {
-      message0: "Greifer %1 hält ein Teil",
-      tooltip: "Wahr, solange der Greifer ein Teil zwischen den Fingern meldet.",
-    },
-    vision_detect: {
-      message0: "erkenne mit %1",
-      tooltip:
-        "Alles, was ein Detektor in einem neuen Bild seiner Kamera findet: eine Liste von Erkennungen (Marker-ID oder Klasse, Pose, Alter).",
-    },
-    vision_find: {
-      message0: "in %1 die Erkennung %2",
-      tooltip: "Die sicherste Erkennung mit dieser Marker-ID oder Klasse, oder nichts.",
-    },
-    vision_grip_pose: {
-      message0: "Greifpose von %1",
-      tooltip: "Eine Pose an der Erkennung, das Werkzeug ihr zugewandt (in der Basis des Roboters).",
-    },
-    vision_above: {
-      message0: "%2 mm über %1",
-      tooltip: "Die Greifpose der Erkennung, entlang z des Roboters angehoben: zum An- und Wegfahren.",
-    },
-    vision_count: { message0: "Anzahl Erkennungen in %1", tooltip: "Wie viele Erkennungen die Liste enthält." },
-    waypoint_get: { message0: "Wegpunkt %1", tooltip: "Ein geteachter Wegpunkt." },
-    pose_create: {
-      message0: "Pose x %1 y %2 z %3 mm %4 Roll %5 Nick %6 Gier %7 °",
-      tooltip: "Eine Pose in der Basis des Roboters.",
-    },
-    pose_compose: {
-      message0: "%1 dann %2",
-      tooltip: "Die zweite Pose, ausgedrückt im Koordinatensystem der ersten.",
-    },
-    pose_inverse: { message0: "Inverse von %1", tooltip: "Die inverse Transformation." },
-    pose_offset: {
-      message0: "%1 %2 versetzt um x %3 y %4 z %5 mm",
-      tooltip: "Die Pose, verschoben entlang der Achsen ihres Koordinatensystems.",
-    },
-    pose_get_component: {
-      message0: "%1 von %2",
-      tooltip: "Eine Komponente einer Pose.",
-      options: {
-        COMPONENT: { roll: "Rollen (°)", pitch: "Nicken (°)", yaw: "Gieren (°)" },
-      },
-    },
-    pose_set_component: {
-      message0: "%1 mit %2 gleich %3",
-      tooltip: "Eine Kopie der Pose mit einer ersetzten Komponente.",
-      options: {
-        COMPONENT: { roll: "Rollen (°)", pitch: "Nicken (°)", yaw: "Gieren (°)" },
-      },
-    },
-    program_log: {
-      message0: "protokolliere %1 %2",
-      tooltip: "Eine Zeile in der Ausgabe des Programms.",
-      options: { LEVEL: { info: "Info", warning: "Warnung", error: "Fehler" } },
-    },
-    program_confirm: {
-      message0: "Bedienerpause %1",
-      tooltip: "Hält an und zeigt die Meldung, bis der Bediener Fortsetzen drückt.",
-    },
-    program_stop: { message0: "Programm beenden", tooltip: "Beendet den Lauf hier." },
-    robot_use: {
-      message0: "Roboter %1 verwenden",
-      tooltip: "Die folgenden Roboterblöcke steuern diesen Roboter.",
-    },
-    robot_move_joint: {
-      message0: "PTP zu %1",
-      tooltip: "Achsinterpolierte Bewegung (PTP) zu einem Wegpunkt, einer Pose oder Achswerten (Grad).",
-    },
-    robot_move_linear: {
-      message0: "LIN zu %1",
-      tooltip: "Bewegt den Werkzeugmittelpunkt auf einer Geraden (LIN).",
-    },
-    robot_move_relative: {
-      message0: "verfahre um x %1 y %2 z %3 mm %4 entlang %5 Achsen",
-      tooltip: "Bewegt den Werkzeugmittelpunkt um einen Versatz, auf einer Geraden.",
-      options: { FRAME: { base: "Basis", tool: "Werkzeug" } },
-    },
-    robot_set_speed: {
-      message0: "Geschwindigkeit %1 %%",
-      tooltip: "Geschwindigkeit der folgenden Bewegungen, in Prozent der Grenzen des Roboters.",
-    },
-    robot_joint_positions: {
-      message0: "Achswerte (Grad)",
-      tooltip: "Die Achswerte des aktiven Roboters.",
-    },
-    robot_tcp_pose: {
-      message0: "Werkzeugpose",
-      tooltip: "Die Werkzeugpose des aktiven Roboters in seiner Basis.",
-    },
-    robot_tool: {
-      message0: "Werkzeug %1",
-      tooltip: "Öffnet oder schließt das Werkzeug (den Greifer) des Roboters.",
-      options: { ACTION: { OPEN: "öffnen", CLOSE: "schließen" } },
-    },
-    robot_home: {
-      message0: "Grundstellung anfahren",
-      tooltip: "Achsbewegung in die Grundstellung des Roboters.",
-    },
-    store_get: {
-      message0: "gespeichert %1",
-      tooltip: "Eine Variable aus dem Variablenspeicher.",
-    },
-    store_set: {
-      message0: "speichere %1 als %2",
-      tooltip: "Legt einen Wert im Variablenspeicher ab, wo er den Lauf überdauert.",
-    },
-    time_wait: {
-      message0: "warte %1 s",
-      tooltip: "Wartet; eine Pause des Programms pausiert auch das Warten.",
-    },
-    time_wait_until: {
-      message0: "warte bis %1 höchstens %2 s",
-      tooltip: "Wartet, bis die Bedingung wahr ist; nach der Zeit schlägt das Programm fehl.",
-    },
   },
 };

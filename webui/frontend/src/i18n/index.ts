@@ -10,15 +10,11 @@ export type StringKey = keyof typeof en;
 export type Catalogue = { readonly [K in StringKey]: string };
 
 /**
- * The words of the blocks in a language other than the block definitions' English: per block
- * type its message (the same %1, %2… as the English, in any order), tooltip and dropdown
- * labels (by field, then value); the toolbox's categories by their English names. Blockly's
- * own blocks come with Blockly's translation of the same language.
+ * The toolbox's categories in a language other than English, by their English names. The
+ * blocks' own words come from the runtime (each category's words.json, each plugin's block
+ * declarations); Blockly's own blocks come with Blockly's translation of the same language.
  */
-export interface BlockWords {
-  readonly blocks: Readonly<
-    Record<string, { message0: string; tooltip: string; options?: Record<string, Record<string, string>> }>
-  >;
+export interface CategoryWords {
   readonly categories: Readonly<Record<string, string>>;
 }
 
@@ -26,7 +22,7 @@ export type Language = "en" | "de";
 /** The languages offered, each named in itself. */
 export const LANGUAGES: Record<
   Language,
-  { name: string; strings: Catalogue; blocks: BlockWords | null }
+  { name: string; strings: Catalogue; blocks: CategoryWords | null }
 > = {
   en: { name: "English", strings: en, blocks: null },
   de: { name: "Deutsch", strings: de, blocks: deBlocks },

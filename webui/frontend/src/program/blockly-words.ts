@@ -50,7 +50,7 @@ export function applyBlocklyLanguage(): void {
 type Json = Record<string, unknown>;
 type Words = { message0: string; tooltip: string; options?: Record<string, Record<string, string>> };
 
-/** What the runtime says of its plugins' blocks, per language. */
+/** The blocks' words the runtime serves, per language (the core's categories' and plugins'). */
 export type RuntimeWords = Record<
   string,
   { blocks: Record<string, Words>; categories: Record<string, string> }
@@ -58,16 +58,14 @@ export type RuntimeWords = Record<
 
 let runtimeWords: RuntimeWords = {};
 
-/** The plugins' words, from GET /api/programs/_blocks: used after this UI's own. */
+/** The blocks' words, from GET /api/programs/_blocks. */
 export function useRuntimeWords(words: RuntimeWords): void {
   runtimeWords = words;
 }
 
 /** A block definition with the chosen language's words (the English one as it is). */
 export function localizedBlock<T extends { type: string }>(definition: T): T {
-  const words =
-    LANGUAGES[language()].blocks?.blocks[definition.type] ??
-    runtimeWords[language()]?.blocks[definition.type];
+  const words = runtimeWords[language()]?.blocks[definition.type];
   if (!words) return definition;
   // Copied by hand, not structuredClone: dynamic dropdowns hold their menu function.
   const json: Json = { ...definition, message0: words.message0, tooltip: words.tooltip };

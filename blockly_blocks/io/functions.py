@@ -10,10 +10,10 @@ from openpendant.sandbox.library.base import (
     bool_arg,
     host,
     number_arg,
+    poll_until,
     sandbox_function,
     text_arg,
 )
-from openpendant.sandbox.library.timing import poll_until
 
 
 @sandbox_function

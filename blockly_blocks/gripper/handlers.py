@@ -1,4 +1,5 @@
-"""The runtime's answers to the gripper blocks (see handlers.py for the conventions)."""
+"""The runtime's answers to the gripper blocks (runtime/program/calls.py says how they
+are written)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Any, cast
 from openpendant.runtime.clients.kinds import GripperClient
 from openpendant.runtime.interfaces.gripper import GripperMotion
 from openpendant.runtime.kit.errors import NotFound, OpenPendantError
-from openpendant.runtime.program.handlers import DEVICE_NAME
+from openpendant.runtime.program.calls import DEVICE_NAME
 from openpendant.runtime.program.host import RunHost
 from openpendant.sandbox.supervisor import CallRefused
 

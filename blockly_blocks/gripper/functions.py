@@ -5,8 +5,13 @@ from __future__ import annotations
 
 from typing import Any
 
-from openpendant.sandbox.library.base import host, number_arg, sandbox_function, text_arg
-from openpendant.sandbox.library.timing import poll_until
+from openpendant.sandbox.library.base import (
+    host,
+    number_arg,
+    poll_until,
+    sandbox_function,
+    text_arg,
+)
 
 
 @sandbox_function

@@ -1,5 +1,6 @@
-"""The runtime's answers to the vision blocks (see handlers.py for the conventions): what a
-detector found, each pose put into the base frame of the robot the program commands."""
+"""The runtime's answers to the vision blocks (runtime/program/calls.py says how they are
+written): what a detector found, each pose put into the base frame of the robot the program
+commands."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Any
 from openpendant.runtime.cell.bases import base_in_world
 from openpendant.runtime.interfaces.detector import DetectRequest
 from openpendant.runtime.kit.errors import OpenPendantError
-from openpendant.runtime.program.handlers import DEVICE_NAME
+from openpendant.runtime.program.calls import DEVICE_NAME
 from openpendant.runtime.program.host import RunHost
 from openpendant.runtime.robotics.kinematics import pose_to_se3, se3_to_pose
 from openpendant.runtime.vision.client import vision_client

@@ -1,15 +1,14 @@
-"""Generators for the vision blocks (definitions/vision.json): detect with a detector, the
-detection with a marker id or class, its grip pose, a pose above it, how many there are."""
+"""The Python each vision block generates: calls of the functions in functions.py."""
 
 from __future__ import annotations
 
+from openpendant.blockly_blocks.fields import choice
 from openpendant.blockly_blocks.generator import Generator, py_string
-from openpendant.blockly_blocks.project import _choice
 from openpendant.blockly_blocks.workspace import Block
 
 
 def vision_detect(block: Block, g: Generator) -> str:
-    return f"detect({py_string(_choice(block, g, 'DETECTOR'))})"
+    return f"detect({py_string(choice(block, g, 'DETECTOR'))})"
 
 
 def vision_find(block: Block, g: Generator) -> str:

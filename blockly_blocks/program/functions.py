@@ -1,12 +1,11 @@
-"""Program control: log lines, pause for the operator, end the run, and the block markers
-the Blockly generator puts before every statement."""
+"""Program control: log lines, pause for the operator, end the run."""
 
 from __future__ import annotations
 
 from typing import Any
 
 from openpendant.sandbox.guards import SandboxError
-from openpendant.sandbox.library.base import host, sandbox_function, text_arg
+from openpendant.sandbox.library.base import host, sandbox_function
 
 LEVELS = ("info", "warning", "error")
 
@@ -29,9 +28,3 @@ def confirm(message: Any = "Continue?") -> None:
 def stop_program() -> None:
     """End the run here, as finished."""
     host().finish()
-
-
-@sandbox_function
-def at_block(block_id: str) -> None:
-    """Where the program is, for highlighting, pausing, stepping and breakpoints."""
-    host().at_block(text_arg(block_id, "block id", max_length=64))
