@@ -77,6 +77,8 @@ def test_what_a_fork_cannot_be_is_left_to_a_fresh_interpreter(
     other_path = {**os.environ, "PYTHONPATH": str(tmp_path)}
     assert client.spawn([*CLI, "--version"], other_path, log) is None
     assert client.spawn([sys.executable, "-c", "pass"], dict(os.environ), log) is None
+    opted_out = {**os.environ, zygote.ENV: "0"}  # one process a test wants started afresh
+    assert client.spawn([*CLI, "--version"], opted_out, log) is None
     monkeypatch.setenv(zygote.ENV, "0")
     assert client.spawn([*CLI, "--version"], dict(os.environ), log) is None
     log.close()

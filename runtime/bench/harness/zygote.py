@@ -259,7 +259,9 @@ class ZygoteClient:
         """`argv` (`[python, "-m", "openpendant.runtime.cli", …]`) forked, its stdout a pipe;
         None where a fork could not be what a fresh interpreter would be (the tests do not
         ask for one, or the interpreter's own environment differs from the zygote's)."""
-        if os.environ.get(ENV) != "1" or argv[:3] != [sys.executable, "-m", CLI]:
+        if os.environ.get(ENV) != "1" or env.get(ENV) == "0":
+            return None  # not for the tests, or not for this process of theirs
+        if argv[:3] != [sys.executable, "-m", CLI]:
             return None
         if _namespace() != HOME_NETWORK:
             return None  # this thread is in a network of a test's own (tests/support/netns.py)
