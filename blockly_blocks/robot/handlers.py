@@ -3,9 +3,9 @@ they are written)."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
-from openpendant.runtime.interfaces.robot import ToolCommand
+from openpendant.runtime.interfaces.robot import RobotState, ToolCommand
 from openpendant.runtime.kit.errors import NotFound
 from openpendant.runtime.motion.client import MoveKind, MoveRequest, Target
 from openpendant.runtime.program.calls import checked
@@ -51,20 +51,21 @@ async def set_speed(run: RunHost, args: dict[str, Any]) -> None:
     run.speed = ratio
 
 
-async def _state(run: RunHost) -> dict[str, Any]:
+async def _state(run: RunHost) -> RobotState:
+    """The active robot's newest state from this service's own link to it (watched from
+    the first read on), not asked of the device manager on each call; a state that is not
+    fresh is refused with the reason."""
     robot = await run.active_robot()
-    state = await run.devices.manager.state(robot)
-    if not state:
-        raise CallRefused(f"no state from {robot}", "device_disconnected")
-    return state
+    client = await run.read_device(robot, "robot")
+    return cast(RobotState, client.current())
 
 
 async def joint_positions(run: RunHost, _: dict[str, Any]) -> list[float]:
-    return [float(v) for v in (await _state(run))["joint_position"]]
+    return [float(v) for v in (await _state(run)).joint_position]
 
 
 async def tcp_pose(run: RunHost, _: dict[str, Any]) -> Any:
-    return (await _state(run))["tcp_pose"]
+    return (await _state(run)).tcp_pose.model_dump(mode="json")
 
 
 async def tool(run: RunHost, args: dict[str, Any]) -> None:

@@ -5,6 +5,7 @@ bad programs and targets are refused with the block named, and the robot stays p
 
 from __future__ import annotations
 
+import ast
 import json
 import math
 import sqlite3
@@ -538,6 +539,23 @@ def run_to_end(cell: Cell, name: str, source: str) -> dict[str, Any]:
     response = cell.runtime.api("POST", f"/programs/{name}/run", json={})
     assert response.status_code == 202, response.text
     return watch(cell, name, ("finished", "error", "stopped"), 30)
+
+
+def test_a_program_reads_where_the_robot_is(ready: Cell) -> None:
+    """joint_positions() and tcp_pose() read the robot's newest state (from the program
+    service's own link to it, watched from the first read on): what the driver reports."""
+    source = (
+        "q = joint_positions()\n"
+        "print(q)\n"
+        "p = tcp_pose()\n"
+        "print([pose_get(p, c) for c in ('x', 'y', 'z')])\n"
+    )
+    finished = run_to_end(ready, "where", source)
+    assert finished["state"] == "finished", finished
+    joints, position = (o["text"] for o in finished["output"])
+    assert np.allclose(np.radians(ast.literal_eval(joints)), ready.robot.q(), atol=1e-6)
+    tcp = np.array(ready.robot.state()["tcp_pose"]["position"]) * 1000.0
+    assert np.allclose(ast.literal_eval(position), tcp, atol=1e-3)
 
 
 def test_a_program_cannot_fill_the_store(ready: Cell) -> None:
