@@ -27,7 +27,7 @@ from tests.unit.test_sandbox_attacks import RecordingHost
 
 ROOT = Path(__file__).resolve().parents[2]
 SPARE_WAITS = 3.0  # s
-BLOCK = re.compile(r"^```(\w+)\n# (\S+)\n(.*?)^```$", re.M | re.S)
+BLOCK = re.compile(r"^```(\w+)\n(?:#|//) (\S+)\n(.*?)^```$", re.M | re.S)
 
 
 def guide_files(guide: Path) -> dict[str, str]:
@@ -209,3 +209,20 @@ def test_the_block_guide_s_block_generates_runs_and_stands_in_the_toolbox() -> N
     time_category = next(c for c in toolbox()["contents"] if c.get("toolboxitemid") == "time")
     assert {"kind": "block", "type": "time_since_start"} in time_category["contents"]
     assert words()["de"]["blocks"]["time_since_start"]["message0"] == "Sekunden seit Start"
+
+
+def test_every_piece_of_the_panel_guide_is_in_its_file() -> None:
+    """The panel guide walks through the I/O panel as it is: each piece it shows is in its
+    file word for word (browser/test_io_panel.py uses the panel itself)."""
+    pieces = BLOCK.findall((ROOT / "docs" / "dev" / "panel.md").read_text())
+    assert [path for _, path, _ in pieces] == [
+        "webui/frontend/src/panels/io-panel.ts",
+        "webui/frontend/src/panels/io-panel.ts",
+        "webui/frontend/src/panels/io-panel.ts",
+        "webui/frontend/src/panels/registry.ts",
+        "webui/plugin.py",
+        "webui/frontend/src/i18n/en.ts",
+        "webui/frontend/src/i18n/de.ts",
+    ]
+    for _, path, body in pieces:
+        assert body in (ROOT / path).read_text(), f"{path} lacks the guide's code"
