@@ -160,6 +160,12 @@ def test_the_installed_runtime_runs_serves_its_ui_and_detects_its_robot(
         assert httpx.get(f"{base}/api/health", headers=auth).json()["status"] == "ok"
         page = httpx.get(f"{base}/")
         assert page.status_code == 200 and "<op-app" in page.text
+        # The block categories' folders came with the package (their JSON is package data).
+        blocks = httpx.get(f"{base}/api/programs/_blocks", headers=auth).json()
+        categories = {"robot", "poses", "time", "io", "gripper", "vision", "store", "program"}
+        assert categories <= set(blocks["definitions"])
+        german = blocks["words"]["de"]["blocks"]["time_since_start"]
+        assert german["message0"] == "Sekunden seit Start"
         installation = (tmp_path / "data" / "runtime-id").read_text().strip()
         own = device_uuid(installation, default_devices()[0])
         wait_for(
