@@ -110,6 +110,16 @@ def test_a_package_installed_since_it_started_starts_it_afresh(
     first = client._proc
     assert spawn(client, tmp_path, "--version").wait(30) == 0
     assert client._proc is first
+    robot = spawn(
+        client,
+        tmp_path,
+        *("sim-robot", "--name", "zygote-kept", "--port", "0"),
+        XDG_DATA_HOME=str(tmp_path / "data"),
+    )
+    assert robot.stdout.readline().startswith(b'{"event": "ready"')
     (site / "new_package").mkdir()
     assert spawn(client, tmp_path, "--version").wait(30) == 0
     assert client._proc is not first
+    assert robot.poll() is None, "a child of the old zygote ended with the new one's start"
+    robot.terminate()
+    robot.wait(10)

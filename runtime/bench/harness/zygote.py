@@ -227,16 +227,22 @@ class ZygoteClient:
         self._path = ""
         self._installed: tuple[tuple[str, int], ...] = ()
         self._interpreter: dict[str, str] = {}
+        # Zygotes started afresh leave the old one idle, not ended: its children (a module's
+        # runtime, still in use) end with it, by their parent-death signal.
+        self._retired: list[subprocess.Popen[bytes]] = []
 
     def _stop(self) -> None:
-        if self._proc is not None:
-            assert self._proc.stdin is not None
-            self._proc.stdin.close()  # it ends; children it forked keep running until theirs
-            self._proc.wait(10)
-            self._proc = None
+        """End every zygote (and so the children each forked)."""
+        for proc in [*self._retired, *([self._proc] if self._proc else [])]:
+            assert proc.stdin is not None
+            proc.stdin.close()
+            proc.wait(10)
+        self._retired.clear()
+        self._proc = None
 
     def _start(self) -> None:
-        self._stop()
+        if self._proc is not None:
+            self._retired.append(self._proc)
         self._installed = _installed()
         folder = tempfile.mkdtemp(prefix="openpendant-zygote-")
         self._path = str(Path(folder) / "socket")
