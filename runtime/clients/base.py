@@ -109,10 +109,13 @@ class DeviceClient(Generic[S]):
         ep = endpoint_of(method)
         params = args[: len(ep.params)]
         body = args[len(ep.params)] if ep.body is not None and len(args) > len(ep.params) else None
-        payload = body.model_dump(mode="json") if isinstance(body, BaseModel) else None
+        # A model goes as its JSON text, encoded once here and relayed as it is by the
+        # device manager (a trajectory's thousands of numbers were parsed and encoded again
+        # on the way).
+        text = body.model_dump_json() if isinstance(body, BaseModel) else None
         gen = self.generation if generation is None else generation
         status, content = await self.hub.call(
-            self.name, gen, ep.method, ep.url(*params), payload, claim
+            self.name, gen, ep.method, ep.url(*params), claim=claim, body_text=text
         )
         if status >= 400:
             raise _refusal(status, content, f"{ep.method} {ep.path}")

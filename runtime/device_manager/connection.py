@@ -68,6 +68,7 @@ def has_frames(kind: str) -> bool:
 RETRY = (0.1, 0.25, 0.5)  # s between attempts; a returning device is met within 0.5 s
 CONNECT_TIMEOUT = 1.0
 CALL_TIMEOUT = 5.0
+JSON_TYPE = {"content-type": "application/json"}
 MAX_INFO = 256 * 1024  # bytes of GET /info
 MAX_STATE = 1 << 20  # bytes of one state message
 MAX_STREAMED = 1 << 24  # bytes of one streamed message (an image): the gateway's bound too
@@ -227,12 +228,19 @@ class DeviceConnection:
     def _halted(self, url: str, _: asyncio.Task[None]) -> None:
         self._halts.pop(url, None)
 
-    async def call(self, method: str, path: str, body: Any, generation: int) -> tuple[int, Any]:
-        """A request to the driver on this generation's session: (status, JSON body)."""
+    async def call(
+        self, method: str, path: str, body: Any, generation: int, text: str | None = None
+    ) -> tuple[int, Any]:
+        """A request to the driver on this generation's session: (status, JSON body). `text`:
+        the body as JSON text, sent as it is (the driver checks it as any body)."""
         self._require(generation)
         assert self._http is not None
+        if text is not None:
+            sent: dict[str, Any] = {"content": text.encode(), "headers": JSON_TYPE}
+        else:
+            sent = {"json": body}
         try:
-            response = await self._http.request(method, path, json=body, timeout=CALL_TIMEOUT)
+            response = await self._http.request(method, path, timeout=CALL_TIMEOUT, **sent)
         except httpx.HTTPError as exc:
             raise Unavailable(
                 f"{self.name} did not answer: {type(exc).__name__}", code="device_disconnected"

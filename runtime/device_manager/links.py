@@ -271,6 +271,9 @@ class LinkServer:
                 raise OpenPendantError("a call needs a method and a path", code="bad_message")
             if not isinstance(generation, int):
                 raise OpenPendantError("a call needs the link generation", code="bad_message")
+            text = message.get("body_text")
+            if text is not None and not isinstance(text, str):
+                raise OpenPendantError("a call's body_text is JSON text", code="bad_message")
             conn = self._connection(name)
             try:
                 claim = _claim_of(message)
@@ -282,7 +285,7 @@ class LinkServer:
                 self.commanders[name] = (client, generation)
                 if claim is not None:
                     self._held_for(claim, name, generation)
-            status, body = await conn.call(method, path, message.get("body"), generation)
+            status, body = await conn.call(method, path, message.get("body"), generation, text)
             if claim is not None and method != "GET" and not self.claims.live(claim):
                 # Its caller went away while the command was on its way to the device (the
                 # halt may have got there first): halted again, after it.

@@ -168,8 +168,10 @@ class LinkHub:
         path: str,
         body: Any = None,
         claim: str | None = None,
+        body_text: str | None = None,
     ) -> tuple[int, Any]:
-        """A request to the driver; under `claim`, refused once that claim has ended."""
+        """A request to the driver; under `claim`, refused once that claim has ended.
+        `body_text`: a body already in JSON, which the device manager sends on unparsed."""
         ref = next(self._refs)
         future: asyncio.Future[tuple[int, Any]] = asyncio.get_running_loop().create_future()
         self._calls[ref] = future
@@ -183,6 +185,7 @@ class LinkHub:
                     "method": method,
                     "path": path,
                     "body": body,
+                    "body_text": body_text,
                     "claim": claim,
                 }
             )

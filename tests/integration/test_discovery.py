@@ -388,6 +388,11 @@ def test_malformed_link_socket_messages_are_refused_and_the_socket_stays(
             json.dumps({"op": "claim", "device": "nobody", "gen": "x"}),
             json.dumps({"op": "call", "ref": 7, "device": "nobody", "gen": 1, "path": "x"}),
             json.dumps({"op": "send", "device": "nobody", "gen": 1, "command": {"type": "x"}}),
+            # A body relayed as JSON text must be text.
+            json.dumps(
+                {"op": "call", "ref": 8, "device": "nobody", "gen": 1, "method": "GET"}
+                | {"path": "/state", "body_text": 5}
+            ),
         ]
         for message in bad:
             ws.send(message)
@@ -400,6 +405,8 @@ def test_malformed_link_socket_messages_are_refused_and_the_socket_stays(
                     refusals.append(body)
         codes = [r.get("error", {}).get("code") or r["body"]["error"]["code"] for r in refusals]
         assert codes.count("bad_message") >= 4
+        relayed = [r for r in refusals if r.get("ref") == 8]
+        assert relayed and relayed[0]["body"]["error"]["code"] == "bad_message", relayed
         assert "device_not_found" in codes
         ws.send(json.dumps({"op": "watch", "devices": "*"}))  # still served
         ws.send(json.dumps({"op": "hello", "service": "tests"}))
