@@ -19,12 +19,13 @@ from openpendant.device_drivers.opencv_camera.sources import (
     open_source,
     paced,
 )
-from openpendant.runtime.imaging.encoding import encoded
+from openpendant.runtime.imaging.encoding import encoded_frame
 from openpendant.runtime.interfaces.camera import (
     CameraDriver,
     CameraInfo,
     CameraState,
     CaptureRequest,
+    Frame,
     Image,
 )
 from openpendant.runtime.interfaces.device import DeviceIdentity
@@ -85,9 +86,12 @@ class OpenCVCamera(CameraDriver):
             )
 
     async def capture(self, request: CaptureRequest) -> Image:
+        return (await self.frame(request)).image()
+
+    async def frame(self, request: CaptureRequest) -> Frame:
         asked = time.time()
         pixels, taken, number = await asyncio.to_thread(self._frame_after, asked)
-        return encoded(pixels, request, number, taken)
+        return encoded_frame(pixels, request, number, taken)
 
     def _frame_after(self, asked: float) -> tuple[np.ndarray, float, int]:
         timeout = max(3.0 / self.info.fps, 2.0)

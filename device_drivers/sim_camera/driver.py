@@ -16,12 +16,13 @@ import numpy as np
 from openpendant.device_drivers.sim_camera.optics import CameraModel, Gray, Renderer, Target
 from openpendant.device_drivers.sim_camera.scene import cell_targets
 from openpendant.device_drivers.sim_cell.link import CellClient
-from openpendant.runtime.imaging.encoding import encoded
+from openpendant.runtime.imaging.encoding import encoded_frame
 from openpendant.runtime.interfaces.camera import (
     CameraDriver,
     CameraInfo,
     CameraState,
     CaptureRequest,
+    Frame,
     Image,
 )
 from openpendant.runtime.interfaces.device import DeviceIdentity
@@ -127,6 +128,9 @@ class SimCamera(CameraDriver):
         self.board_pose = None if pose is None else np.array(pose, dtype=float)
 
     async def capture(self, request: CaptureRequest) -> Image:
+        return (await self.frame(request)).image()
+
+    async def frame(self, request: CaptureRequest) -> Frame:
         if self._renderer is None:
             raise DeviceError("the camera is still starting", code="not_ready", status=503)
         missing = self.missing_cell()
@@ -144,7 +148,7 @@ class SimCamera(CameraDriver):
         pixels = await asyncio.to_thread(self._render, self.scene)
         self.frames += 1
         self.last_frame = taken
-        return encoded(pixels, request, self.frames, taken)
+        return encoded_frame(pixels, request, self.frames, taken)
 
     def _render(self, scene: dict[str, Any] | None) -> Gray:
         assert self._renderer is not None

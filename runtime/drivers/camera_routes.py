@@ -6,7 +6,6 @@ stream with the reason, as an error message the viewer shows."""
 
 from __future__ import annotations
 
-import base64
 import contextlib
 import json
 
@@ -29,13 +28,13 @@ def frames_router(driver: CameraDriver, log: CommandLog) -> APIRouter:
         with contextlib.suppress(WebSocketDisconnect, RuntimeError, OSError):
             while True:
                 try:
-                    image = await driver.capture(request)
+                    frame = await driver.frame(request)
                 except OpenPendantError as exc:
                     await send_error(ws, exc)
                     await ws.close(code=1011)
                     return
-                await ws.send_text(json.dumps(image.model_dump(exclude={"data"})))
-                await ws.send_bytes(base64.b64decode(image.data))
+                await ws.send_text(json.dumps(frame.header()))
+                await ws.send_bytes(frame.data)
                 await ws.receive_text()  # the consumer has drawn it
 
     return router

@@ -1,18 +1,17 @@
 """A frame as the standard camera interface sends it: PNG (lossless, for calibration) or
-JPEG at the asked quality, base64 in an Image."""
+JPEG at the asked quality, its bytes as they are (`Frame.image()` puts them in base64 for
+`POST /capture`)."""
 
 from __future__ import annotations
-
-import base64
 
 import cv2
 import numpy as np
 
-from openpendant.runtime.interfaces.camera import CaptureRequest, Image
+from openpendant.runtime.interfaces.camera import CaptureRequest, Frame
 from openpendant.runtime.kit.errors import DeviceError
 
 
-def encoded(pixels: np.ndarray, request: CaptureRequest, seqno: int, taken: float) -> Image:
+def encoded_frame(pixels: np.ndarray, request: CaptureRequest, seqno: int, taken: float) -> Frame:
     if request.encoding == "png":
         ok, data = cv2.imencode(".png", pixels)
     else:
@@ -20,11 +19,11 @@ def encoded(pixels: np.ndarray, request: CaptureRequest, seqno: int, taken: floa
     if not ok:
         raise DeviceError(f"the frame could not be encoded as {request.encoding}", status=500)
     height, width = pixels.shape[:2]
-    return Image(
+    return Frame(
         seqno=seqno,
         ts=taken,
         width=width,
         height=height,
         encoding=request.encoding,
-        data=base64.b64encode(data.tobytes()).decode(),
+        data=data.tobytes(),
     )

@@ -3,8 +3,10 @@ on request, and a stream of frames at the consumer's pace."""
 
 from __future__ import annotations
 
+import base64
 from abc import ABC, abstractmethod
-from typing import Literal
+from dataclasses import asdict, dataclass
+from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
@@ -67,6 +69,28 @@ class Image(BaseModel):
     data: str
 
 
+@dataclass(frozen=True)
+class Frame:
+    """One encoded frame as the frame stream sends it: an Image's fields, its bytes as they
+    are (base64 is for the JSON of `POST /capture` only)."""
+
+    seqno: int
+    ts: float
+    width: int
+    height: int
+    encoding: Encoding
+    data: bytes
+
+    def header(self) -> dict[str, Any]:
+        """The stream's text message before the bytes."""
+        fields = asdict(self)
+        del fields["data"]
+        return fields
+
+    def image(self) -> Image:
+        return Image(**self.header(), data=base64.b64encode(self.data).decode())
+
+
 class Camera(ABC):
     """Frames are also streamed over `WS /frames/ws`: per frame a text message (the frame's
     fields but `data`, as JSON) and a binary one (the encoded image), the next sent only
@@ -80,6 +104,13 @@ class Camera(ABC):
 
 class CameraDriver(KindDriver[CameraInfo], Camera):
     description = CameraDescription
+
+    async def frame(self, request: CaptureRequest) -> Frame:
+        """The frame stream's next frame. A driver that encodes its frames itself gives their
+        bytes as they are (`runtime/imaging/encoding.py`); by default, `capture()`'s."""
+        image = await self.capture(request)
+        fields = image.model_dump(exclude={"data"})
+        return Frame(**fields, data=base64.b64decode(image.data))
 
     @abstractmethod
     def state(self) -> CameraState: ...
