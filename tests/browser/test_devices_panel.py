@@ -12,6 +12,7 @@ import pytest
 from playwright.sync_api import BrowserContext, Locator, expect
 
 from openpendant.runtime.bench.harness.processes import DriverProc, Runtime, SimRobotProc
+from openpendant.runtime.bench.harness.zygote import ENV as ZYGOTE_ENV
 from openpendant.runtime.kit.device_auth import DeviceAuth, known_secret
 from tests.browser.conftest import PageErrors, add_robot, fits_the_screen, sign_in
 
@@ -101,7 +102,12 @@ def test_another_device_claiming_an_added_robot_is_shown_and_not_followed(
     real = runtime.api("GET", "/devices/robot").json()
     # With the runtime's data directory, its simulator has the robot's uuid and key.
     home = runtime.home if own_key else tmp_path
-    impostor = SimRobotProc(home, name="sim-ur5", extra=["--uuid", real["uuid"]])
+    # A fresh interpreter, as a board comes up: forked at once, a copy with the robot's own
+    # key could ask for its name within a second of the robot's last multicast and take it
+    # (RFC 6762 §14; see test_discovery's twin).
+    impostor = SimRobotProc(
+        home, name="sim-ur5", extra=["--uuid", real["uuid"]], env={ZYGOTE_ENV: "0"}
+    )
     try:
         impostor.wait_ready()
         page = tablet.new_page()

@@ -21,7 +21,9 @@ class FakeConnection:
         self.received: list[str] = []
         self.gate: asyncio.Event | None = None  # holds a call on its way, when set
 
-    async def call(self, method: str, path: str, body: Any, generation: int) -> tuple[int, Any]:
+    async def call(
+        self, method: str, path: str, body: Any, generation: int, text: str | None = None
+    ) -> tuple[int, Any]:
         if self.gate is not None:
             await self.gate.wait()
         self.received.append(f"{method} {path}")

@@ -4,6 +4,7 @@ the typed client calls the same declarations over the device's link."""
 from __future__ import annotations
 
 import asyncio
+import json
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar
 
@@ -150,8 +151,10 @@ class FakeHub(LinkHub):
         path: str,
         body: Any = None,
         claim: str | None = None,
+        body_text: str | None = None,
     ) -> tuple[int, Any]:
-        self.calls.append((name, generation, method, path, body))
+        sent = json.loads(body_text) if body_text is not None else body
+        self.calls.append((name, generation, method, path, sent))
         return self.answers[(method, path)]
 
     async def send(
