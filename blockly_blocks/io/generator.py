@@ -1,4 +1,4 @@
-"""The Python each io block generates: calls of the functions in functions.py."""
+"""The Python each I/O block generates: calls of the functions in functions.py."""
 
 from __future__ import annotations
 

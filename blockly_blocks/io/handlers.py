@@ -1,4 +1,4 @@
-"""The runtime's answers to the io blocks' calls (runtime/program/calls.py says how
+"""The runtime's answers to the I/O blocks' calls (runtime/program/calls.py says how
 they are written)."""
 
 from __future__ import annotations

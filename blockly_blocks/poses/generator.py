@@ -1,4 +1,4 @@
-"""The Python each poses block generates: calls of the functions in functions.py."""
+"""The Python each waypoint and pose block generates: calls of the functions in functions.py."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The runtime's answers to the poses blocks' calls (runtime/program/calls.py says how
+"""The runtime's answers to the waypoint blocks' calls (runtime/program/calls.py says how
 they are written)."""
 
 from __future__ import annotations

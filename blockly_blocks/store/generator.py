@@ -1,4 +1,4 @@
-"""The Python each store block generates: calls of the functions in functions.py."""
+"""The Python each stored-variable block generates: calls of the functions in functions.py."""
 
 from __future__ import annotations
 
