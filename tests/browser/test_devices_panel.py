@@ -5,6 +5,7 @@ from __future__ import annotations
 import re
 import secrets
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import httpx
@@ -14,7 +15,21 @@ from playwright.sync_api import BrowserContext, Locator, expect
 from openpendant.runtime.bench.harness.processes import DriverProc, Runtime, SimRobotProc
 from openpendant.runtime.bench.harness.zygote import ENV as ZYGOTE_ENV
 from openpendant.runtime.kit.device_auth import DeviceAuth, known_secret
-from tests.browser.conftest import PageErrors, add_robot, fits_the_screen, sign_in
+from tests.browser.conftest import PageErrors, add_robot, browser_env, fits_the_screen, sign_in
+
+
+@pytest.fixture(scope="module")
+def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
+    """The browser tests' runtime, started as a fresh interpreter: forked from the tests'
+    zygote, the copy of its robot with the robot's own key took the robot's name in two clean
+    runs of the suite (a fresh copy as well; not understood yet, issue 33's note), and the
+    card never showed it at its own address."""
+    home = tmp_path_factory.mktemp("browser")
+    proc = Runtime(home, env=browser_env(home, **{ZYGOTE_ENV: "0"}))
+    proc.wait_ready()
+    yield proc
+    proc.stop()
+    assert proc.service_errors() == []
 
 
 def jog_first_joint(url: str, secret: str, seconds: float) -> None:

@@ -47,14 +47,6 @@ def ready(cell: Cell) -> Cell:
     return cell
 
 
-@pytest.fixture
-def fast(ready: Cell) -> Iterator[Cell]:
-    """The simulated robot plays its moves five times faster: for a test that needs its
-    moves only to end, or reads their setpoints (the same at any speed)."""
-    with ready.robot.faster():
-        yield ready
-
-
 def start(cell: Cell, request: dict[str, Any]) -> dict[str, Any]:
     response = cell.runtime.api(
         "POST", "/motion/robots/robot/moves", json=request, headers=cell.headers()
@@ -85,7 +77,7 @@ def setpoints_during(cell: Cell, request: dict[str, Any]) -> np.ndarray[Any, Any
     # history from 0.2 s back holds all of it, and a little rest before. But not from before
     # the request: when planning was quick, those 0.2 s reach back into the end of the
     # previous move (the fixture's move home, up to 0.85 mm off a line through home).
-    # 500 cycles: 1 s at real speed, 0.2 s where the robot plays its moves 5x faster.
+    # 500 cycles: 1 s (a robot playing its moves faster covers more of them in that time).
     after = max(before, int(cell.robot.state()["seqno"]) - 500)
     rows: list[list[float]] = []
 
@@ -126,8 +118,7 @@ def pose_of(q: list[float] | np.ndarray[Any, Any]) -> dict[str, list[float]]:
     }
 
 
-def test_move_joint_reaches_its_target_within_the_limits(fast: Cell) -> None:
-    ready = fast
+def test_move_joint_reaches_its_target_within_the_limits(ready: Cell) -> None:
     goal = [0.6, -1.2, 1.2, -1.4, -1.2, 0.5]
     positions = setpoints_during(
         ready, {"kind": "joint", "target": {"joints": goal}, "speed": 1.0, "acceleration": 1.0}
@@ -137,8 +128,7 @@ def test_move_joint_reaches_its_target_within_the_limits(fast: Cell) -> None:
     assert np.linalg.norm(reached - KINEMATICS.tcp(np.array(goal)).translation) < 1e-4
 
 
-def test_move_linear_stays_on_the_line(fast: Cell) -> None:
-    ready = fast
+def test_move_linear_stays_on_the_line(ready: Cell) -> None:
     start = KINEMATICS.tcp(ready.robot.q()).copy()
     goal = pin.SE3(
         start.rotation @ pin.rpy.rpyToMatrix(0.0, 0.0, 0.4),
@@ -164,8 +154,7 @@ def test_move_linear_stays_on_the_line(fast: Cell) -> None:
     assert np.linalg.norm(pin.log3(reached.rotation.T @ goal.rotation)) < 1e-4
 
 
-def test_move_through_waypoints_with_blends_reaches_the_last(fast: Cell) -> None:
-    ready = fast
+def test_move_through_waypoints_with_blends_reaches_the_last(ready: Cell) -> None:
     home = np.array(INFO.home)
     here = KINEMATICS.tcp(home)
     corners = [here.translation + d for d in ([0.1, 0.0, 0.0], [0.1, 0.15, 0.0], [0.0, 0.15, -0.1])]
@@ -191,8 +180,7 @@ def test_move_through_waypoints_with_blends_reaches_the_last(fast: Cell) -> None
     assert np.linalg.norm(reached - corners[2]) < 1e-4
 
 
-def test_relative_moves_in_base_and_tool_frames(fast: Cell) -> None:
-    ready = fast
+def test_relative_moves_in_base_and_tool_frames(ready: Cell) -> None:
     before = KINEMATICS.tcp(ready.robot.q()).copy()
     offset = {"position": [0.0, 0.0, 0.05], "orientation": [0, 0, 0, 1]}
     move(ready, {"kind": "relative", "offset": offset, "offset_frame": "base"})
@@ -203,8 +191,7 @@ def test_relative_moves_in_base_and_tool_frames(fast: Cell) -> None:
     assert np.allclose(tool.translation - after.translation, after.rotation[:, 2] * 0.05, atol=1e-4)
 
 
-def test_a_colliding_move_is_refused_and_nothing_moves(fast: Cell) -> None:
-    ready = fast
+def test_a_colliding_move_is_refused_and_nothing_moves(ready: Cell) -> None:
     move(ready, {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0})
     put_posts(ready.runtime)
     before = ready.robot.q()
@@ -220,8 +207,7 @@ def test_a_colliding_move_is_refused_and_nothing_moves(fast: Cell) -> None:
     assert np.allclose(ready.robot.q(), before)
 
 
-def test_a_move_around_the_posts_never_touches_them(fast: Cell) -> None:
-    ready = fast
+def test_a_move_around_the_posts_never_touches_them(ready: Cell) -> None:
     move(ready, {"kind": "joint", "target": {"joints": LEFT}, "speed": 1.0})
     put_posts(ready.runtime)
     positions = setpoints_during(
@@ -236,8 +222,7 @@ def test_a_move_around_the_posts_never_touches_them(fast: Cell) -> None:
         assert contact is not None and contact.proximity.distance > 0, contact
 
 
-def test_a_stop_while_a_move_is_planned_means_it_never_starts(fast: Cell) -> None:
-    ready = fast
+def test_a_stop_while_a_move_is_planned_means_it_never_starts(ready: Cell) -> None:
     """Stop wins even over a move still being planned: a path through many waypoints, each
     line sampled, checked and timed (seconds; planning around the posts has become too
     quick to stop on the way)."""
@@ -263,8 +248,7 @@ def test_a_stop_while_a_move_is_planned_means_it_never_starts(fast: Cell) -> Non
     assert np.allclose(ready.robot.q(), LEFT, atol=1e-6)
 
 
-def test_a_stop_naming_a_caller_refuses_its_later_moves(fast: Cell) -> None:
-    ready = fast
+def test_a_stop_naming_a_caller_refuses_its_later_moves(ready: Cell) -> None:
     """A program's move request still on its way when its stop arrives must not run: the
     stop names the run (X-Caller) and every later move of that run is refused."""
     stopped = ready.runtime.api(
