@@ -12,12 +12,11 @@ from openpendant.runtime.bench.harness.zygote import ENV as ZYGOTE_ENV
 os.environ.update(LOOPBACK_ENV)
 # URDFs made from DH parameters are cached (runtime/robotics/dh_urdf.py): not in the user's.
 os.environ["XDG_CACHE_HOME"] = tempfile.mkdtemp(prefix="openpendant-test-cache-")
-# OPENPENDANT_TEST_ZYGOTE=1 forks the runtimes and drivers the tests start from one process
-# that has imported them (runtime/bench/harness/zygote.py) instead of starting each as a
-# fresh interpreter (2.6 CPU-seconds of imports): the suite is about 2.5 minutes shorter.
-# Off by default until browser/test_devices_panel's copy of a robot with its own key, which
-# failed in three clean runs with it (and never alone), is understood (issue 33's note).
-os.environ.setdefault(ZYGOTE_ENV, "0")
+# The runtimes and drivers the tests start are forked from one process that has imported
+# them (runtime/bench/harness/zygote.py) instead of each starting as a fresh interpreter
+# (2.6 CPU-seconds of imports): the suite is about 2.5 minutes shorter.
+# OPENPENDANT_TEST_ZYGOTE=0 starts each afresh.
+os.environ.setdefault(ZYGOTE_ENV, "1")
 
 
 @pytest.fixture

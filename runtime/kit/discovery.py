@@ -17,7 +17,7 @@ import unicodedata
 from collections.abc import Awaitable, Callable, Coroutine
 from dataclasses import dataclass, field, replace
 from functools import partial
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 from zeroconf import (
     InterfaceChoice,
@@ -29,7 +29,7 @@ from zeroconf import (
 
 # Exported by zeroconf, outside its __all__:
 from zeroconf._cache import DNSCache
-from zeroconf._dns import DNSQuestion
+from zeroconf._dns import DNSQuestion, DNSRecord
 from zeroconf._protocol.outgoing import DNSOutgoing
 from zeroconf.asyncio import AsyncServiceBrowser, AsyncServiceInfo, AsyncZeroconf
 
@@ -184,11 +184,21 @@ class Advertisement:
         )
 
 
-async def name_taken(zc: Zeroconf, name: str, wait: float = NAME_CHECK) -> bool:
-    """Whether another live announcer answers for `name` within `wait` s (a responder
-    answers a question for its own service record at once)."""
+async def name_taken(zc: Zeroconf, proposed: AsyncServiceInfo, wait: float = NAME_CHECK) -> bool:
+    """Whether another live announcer answers for `proposed`'s name within `wait` s.
+
+    Asked as a probe (RFC 6762 §8.1), which a responder answers at once: a plain question
+    about a record it multicast within the last second is answered only after that second
+    (§14), and a copy started in that second took the name of the device it copies. The
+    proposed records go in the authority section (§8.2), so the probe differs from the
+    holder's own check, which it heard: zeroconf drops a packet that repeats, byte for
+    byte, one received within the last second."""
+    name = proposed.name
     query = DNSOutgoing(DNS_QUERY)
     query.add_question(DNSQuestion(name, DNS_SRV, DNS_IN))
+    # Typed for pointers only; zeroconf writes any record there.
+    authorities = cast(list[DNSRecord], query.authorities)
+    authorities += [proposed.dns_service(), proposed.dns_text()]
     zc.async_send(query)
     deadline = time.monotonic() + wait
     while newest_record(zc.cache, current_time_millis(), name) is None:
@@ -218,7 +228,7 @@ class Advertiser:
         # 1.5 s, against the ≤ 1 s discovery target) is not needed: one question whether
         # the same device runs elsewhere already. The returned task repeats the
         # announcement (the first is out already).
-        while ad.copy < NAME_COPIES and await name_taken(self._zc.zeroconf, ad.instance_name()):
+        while ad.copy < NAME_COPIES and await name_taken(self._zc.zeroconf, ad.service_info()):
             ad = replace(ad, copy=ad.copy + 1)
         self._info = ad.service_info()
         self._announcing = await self._zc.async_register_service(
@@ -226,6 +236,11 @@ class Advertiser:
         )
         self._follower = asyncio.create_task(follow_interfaces(self._zc))
         log.info("advertising %s", self._info.name, extra={"port": ad.port, "uuid": ad.uuid})
+
+    @property
+    def announced(self) -> str | None:
+        """The instance name it announces under (None before it starts)."""
+        return self._info.name if self._info is not None else None
 
     async def stop(self) -> None:
         if self._zc is None:

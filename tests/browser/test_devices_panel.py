@@ -5,7 +5,6 @@ from __future__ import annotations
 import re
 import secrets
 import time
-from collections.abc import Iterator
 from pathlib import Path
 
 import httpx
@@ -13,23 +12,8 @@ import pytest
 from playwright.sync_api import BrowserContext, Locator, expect
 
 from openpendant.runtime.bench.harness.processes import DriverProc, Runtime, SimRobotProc
-from openpendant.runtime.bench.harness.zygote import ENV as ZYGOTE_ENV
 from openpendant.runtime.kit.device_auth import DeviceAuth, known_secret
-from tests.browser.conftest import PageErrors, add_robot, browser_env, fits_the_screen, sign_in
-
-
-@pytest.fixture(scope="module")
-def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
-    """The browser tests' runtime, started as a fresh interpreter: forked from the tests'
-    zygote, the copy of its robot with the robot's own key took the robot's name in two clean
-    runs of the suite (a fresh copy as well; not understood yet, issue 33's note), and the
-    card never showed it at its own address."""
-    home = tmp_path_factory.mktemp("browser")
-    proc = Runtime(home, env=browser_env(home, **{ZYGOTE_ENV: "0"}))
-    proc.wait_ready()
-    yield proc
-    proc.stop()
-    assert proc.service_errors() == []
+from tests.browser.conftest import PageErrors, add_robot, fits_the_screen, sign_in
 
 
 def jog_first_joint(url: str, secret: str, seconds: float) -> None:
@@ -117,12 +101,7 @@ def test_another_device_claiming_an_added_robot_is_shown_and_not_followed(
     real = runtime.api("GET", "/devices/robot").json()
     # With the runtime's data directory, its simulator has the robot's uuid and key.
     home = runtime.home if own_key else tmp_path
-    # A fresh interpreter, as a board comes up: forked at once, a copy with the robot's own
-    # key could ask for its name within a second of the robot's last multicast and take it
-    # (RFC 6762 §14; see test_discovery's twin).
-    impostor = SimRobotProc(
-        home, name="sim-ur5", extra=["--uuid", real["uuid"]], env={ZYGOTE_ENV: "0"}
-    )
+    impostor = SimRobotProc(home, name="sim-ur5", extra=["--uuid", real["uuid"]])
     try:
         impostor.wait_ready()
         page = tablet.new_page()

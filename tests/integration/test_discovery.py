@@ -26,7 +26,6 @@ from openpendant.runtime.bench.harness.processes import (
     stop_all,
     wait_for,
 )
-from openpendant.runtime.bench.harness.zygote import ENV as ZYGOTE_ENV
 from openpendant.runtime.kit.discovery import SERVICE_TYPE
 from tests.support.fake_device import FakeDevice
 
@@ -341,13 +340,8 @@ def test_the_list_marks_what_is_added_here_paired_with_this_runtime_or_another_s
 
         # The device a second time (its uuid and key) is announced under names of its own
         # (RFC 6762 §9); another device with its uuid, not its key, does not speak for it.
-        # Started as fresh interpreters (over a second each), as boards come up: a holder that
-        # multicast its records within the last second answers a question only after that
-        # second (RFC 6762 §14), and the twin's name check waits 0.25 s (kit/discovery.py),
-        # so a twin forked at once takes the board's name as its own.
-        fresh = {ZYGOTE_ENV: "0"}
-        twin = SimRobotProc(tmp_path / "board", name, extra=["--uuid", board.uuid], env=fresh)
-        clone = SimRobotProc(tmp_path / "clone", name, extra=["--uuid", board.uuid], env=fresh)
+        twin = SimRobotProc(tmp_path / "board", name, extra=["--uuid", board.uuid])
+        clone = SimRobotProc(tmp_path / "clone", name, extra=["--uuid", board.uuid])
         started += [twin, clone]
         twin.wait_ready()
         clone.wait_ready()

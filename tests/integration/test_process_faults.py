@@ -282,7 +282,11 @@ def test_a_killed_program_service_never_has_its_next_move_run(ready: Cell) -> No
         body = {"leases": {"robot": ready.token}, "robot": "robot"}
         started = ready.runtime.api("POST", "/programs/to_and_fro/run", json=body)
         assert started.status_code == 202, started.text
-        move_ends(ready)
+        try:
+            move_ends(ready)
+        except TimeoutError:
+            status = ready.runtime.api("GET", "/programs/to_and_fro/status").json()
+            raise AssertionError(f"kill {kill_no}: no move ended; the run: {status}") from None
         delay = rng.uniform(0.0, 0.4)
         time.sleep(delay)
         delays.append(delay)
