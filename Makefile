@@ -9,8 +9,17 @@ UI := webui/frontend
 PY_STAMP := $(VENV)/.installed
 NPM_STAMP := $(UI)/node_modules/.installed
 UI_BUILT := $(UI)/dist/index.html
-UI_SOURCES := $(shell find $(UI)/src $(UI)/public -type f 2>/dev/null) \
+UI_SOURCES := $(shell find $(UI)/src $(UI)/public -type f -not -path '*/generated/*' 2>/dev/null) \
 	$(UI)/index.html $(UI)/vite.config.ts $(UI)/tsconfig.json $(UI)/tsconfig.node.json
+# The UI's API types, generated from the services' own models (webui/openapi.py) by
+# openapi-typescript, which has a package of its own (it needs TypeScript 5's compiler API).
+API_TOOL := $(UI)/tools/openapi
+API_TOOL_STAMP := $(API_TOOL)/node_modules/.installed
+API_JSON := $(UI)/src/generated/openapi.json
+API_CHECKED := $(UI)/src/generated/.checked
+API_TYPES := $(UI)/src/generated/api.d.ts
+PY_SOURCES := $(shell find runtime webui blockly_blocks plugins device_drivers sandbox \
+	-name '*.py' -not -path '*/node_modules/*' 2>/dev/null)
 ARGS ?=
 
 .PHONY: setup run test lint bench ui clean screenshots
@@ -29,7 +38,23 @@ $(NPM_STAMP): $(UI)/package.json $(UI)/package-lock.json
 	cd $(UI) && npm ci --no-audit --no-fund
 	touch $@
 
-$(UI_BUILT): $(NPM_STAMP) $(UI_SOURCES)
+$(API_TOOL_STAMP): $(API_TOOL)/package.json $(API_TOOL)/package-lock.json
+	cd $(API_TOOL) && npm ci --no-audit --no-fund
+	touch $@
+
+# Asked again whenever a Python file changed; rewritten (and the UI rebuilt) only if the
+# document did.
+$(API_CHECKED): $(PY_STAMP) $(PY_SOURCES)
+	$(BIN)/openpendant openapi --out $(API_JSON)
+	touch $@
+
+$(API_JSON): $(API_CHECKED) ;
+
+$(API_TYPES): $(API_JSON) $(API_TOOL_STAMP)
+	cd $(API_TOOL) && node_modules/.bin/openapi-typescript --default-non-nullable false \
+		$(CURDIR)/$(API_JSON) -o $(CURDIR)/$@
+
+$(UI_BUILT): $(NPM_STAMP) $(UI_SOURCES) $(API_TYPES)
 	cd $(UI) && npm run build
 
 ui: $(UI_BUILT)
@@ -60,4 +85,5 @@ bench: setup
 	$(BIN)/openpendant bench --json bench-results/latest.json $(ARGS)
 
 clean:
-	rm -rf $(VENV) $(UI)/node_modules $(UI)/dist .mypy_cache .ruff_cache .pytest_cache
+	rm -rf $(VENV) $(UI)/node_modules $(UI)/dist $(API_TOOL)/node_modules $(UI)/src/generated \
+		.mypy_cache .ruff_cache .pytest_cache

@@ -63,6 +63,13 @@ def _bench(args: argparse.Namespace) -> int:
     return main(only=args.only, json_path=args.json)
 
 
+def _openapi(args: argparse.Namespace) -> int:
+    from openpendant.webui.openapi import write
+
+    write(args.out)
+    return 0
+
+
 def _token(args: argparse.Namespace) -> int:
     from openpendant.runtime.auth.setup import create_token
     from openpendant.runtime.kit.errors import OpenPendantError
@@ -130,6 +137,12 @@ def parser() -> argparse.ArgumentParser:
     create.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
     create.add_argument("--config", type=Path, default=None, help="site config YAML")
     create.set_defaults(handler=_token)
+
+    openapi = sub.add_parser(
+        "openapi", help="print the API's OpenAPI document (every service, below /api)"
+    )
+    openapi.add_argument("--out", type=Path, default=None, help="write it here instead")
+    openapi.set_defaults(handler=_openapi)
 
     bench = sub.add_parser("bench", help="run the benchmarks (runtime/bench)")
     bench.add_argument(

@@ -8,7 +8,7 @@ import asyncio
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, Query, Request, Response
-from pydantic import Field
+from pydantic import BaseModel, Field
 
 from openpendant.runtime.auth.audit import AuditLog
 from openpendant.runtime.auth.roles import Role
@@ -75,6 +75,84 @@ class NewToken(Strict):
     confirm_password: Text
 
 
+# What the routes answer (the UI's client is generated from these, webui/openapi.py).
+
+
+class AuthStatus(BaseModel):
+    set_up: bool  # an administrator exists
+    setup_needs_code: bool  # from here, set-up asks for the code printed at start
+    signed_in: bool
+
+
+class SignedIn(BaseModel):
+    user: str
+    role: RoleName
+    csrf: str | None  # shown on every changing request of the session (none for a token)
+
+
+class Me(SignedIn):
+    via: Literal["session", "token"]
+
+
+Need = Literal["viewer", "operator", "programmer", "admin", "public", "internal"]
+
+
+class PolicyRule(BaseModel):
+    methods: list[str]
+    pattern: str  # as JavaScript's RegExp reads it
+    need: Need
+
+
+class Policy(BaseModel):
+    rules: list[PolicyRule]
+    roles: list[RoleName]  # from least to most
+    otherwise: Need
+
+
+class Ticket(BaseModel):
+    ticket: str
+    lifetime: float  # s
+
+
+class UserRow(BaseModel):
+    name: str
+    role: RoleName
+    created: float
+    has_pin: bool
+    locked_until: float
+
+
+class UserRole(BaseModel):
+    name: str
+    role: RoleName
+
+
+class TokenRow(BaseModel):
+    id: str
+    name: str
+    role: RoleName
+    created: float
+    last_used: float | None
+
+
+class TokenMade(BaseModel):
+    token: str  # shown in this answer only
+    name: str
+    role: RoleName
+
+
+class AuditRow(BaseModel):
+    seq: int
+    ts: float
+    user: str
+    role: str  # "" for a failed sign-in
+    address: str
+    action: str
+    target: str
+    status: int
+    detail: dict[str, Any]
+
+
 def identity(request: Request) -> Identity:
     who: Identity | None = request.scope.get("state", {}).get("identity")
     if who is None:
@@ -103,7 +181,7 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
             detail=detail,
         )
 
-    def signed_in(request: Request, response: Response, user: str, role: Role) -> dict[str, Any]:
+    def signed_in(request: Request, response: Response, user: str, role: Role) -> SignedIn:
         secret, csrf = store.open_session(user)
         response.set_cookie(
             SESSION_COOKIE,
@@ -113,7 +191,7 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
             secure=request.url.scheme == "https",
             path="/",
         )
-        return {"user": user, "role": role.name, "csrf": csrf}
+        return SignedIn(user=user, role=role.name, csrf=csrf)
 
     async def check(request: Request, user: str, secret: str, *, pin: bool = False) -> Role:
         try:
@@ -131,17 +209,17 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         return who
 
     @router.get("/status")
-    async def status(request: Request) -> dict[str, Any]:
+    async def status(request: Request) -> AuthStatus:
         """What the sign-in screen shows: set-up still to do, and whether from here."""
         who = request.scope.get("state", {}).get("identity")
-        return {
-            "set_up": store.user_count() > 0,
-            "setup_needs_code": not is_loopback(client_address(request.scope)),
-            "signed_in": who is not None,
-        }
+        return AuthStatus(
+            set_up=store.user_count() > 0,
+            setup_needs_code=not is_loopback(client_address(request.scope)),
+            signed_in=who is not None,
+        )
 
     @router.post("/setup")
-    async def setup(body: Setup, request: Request, response: Response) -> dict[str, Any]:
+    async def setup(body: Setup, request: Request, response: Response) -> SignedIn:
         """The first administrator: from the runtime computer itself, or with the one-time
         code the runtime printed where it was started."""
         local = is_loopback(client_address(request.scope))
@@ -156,13 +234,13 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         return signed_in(request, response, body.user, Role.admin)
 
     @router.post("/login")
-    async def login(body: Login, request: Request, response: Response) -> dict[str, Any]:
+    async def login(body: Login, request: Request, response: Response) -> SignedIn:
         role = await check(request, body.user, body.password)
         record(request, body.user, role.name, "LOGIN", 200)
         return signed_in(request, response, body.user, role)
 
     @router.post("/pin")
-    async def pin_login(body: PinLogin, request: Request, response: Response) -> dict[str, Any]:
+    async def pin_login(body: PinLogin, request: Request, response: Response) -> SignedIn:
         """An operator's quick switch on a shared tablet; never more than an operator."""
         role = await check(request, body.user, body.pin, pin=True)
         if role > Role.operator:
@@ -181,26 +259,30 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         return response
 
     @router.get("/me")
-    async def me(request: Request) -> dict[str, Any]:
+    async def me(request: Request) -> Me:
         who = identity(request)
-        return {"user": who.user, "role": who.role.name, "csrf": who.csrf, "via": who.via}
+        return Me.model_validate(
+            {"user": who.user, "role": who.role.name, "csrf": who.csrf, "via": who.via}
+        )
 
     @router.get("/policy")
-    async def rights() -> dict[str, Any]:
+    async def rights() -> Policy:
         """The table of rights this gateway enforces, for the UI to disable what the role
         signed in may not do: the rules in order (the first that matches a method and a path
         below /api decides), the roles from least to most, and the need of a request no
         rule names."""
-        return {
-            "rules": policy.served(),
-            "roles": [role.name for role in Role],
-            "otherwise": policy.ADMIN.name,
-        }
+        return Policy.model_validate(
+            {
+                "rules": policy.served(),
+                "roles": [role.name for role in Role],
+                "otherwise": policy.ADMIN.name,
+            }
+        )
 
     @router.post("/me/password")
     async def change_password(
         body: PasswordChange, request: Request, response: Response
-    ) -> dict[str, Any]:
+    ) -> SignedIn:
         """Every session of the user ends; this one goes on with a new session."""
         who = await reauthenticated(request, body.current)
         await asyncio.to_thread(store.set_password, who.user, body.new)
@@ -208,28 +290,28 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         return signed_in(request, response, who.user, who.role)
 
     @router.post("/ticket")
-    async def ticket(request: Request) -> dict[str, Any]:
+    async def ticket(request: Request) -> Ticket:
         """A ticket to open one jog socket on its own port (within a minute); the socket
         closes when this session ends or this token is revoked."""
         who = identity(request)
         ticket = tickets.issue(who.user, int(who.role), session=who.session, token=who.token)
-        return {"ticket": ticket, "lifetime": tickets.LIFETIME}
+        return Ticket(ticket=ticket, lifetime=tickets.LIFETIME)
 
     @router.get("/users")
-    async def users() -> list[dict[str, Any]]:
-        return [u.__dict__ for u in store.users()]
+    async def users() -> list[UserRow]:
+        return [UserRow.model_validate(u.__dict__) for u in store.users()]
 
     @router.post("/users", status_code=201)
-    async def add_user(body: NewUser, request: Request) -> dict[str, Any]:
+    async def add_user(body: NewUser, request: Request) -> UserRole:
         who = await reauthenticated(request, body.confirm_password)
         role = Role.named(body.role)
         await asyncio.to_thread(store.create_user, body.name, body.password, role)
         detail = {"name": body.name, "role": role.name}
         record(request, who.user, who.role.name, "ADD_USER", 201, detail)
-        return {"name": body.name, "role": role.name}
+        return UserRole.model_validate({"name": body.name, "role": role.name})
 
     @router.put("/users/{name}")
-    async def change_user(name: str, body: UserChange, request: Request) -> dict[str, Any]:
+    async def change_user(name: str, body: UserChange, request: Request) -> UserRole:
         who = await reauthenticated(request, body.confirm_password)
         before = store.role_of(name)
         if body.role is not None:
@@ -253,7 +335,7 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
                 "pin": body.pin is not None,
             },
         )
-        return {"name": name, "role": after.name}
+        return UserRole.model_validate({"name": name, "role": after.name})
 
     @router.delete("/users/{name}", status_code=204)
     async def delete_user(name: str, body: Confirmation, request: Request) -> Response:
@@ -265,17 +347,17 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
         return Response(status_code=204)
 
     @router.get("/tokens")
-    async def tokens() -> list[dict[str, Any]]:
-        return [t.__dict__ for t in store.tokens()]
+    async def tokens() -> list[TokenRow]:
+        return [TokenRow.model_validate(t.__dict__) for t in store.tokens()]
 
     @router.post("/tokens", status_code=201)
-    async def add_token(body: NewToken, request: Request) -> dict[str, Any]:
+    async def add_token(body: NewToken, request: Request) -> TokenMade:
         """The token is shown in this answer only."""
         who = await reauthenticated(request, body.confirm_password)
         secret = store.create_token(body.name, Role.named(body.role))
         detail = {"name": body.name, "role": body.role}
         record(request, who.user, who.role.name, "ADD_TOKEN", 201, detail)
-        return {"token": secret, "name": body.name, "role": body.role}
+        return TokenMade(token=secret, name=body.name, role=body.role)
 
     @router.delete("/tokens/{token_id}", status_code=204)
     async def revoke_token(token_id: str, body: Confirmation, request: Request) -> Response:
@@ -287,10 +369,9 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
     @router.get("/audit")
     async def audit_entries(
         before: int | None = Query(None, ge=1, le=2**53), limit: int = Query(100, ge=1, le=1000)
-    ) -> list[dict[str, Any]]:
-        return [
-            e.__dict__ for e in await asyncio.to_thread(audit.entries, before=before, limit=limit)
-        ]
+    ) -> list[AuditRow]:
+        entries = await asyncio.to_thread(audit.entries, before=before, limit=limit)
+        return [AuditRow.model_validate(e.__dict__) for e in entries]
 
     @router.get("/audit/export")
     async def audit_export() -> Response:

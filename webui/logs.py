@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any
+
+from pydantic import BaseModel
 
 LEVELS = {"debug": 10, "info": 20, "warning": 30, "error": 40, "critical": 50}
 TAIL_BYTES = 256 * 1024  # of each file: recent enough, and bounded however large it grew
@@ -21,10 +22,18 @@ def _tail(path: Path) -> list[str]:
     return lines[1:] if size > TAIL_BYTES else lines  # the first may be cut
 
 
-def recent_entries(log_dir: Path, level: str = "warning", limit: int = 100) -> list[dict[str, Any]]:
+class LogEntry(BaseModel):
+    ts: float
+    time: str
+    level: str
+    service: str
+    message: str
+
+
+def recent_entries(log_dir: Path, level: str = "warning", limit: int = 100) -> list[LogEntry]:
     """Entries at `level` or above from every log file, newest first, at most `limit`."""
     floor = LEVELS.get(level, LEVELS["warning"])
-    found: list[dict[str, Any]] = []
+    found: list[LogEntry] = []
     for path in sorted(log_dir.glob("*.log")) if log_dir.is_dir() else []:
         for line in _tail(path):
             try:
@@ -33,14 +42,15 @@ def recent_entries(log_dir: Path, level: str = "warning", limit: int = 100) -> l
                 continue  # a process's plain output (a crash trace) is not an entry
             if not isinstance(entry, dict) or LEVELS.get(entry.get("level", ""), 0) < floor:
                 continue
+            ts = entry.get("ts")
             found.append(
-                {
-                    "ts": entry.get("ts", 0.0),
-                    "time": str(entry.get("time", "")),
-                    "level": entry.get("level"),
-                    "service": str(entry.get("service", path.stem)),
-                    "message": str(entry.get("msg", ""))[:2000],
-                }
+                LogEntry(
+                    ts=float(ts) if isinstance(ts, int | float) else 0.0,
+                    time=str(entry.get("time", "")),
+                    level=str(entry.get("level")),
+                    service=str(entry.get("service", path.stem)),
+                    message=str(entry.get("msg", ""))[:2000],
+                )
             )
-    found.sort(key=lambda e: float(e["ts"]) if isinstance(e["ts"], int | float) else 0.0)
+    found.sort(key=lambda e: e.ts)
     return found[::-1][: max(1, min(limit, MAX_ENTRIES))]

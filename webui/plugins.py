@@ -14,6 +14,7 @@ from typing import Any
 import httpx
 from fastapi import APIRouter
 from fastapi.responses import FileResponse
+from pydantic import BaseModel
 
 from openpendant.plugins.api import Panel
 from openpendant.plugins.registry import Registry, registry
@@ -50,6 +51,44 @@ def panel_file(plugins: Registry, plugin: str, path: str) -> Path:
         if inside and target.suffix.lower() in PANEL_FILES:
             return target
     raise NotFound(f"no file {path!r} in the panels of plugin {plugin!r}")
+
+
+class PluginInfo(BaseModel):
+    name: str
+    description: str
+    package: str
+    version: str
+    builtin: bool
+    kinds: list[str]
+    drivers: list[str]
+    blocks: list[str]
+    services: list[str]
+    panels: list[str]
+
+
+class PanelInfo(BaseModel):
+    id: str
+    plugin: str
+    element: str  # the custom element's tag
+    title: dict[str, str]  # per language
+    icon: str
+    module: str | None  # where the UI loads it from
+    words: dict[str, dict[str, str]]  # its plugin's words, per language
+
+
+class PluginFailure(BaseModel):
+    plugin: str
+    source: str
+    error: str
+    process: str  # the process it failed in
+
+
+class PluginReport(BaseModel):
+    """The plugins as the runtime loaded them: what each adds, what failed to load."""
+
+    plugins: list[PluginInfo]
+    panels: list[PanelInfo]
+    failures: list[PluginFailure]
 
 
 def describe(plugins: Registry) -> dict[str, Any]:
@@ -95,7 +134,7 @@ def plugins_router(urls: dict[str, str], http: httpx.AsyncClient) -> APIRouter:
     router = APIRouter()
 
     @router.get("/api/plugins")
-    async def plugins() -> dict[str, Any]:
+    async def plugins() -> PluginReport:
         found = describe(registry())
         names = sorted(urls)
         answers = await asyncio.gather(
@@ -110,7 +149,7 @@ def plugins_router(urls: dict[str, str], http: httpx.AsyncClient) -> APIRouter:
                 if key not in seen:
                     seen.add(key)
                     found["failures"].append({**failure, "process": name})
-        return found
+        return PluginReport.model_validate(found)
 
     @router.get("/plugins/{plugin}/{path:path}")
     async def plugin_file(plugin: str, path: str) -> FileResponse:

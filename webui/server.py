@@ -13,6 +13,7 @@ import httpx
 from fastapi import FastAPI, Query, Request, Response, WebSocket
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
+from pydantic import BaseModel, ConfigDict
 
 from openpendant.runtime.auth.audit import AUDIT_FILE, AuditLog
 from openpendant.runtime.auth.setup import SETUP_CODE_ENV, auth_store
@@ -25,7 +26,7 @@ from openpendant.runtime.services import services as declared_services
 from openpendant.runtime.services import web_policy
 from openpendant.webui.access import AccessGuard
 from openpendant.webui.auth_routes import auth_router
-from openpendant.webui.logs import MAX_ENTRIES, recent_entries
+from openpendant.webui.logs import MAX_ENTRIES, LogEntry, recent_entries
 from openpendant.webui.plugins import plugins_router
 from openpendant.webui.proxy import ServiceProxy
 
@@ -37,6 +38,26 @@ NOT_BUILT = """<!doctype html><meta charset="utf-8"><title>OpenPendant</title>
 <p>The API is up: <a href="/api/health">/api/health</a></p></body>"""
 
 METHODS = ["GET", "POST", "PUT", "PATCH", "DELETE"]
+
+
+class ServiceHealth(BaseModel):
+    """A service's own health answer (with what else it says, e.g. its plugin failures), or
+    what the gateway found when it asked."""
+
+    model_config = ConfigDict(extra="allow")
+
+    status: str  # "ok", "starting", "down", or a service's own word
+    service: str | None = None
+    version: str | None = None
+    pid: int | None = None
+    uptime_s: float | None = None
+    url: str | None = None
+    message: str | None = None
+
+
+class Health(BaseModel):
+    status: Literal["ok", "degraded"]
+    services: dict[str, ServiceHealth]
 
 
 async def service_health(client: httpx.AsyncClient, name: str, base: str) -> dict[str, Any]:
@@ -93,7 +114,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     app.include_router(auth_router(store, audit, os.environ.get(SETUP_CODE_ENV) or None))
 
     @app.get("/api/health")
-    async def health() -> dict[str, Any]:
+    async def health() -> Health:
         names = [spec.name for spec in declared_services()]
         results = await asyncio.gather(
             *(service_health(proxy.http, name, urls[name]) for name in names if name in urls)
@@ -104,7 +125,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
         for name in missing:
             services[name] = {"status": "down", "message": "no address configured"}
         ok = all(s.get("status") == "ok" for s in services.values())
-        return {"status": "ok" if ok else "degraded", "services": services}
+        return Health.model_validate({"status": "ok" if ok else "degraded", "services": services})
 
     app.include_router(plugins_router(urls, proxy.http))
 
@@ -119,7 +140,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     async def logs(
         level: Literal["debug", "info", "warning", "error"] = "warning",
         limit: int = Query(100, ge=1, le=MAX_ENTRIES),
-    ) -> list[dict[str, Any]]:
+    ) -> list[LogEntry]:
         """The runtime's recent log entries at `level` or above, newest first."""
         return await asyncio.to_thread(recent_entries, settings.logs, level, limit)
 

@@ -7,6 +7,9 @@ from __future__ import annotations
 
 from typing import Any
 
+from pydantic import ValidationError
+
+from openpendant.runtime.device_manager.models import CellPart
 from openpendant.runtime.device_manager.registry import DeviceRegistry
 from openpendant.runtime.interfaces.robot import SIM_CELL
 from openpendant.runtime.kit.errors import NotFound, Unavailable
@@ -19,7 +22,7 @@ def has_cell(info: dict[str, Any] | None) -> bool:
     return isinstance(described, dict) and SIM_CELL in described.get("capabilities", [])
 
 
-async def cell_parts(devices: DeviceRegistry, local_name: str) -> list[Any]:
+async def cell_parts(devices: DeviceRegistry, local_name: str) -> list[CellPart]:
     conn = devices.connection(local_name)
     if not has_cell(conn.info):
         raise NotFound(f"{local_name} is not a simulated cell: it has no parts", code="no_cell")
@@ -28,4 +31,9 @@ async def cell_parts(devices: DeviceRegistry, local_name: str) -> list[Any]:
         raise Unavailable(
             f"{local_name} did not list its parts (HTTP {status})", code="device_error"
         )
-    return content
+    try:
+        return [CellPart.model_validate(part) for part in content]
+    except ValidationError as exc:
+        raise Unavailable(
+            f"{local_name} listed malformed parts: {exc.errors()[0]['msg']}", code="device_error"
+        ) from None

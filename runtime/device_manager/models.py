@@ -7,7 +7,7 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field, field_validator, model_validator
 
-from openpendant.runtime.interfaces.common import PlainText, Strict
+from openpendant.runtime.interfaces.common import PlainText, Pose, Strict
 
 LOCAL_NAME_PATTERN = r"^[a-z][a-z0-9_]{0,31}$"
 
@@ -125,3 +125,13 @@ class LeaseInfo(BaseModel):
     device: str
     holder: str | None = None
     expires: float | None = None
+
+
+class CellPart(BaseModel):
+    """A part on a simulated cell's table, where it truly is (in the device's base frame)."""
+
+    id: str
+    size: list[float]  # m: x, y, z
+    pose: Pose
+    held: bool  # in the robot's fingers
+    tag: int | None  # an ArUco id on its top face

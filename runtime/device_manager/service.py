@@ -16,6 +16,7 @@ from openpendant.runtime.device_manager.frames import relay_frames
 from openpendant.runtime.device_manager.models import (
     AddDeviceRequest,
     AddedDevice,
+    CellPart,
     DetectedDevice,
     DeviceDetails,
     LeaseGranted,
@@ -130,7 +131,7 @@ def devices_router(registry: DeviceRegistry) -> APIRouter:
         return JSONResponse(content, status_code=status)
 
     @router.get("/{local_name}/cell/parts")
-    async def parts(local_name: str) -> list[Any]:
+    async def parts(local_name: str) -> list[CellPart]:
         """A simulated cell's parts, where they truly are (the 3D view draws them)."""
         return await cell_parts(registry, local_name)
 

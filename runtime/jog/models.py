@@ -6,9 +6,10 @@ from __future__ import annotations
 import math
 from typing import Annotated, Literal
 
-from pydantic import Field, model_validator
+from pydantic import BaseModel, Field, model_validator
 
 from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.interfaces.robot import RobotInfo, RobotState
 from openpendant.runtime.interfaces.variables import VARIABLE_NAME
 
 PressId = Annotated[str, Field(min_length=1, max_length=32, pattern=r"^[A-Za-z0-9_.:-]+$")]
@@ -115,3 +116,58 @@ class SpeedRequest(Strict):
     """The speed override, 0 to 1: it scales the robot's trajectories as they run."""
 
     ratio: float = Field(gt=0, le=1)
+
+
+# What the routes answer.
+
+
+class JogSettings(BaseModel):
+    # Where the UI opens its hold-to-run socket: the jog service's own port on the UI's
+    # host, at /jog/ws (none: through the webui, /api/jog/ws).
+    socket_port: int | None
+    deadman_ms: int
+    joint_speed: float  # rad/s at 100 %
+    linear_speed: float  # m/s
+    angular_speed: float  # rad/s
+    manual_tcp_speed: float  # m/s, the cap in manual modes
+    heartbeat_ms: int
+    # A robot's speed override when it first comes into focus on a pendant (and when its
+    # link comes up): lowered to this, never raised.
+    first_speed_ratio: float
+
+
+class RobotModel(BaseModel):
+    """What the jog panel and the 3D view need: joints, limits, URDF and its packages."""
+
+    name: str  # the robot it describes
+    info: RobotInfo
+    urdf: str | None  # where the browser loads it from (None: no URDF it can load)
+    packages: dict[str, str]  # URDF package -> where its files are served
+
+
+class Waypoint(BaseModel):
+    name: str
+    type: Literal["joint_waypoint", "pose_waypoint"]
+    tags: list[str]
+    doc: str
+    updated: float
+    tcp_position: list[float]  # m: x, y, z in the robot's base frame
+
+
+class Halted(BaseModel):
+    robot: str
+    halted: bool
+    state: RobotState | None
+
+
+class SpeedSet(BaseModel):
+    robot: str
+    speed_ratio: float
+
+
+class Avoidance(BaseModel):
+    """What Cartesian jogging keeps clear of: the robots and scene objects it knows."""
+
+    ready: bool
+    robots: list[str]
+    objects: list[str]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import AsyncIterator
-from typing import Annotated, Any
+from typing import Annotated
 
 from fastapi import APIRouter, FastAPI, Header, WebSocket
 
@@ -15,7 +15,16 @@ from openpendant.runtime.interfaces.robot import RobotState, SpeedRatioRequest
 from openpendant.runtime.interfaces.variables import Variable
 from openpendant.runtime.jog.clearance import PathCheck
 from openpendant.runtime.jog.directory import Directory
-from openpendant.runtime.jog.models import SpeedRequest, TeachRequest
+from openpendant.runtime.jog.models import (
+    Avoidance,
+    Halted,
+    JogSettings,
+    RobotModel,
+    SpeedRequest,
+    SpeedSet,
+    TeachRequest,
+    Waypoint,
+)
 from openpendant.runtime.jog.session import ANGULAR_SPEED, JOINT_SPEED, LINEAR_SPEED, JogSession
 from openpendant.runtime.jog.waypoints import robot_waypoints, teach
 from openpendant.runtime.kit.app import create_app
@@ -39,21 +48,17 @@ def jog_router(
     router = APIRouter(prefix="/jog")
 
     @router.get("/settings")
-    async def settings() -> dict[str, Any]:
-        return {
-            # Where the UI opens its hold-to-run socket: the jog service's own port on the
-            # UI's host, at /jog/ws (none: through the webui, /api/jog/ws).
-            "socket_port": socket_port,
-            "deadman_ms": round(deadman * 1000),
-            "joint_speed": JOINT_SPEED,
-            "linear_speed": LINEAR_SPEED,
-            "angular_speed": ANGULAR_SPEED,
-            "manual_tcp_speed": MANUAL_TCP_SPEED,
-            "heartbeat_ms": max(10, min(50, round(deadman * 1000 / 4))),
-            # A robot's speed override when it first comes into focus on a pendant (and when
-            # its link comes up): lowered to this, never raised.
-            "first_speed_ratio": site.link.first_speed_ratio,
-        }
+    async def settings() -> JogSettings:
+        return JogSettings(
+            socket_port=socket_port,
+            deadman_ms=round(deadman * 1000),
+            joint_speed=JOINT_SPEED,
+            linear_speed=LINEAR_SPEED,
+            angular_speed=ANGULAR_SPEED,
+            manual_tcp_speed=MANUAL_TCP_SPEED,
+            heartbeat_ms=max(10, min(50, round(deadman * 1000 / 4))),
+            first_speed_ratio=site.link.first_speed_ratio,
+        )
 
     @router.websocket("/ws")
     async def jog_socket(ws: WebSocket) -> None:
@@ -64,16 +69,15 @@ def jog_router(
             await session.close()
 
     @router.get("/robots/{robot}")
-    async def robot(robot: str) -> dict[str, Any]:
-        """What the jog panel and the 3D view need: joints, limits, URDF and its packages."""
+    async def robot(robot: str) -> RobotModel:
         jogger = await directory.jogger(robot)
         info = jogger.link.info
-        return {
-            "name": robot,
-            "info": info.model_dump(),
-            "urdf": _public_uri(info.urdf),
-            "packages": {name: f"/api/robot-files/{name}" for name in package_roots()},
-        }
+        return RobotModel(
+            name=robot,
+            info=info,
+            urdf=_public_uri(info.urdf),
+            packages={name: f"/api/robot-files/{name}" for name in package_roots()},
+        )
 
     @router.post("/robots/{robot}/teach", status_code=201)
     async def teach_waypoint(robot: str, body: TeachRequest) -> Variable:
@@ -81,27 +85,27 @@ def jog_router(
         return await teach(storage, robot, jogger.link.current(), jogger.kinematics, body)
 
     @router.get("/robots/{robot}/waypoints")
-    async def waypoints(robot: str) -> list[dict[str, Any]]:
+    async def waypoints(robot: str) -> list[Waypoint]:
         jogger = await directory.jogger(robot)
         return await robot_waypoints(storage, robot, jogger.kinematics)
 
     @router.post("/robots/{robot}/halt")
-    async def halt(robot: str) -> dict[str, Any]:
+    async def halt(robot: str) -> Halted:
         """Stop always wins: any client may halt any robot, lease or not."""
         await directory.halt(robot, "stop requested")
         jogger = directory.joggers.get(robot)
         state = jogger.link.latest() if jogger is not None else None
-        return {"robot": robot, "halted": True, "state": state.model_dump() if state else None}
+        return Halted(robot=robot, halted=True, state=state)
 
     @router.put("/robots/{robot}/speed")
-    async def speed(robot: str, body: SpeedRequest, token: LeaseToken = None) -> dict[str, Any]:
+    async def speed(robot: str, body: SpeedRequest, token: LeaseToken = None) -> SpeedSet:
         """The speed override: a running program's moves slow down or speed up along their
         paths. Anyone may lower it (slowing is always safe); raising it needs control."""
         jogger = await directory.jogger(robot)
         if body.ratio > jogger.link.current().speed_ratio + 1e-9:
             await directory.check_lease(robot, token)
         state = await jogger.link.set_speed_ratio(SpeedRatioRequest(ratio=body.ratio))
-        return {"robot": robot, "speed_ratio": state.speed_ratio}
+        return SpeedSet(robot=robot, speed_ratio=state.speed_ratio)
 
     @router.post("/robots/{robot}/enable")
     async def enable(robot: str, token: LeaseToken = None) -> RobotState:
@@ -125,13 +129,12 @@ def avoidance_router(mirror: WorldMirror) -> APIRouter:
     router = APIRouter(prefix="/jog")
 
     @router.get("/avoidance")
-    async def avoidance() -> dict[str, Any]:
-        """What Cartesian jogging keeps clear of: the robots and scene objects it knows."""
-        return {
-            "ready": mirror.refreshed.is_set(),
-            "robots": sorted(mirror.world.robots),
-            "objects": sorted(mirror.world.objects),
-        }
+    async def avoidance() -> Avoidance:
+        return Avoidance(
+            ready=mirror.refreshed.is_set(),
+            robots=sorted(mirror.world.robots),
+            objects=sorted(mirror.world.objects),
+        )
 
     return router
 

@@ -13,7 +13,7 @@ from openpendant.runtime.interfaces.common import Pose
 from openpendant.runtime.interfaces.limits import FloatArray, JointLimitChecker
 from openpendant.runtime.interfaces.robot import RobotState
 from openpendant.runtime.interfaces.variables import Variable
-from openpendant.runtime.jog.models import TeachRequest
+from openpendant.runtime.jog.models import TeachRequest, Waypoint
 from openpendant.runtime.kit.errors import Conflict, InvalidValue
 from openpendant.runtime.robotics.kinematics import Kinematics, pose_to_se3, se3_to_pose
 from openpendant.runtime.variable_storage.client import StorageClient
@@ -81,7 +81,7 @@ async def joint_goal(
 
 async def robot_waypoints(
     storage: StorageClient, robot: str, kinematics: Kinematics
-) -> list[dict[str, Any]]:
+) -> list[Waypoint]:
     """The waypoints of this robot with their TCP positions in its base frame (for the 3D
     view): joint waypoints through forward kinematics, pose waypoints as stored."""
     world = None
@@ -102,13 +102,15 @@ async def robot_waypoints(
                     pose = world.actInv(pose)
                 position = pose.translation
             found.append(
-                {
-                    "name": variable.name,
-                    "type": type_name,
-                    "tags": variable.tags,
-                    "doc": variable.doc,
-                    "updated": variable.updated,
-                    "tcp_position": [float(v) for v in position],
-                }
+                Waypoint.model_validate(
+                    {
+                        "name": variable.name,
+                        "type": type_name,
+                        "tags": variable.tags,
+                        "doc": variable.doc,
+                        "updated": variable.updated,
+                        "tcp_position": [float(v) for v in position],
+                    }
+                )
             )
-    return sorted(found, key=lambda w: str(w["name"]))
+    return sorted(found, key=lambda w: w.name)

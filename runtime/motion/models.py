@@ -8,6 +8,7 @@ from typing import Literal
 from pydantic import BaseModel, Field, model_validator
 
 from openpendant.runtime.interfaces.common import JointVector, Pose, Strict
+from openpendant.runtime.interfaces.scene import SceneObject
 from openpendant.runtime.interfaces.variables import VARIABLE_NAME
 from openpendant.runtime.kit.words import Words
 
@@ -113,3 +114,26 @@ class MoveStatus(BaseModel):
     plan: PlanReport | None = None
     caller: str | None = None  # who asked for it (X-Caller), e.g. a program run
     paused: bool = False  # asked to pause (it stops on its path, or starts paused)
+
+
+class Clearance(BaseModel):
+    """The nearest pair of a robot's moving parts and anything else, now (all None: nothing
+    else in its scene)."""
+
+    robot: str
+    distance: float | None  # m
+    robot_part: str | None = None
+    other: str | None = None
+    points: list[list[float]] | None = None  # on the robot's part, on the other (world, m)
+
+
+class SceneRobot(BaseModel):
+    base: Pose  # in the world
+    joints: list[float]  # rad, as the motion service last read them
+
+
+class Scene(BaseModel):
+    """The world the motion service checks moves in."""
+
+    robots: dict[str, SceneRobot]
+    objects: dict[str, SceneObject]

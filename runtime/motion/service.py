@@ -8,7 +8,7 @@ import contextlib
 import itertools
 from collections import OrderedDict
 from collections.abc import AsyncIterator, Awaitable
-from typing import Annotated, Any
+from typing import Annotated
 
 import numpy as np
 from fastapi import APIRouter, FastAPI, Header
@@ -24,11 +24,14 @@ from openpendant.runtime.kit.settings import MotionSettings, RuntimeSettings
 from openpendant.runtime.kit.words import words
 from openpendant.runtime.motion.executor import Execution
 from openpendant.runtime.motion.models import (
+    Clearance,
     MoveKind,
     MoveRequest,
     MoveState,
     MoveStatus,
     PlanReport,
+    Scene,
+    SceneRobot,
     Target,
 )
 from openpendant.runtime.motion.moves import MovePlanner, Plan, Refused, resolve
@@ -344,18 +347,15 @@ def motion_router(moves: Moves, robots: Robots) -> APIRouter:
     router = APIRouter(prefix="/motion")
 
     @router.get("/scene")
-    async def scene() -> dict[str, Any]:
+    async def scene() -> Scene:
         async with robots.world() as world:
-            return {
-                "robots": {
-                    name: {
-                        "base": world_pose(body.world_base).model_dump(),
-                        "joints": body.q.tolist(),
-                    }
+            return Scene(
+                robots={
+                    name: SceneRobot(base=world_pose(body.world_base), joints=body.q.tolist())
                     for name, body in world.robots.items()
                 },
-                "objects": {name: obj.model_dump() for name, obj in world.objects.items()},
-            }
+                objects=dict(world.objects),
+            )
 
     @router.post("/robots/{robot}/plan")
     async def plan(robot: str, body: MoveRequest) -> PlanReport:
@@ -392,20 +392,20 @@ def motion_router(moves: Moves, robots: Robots) -> APIRouter:
         return await moves.pause(robot, False, caller)
 
     @router.get("/robots/{robot}/clearance")
-    async def clearance(robot: str) -> dict[str, Any]:
+    async def clearance(robot: str) -> Clearance:
         """The nearest pair of this robot's moving parts and anything else, now."""
         async with robots.world() as world:
             contact = world.nearest(robot)
         if contact is None:
-            return {"robot": robot, "distance": None}
+            return Clearance(robot=robot, distance=None)
         p = contact.proximity
-        return {
-            "robot": robot,
-            "distance": p.distance,
-            "robot_part": p.body,
-            "other": p.other,
-            "points": [p.point.tolist(), p.other_point.tolist()],
-        }
+        return Clearance(
+            robot=robot,
+            distance=p.distance,
+            robot_part=p.body,
+            other=p.other,
+            points=[p.point.tolist(), p.other_point.tolist()],
+        )
 
     @router.get("/moves/{move_id}")
     async def move(move_id: str, wait: float = 0.0) -> MoveStatus:

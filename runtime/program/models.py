@@ -108,3 +108,38 @@ class RunStatus(BaseModel):
     ended: float | None = None
     stop_received: float | None = None  # when the stop reached the program service
     stop_request_start: float | None = None  # when it reached the webui (X-Request-Start)
+
+
+class ProgramSource(BaseModel):
+    """A program as a body says it: its blocks (Blockly's JSON) or its Python. Read by the
+    service itself (bounded in size and depth before it is parsed), described here."""
+
+    workspace: dict[str, Any] | None = None
+    python: str | None = None
+
+
+class Generated(BaseModel):
+    """The Python of a workspace, as saving it would give; nothing kept."""
+
+    python: str
+    blocks: int
+    problems: list[ProblemInfo]
+
+
+class BlockCatalog(BaseModel):
+    """Block definitions by category and the toolbox, for the editor (Blockly's JSON)."""
+
+    definitions: dict[str, list[dict[str, Any]]]
+    toolbox: dict[str, Any]
+    # The blocks' translations: per language, block words by type, and the plugins'
+    # category names by their English name.
+    words: dict[str, dict[str, Any]]
+
+
+# The body of PUT /programs/{name} and POST /programs/_generate, for the API's document.
+SOURCE_BODY = {
+    "requestBody": {
+        "required": True,
+        "content": {"application/json": {"schema": ProgramSource.model_json_schema()}},
+    }
+}

@@ -22,7 +22,10 @@ from openpendant.runtime.motion.client import MotionClient
 from openpendant.runtime.program.compiler import Compiler, problem_infos
 from openpendant.runtime.program.library import ProgramLibrary
 from openpendant.runtime.program.models import (
+    SOURCE_BODY,
+    BlockCatalog,
     BreakpointsRequest,
+    Generated,
     Program,
     ProgramSummary,
     RenameRequest,
@@ -48,19 +51,19 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
     router = APIRouter(prefix="/programs")
 
     @router.get("/_blocks")
-    async def blocks() -> dict[str, Any]:
+    async def blocks() -> BlockCatalog:
         """Block definitions by category and the toolbox, for the editor."""
-        return {"definitions": definitions(), "toolbox": toolbox(), "words": words()}
+        return BlockCatalog(definitions=definitions(), toolbox=toolbox(), words=words())
 
-    @router.post("/_generate")
-    async def preview(request: Request) -> dict[str, Any]:
+    @router.post("/_generate", openapi_extra=SOURCE_BODY)
+    async def preview(request: Request) -> Generated:
         """The Python of {"workspace": <Blockly JSON>}, as saving it would give; nothing kept."""
         generated = await library.compiler.preview(await read_body(request))
-        return {
-            "python": generated.python,
-            "blocks": generated.blocks,
-            "problems": [p.model_dump() for p in problem_infos(generated)],
-        }
+        return Generated(
+            python=generated.python,
+            blocks=generated.blocks,
+            problems=problem_infos(generated),
+        )
 
     @router.websocket("/_ws")
     async def live(ws: WebSocket) -> None:
@@ -92,7 +95,7 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
     async def get(name: str) -> Program:
         return await library.get(name)
 
-    @router.put("/{name}")
+    @router.put("/{name}", openapi_extra=SOURCE_BODY)
     async def save(name: str, request: Request) -> Saved:
         """Body {"workspace": <Blockly JSON>} or {"python": "<code>"}; returns the Python."""
         return await library.save(name, await read_body(request))

@@ -9,7 +9,7 @@ from typing import Annotated, Any
 
 import yaml
 from fastapi import APIRouter, FastAPI, Query, Request, Response, WebSocket
-from pydantic import Field
+from pydantic import BaseModel, Field
 
 from openpendant.runtime.interfaces.common import Strict
 from openpendant.runtime.interfaces.variables import Variable
@@ -33,6 +33,19 @@ class PutVariable(Strict):
     # history included: the write is refused (409 storage_full) past it.
     writer: str | None = Field(default=None, max_length=128)
     budget: int | None = Field(default=None, ge=0, le=2**53)
+
+
+class Imported(BaseModel):
+    imported: int  # variables written
+
+
+# The body of POST /variables/_import (an export's YAML), read by the route itself.
+YAML_BODY = {
+    "requestBody": {
+        "required": True,
+        "content": {"application/x-yaml": {"schema": {"type": "string"}}},
+    }
+}
 
 
 class RenameVariable(Strict):
@@ -75,8 +88,8 @@ def variables_router(store: VariableStore, changes: Fanout) -> APIRouter:
             headers={"Content-Disposition": 'attachment; filename="openpendant-variables.yaml"'},
         )
 
-    @router.post("/_import")
-    async def import_variables(request: Request) -> dict[str, Any]:
+    @router.post("/_import", openapi_extra=YAML_BODY)
+    async def import_variables(request: Request) -> Imported:
         raw = await request.body()
         if len(raw) > MAX_IMPORT_BYTES:
             raise InvalidValue("import file is too large", code="too_large")
@@ -90,7 +103,7 @@ def variables_router(store: VariableStore, changes: Fanout) -> APIRouter:
         written = await asyncio.to_thread(store.put_many, items)
         for variable in written:
             notify("changed", variable)
-        return {"imported": len(written)}
+        return Imported(imported=len(written))
 
     @router.websocket("/_events")
     async def events(ws: WebSocket) -> None:

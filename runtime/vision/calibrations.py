@@ -8,7 +8,6 @@ import asyncio
 import base64
 import itertools
 from collections import OrderedDict
-from typing import Any
 
 import cv2
 import numpy as np
@@ -29,6 +28,7 @@ from openpendant.runtime.vision.models import (
     ExtrinsicResult,
     FrameReport,
     IntrinsicSessionView,
+    OperationSaved,
     RobotOriginResult,
     calibration_variable,
 )
@@ -218,7 +218,7 @@ class Calibrations:
 
     # Saving ---------------------------------------------------------------------------------
 
-    async def save(self, op_id: str) -> dict[str, Any]:
+    async def save(self, op_id: str) -> OperationSaved:
         """Stores what a finished operation found; returns the variables written."""
         op = self.operations.finished(op_id)
         result = op.result
@@ -243,4 +243,4 @@ class Calibrations:
         else:  # pragma: no cover - every operation kind is handled above
             raise InvalidValue(f"{op_id} has nothing to save")
         op.saved = True
-        return {"operation": op_id, "saved": saved}
+        return OperationSaved(operation=op_id, saved=saved)

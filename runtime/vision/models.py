@@ -127,7 +127,9 @@ class OperationStatus(BaseModel):
     progress: float
     stage: str
     error: str = ""
-    result: dict[str, object] | None = None
+    # What it found, once done: a camera calibration (intrinsic), a camera's placement
+    # (extrinsic), a robot's base (robot_origin).
+    result: CameraCalibration | ExtrinsicResult | RobotOriginResult | None = None
 
 
 class ExtrinsicRequest(Strict):
@@ -212,3 +214,8 @@ class LocatedDetections(BaseModel):
     calibrated: bool  # poses in the camera frame
     placed: bool  # and in the world
     detections: list[Located] = Field(default_factory=list)
+
+
+class OperationSaved(BaseModel):
+    operation: str
+    saved: list[str]  # the variables written

@@ -36,7 +36,6 @@ class Operation:
             self.progress, self.stage = max(self.progress, min(progress, 1.0)), stage
 
     def status(self) -> OperationStatus:
-        result = None if self.result is None else self.result.model_dump(mode="json")
         return OperationStatus(
             id=self.id,
             kind=self.kind,
@@ -44,7 +43,7 @@ class Operation:
             progress=round(self.progress, 3),
             stage=self.stage,
             error=self.error,
-            result=result,
+            result=self.result,
         )
 
 

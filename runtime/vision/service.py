@@ -6,7 +6,7 @@ from __future__ import annotations
 import contextlib
 import re
 from collections.abc import AsyncIterator
-from typing import Annotated, Any
+from typing import Annotated
 
 from fastapi import APIRouter, FastAPI, Header, Request
 from fastapi.responses import PlainTextResponse
@@ -30,6 +30,7 @@ from openpendant.runtime.vision.models import (
     IntrinsicSessionView,
     IntrinsicStart,
     LocatedDetections,
+    OperationSaved,
     OperationStatus,
     RobotOriginRequest,
     RobotOriginResult,
@@ -40,6 +41,13 @@ from openpendant.runtime.vision.origin_run import OriginRun
 
 LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 CAMERA = re.compile(r"^[a-z][a-z0-9_]{0,31}\Z")
+# The body of PUT .../calibration.yaml, read by the route itself, for the API's document.
+YAML_BODY = {
+    "requestBody": {
+        "required": True,
+        "content": {"application/x-yaml": {"schema": {"type": "string"}}},
+    }
+}
 
 
 def _camera(name: str) -> str:
@@ -133,7 +141,7 @@ def vision_router(
         return (await operations.cancel(op_id)).status()
 
     @router.post("/operations/{op_id}/save")
-    async def save(op_id: str) -> dict[str, Any]:
+    async def save(op_id: str) -> OperationSaved:
         """Stores what a finished calibration found (nothing is stored before)."""
         return await calibrations.save(op_id)
 
@@ -150,7 +158,7 @@ def vision_router(
             headers={"Content-Disposition": f'attachment; filename="{camera}.yaml"'},
         )
 
-    @router.put("/cameras/{camera}/calibration.yaml")
+    @router.put("/cameras/{camera}/calibration.yaml", openapi_extra=YAML_BODY)
     async def import_(camera: str, request: Request) -> CameraCalibration:
         """An OpenCV YAML calibration (another tool's, or one exported before) as this
         camera's."""

@@ -1,6 +1,8 @@
 """The requests the UI's TypeScript makes and the ones its controls declare, read from the
-sources: `api(METHOD, path…)`, `sendRaw(…)` and an XMLHttpRequest's `open(…)` calls, the
-socket paths, and `request(METHOD, path)` (webui/frontend/src/rights.ts).
+sources: the generated client's `client.METHOD(path, {params: {path: {…}}})` calls (each
+`{name}` of the path filled in with what `params.path` gives it), `untyped(METHOD, path…)`
+(a plugin's) and an XMLHttpRequest's `open(…)` calls, the socket paths, and
+`request(METHOD, path)` (webui/frontend/src/rights.ts).
 
 A path is read as a shape: its literal text with a hole for every value (`${…}`) that is
 not a constant of the same file (`const path = \\`…\\``) or a method returning one
@@ -19,7 +21,10 @@ CHANGING = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 OPENERS = {"(": ")", "[": "]", "{": "}"}
 # After these a `/` starts a regular expression, not a division.
 REGEX_AFTER = set("(,=:[!&|?{};+-*%<>~^") | {""}
-CALL = re.compile(r"(?<![\w.$])(api|sendRaw)\s*(?=[<(])|\.open\s*(?=\()")
+CALL = re.compile(r"(?<![\w.$])(api|untyped)\s*(?=[<(])|\.open\s*(?=\()")
+CLIENT_CALL = re.compile(r"(?<![\w$])client\.(GET|POST|PUT|PATCH|DELETE)\s*(?=\()")
+PLACEHOLDER = re.compile(r"\{(\w+)\}")
+IDENTIFIER = r"[A-Za-z_$][\w$]*"
 DECLARED = re.compile(r"(?<![\w.$])request\s*(?=\()")
 SOCKET_PATH = re.compile(r"^(?:/api)?/[\w./{}-]*(?:/ws|_ws|/_events)(?:\?.*)?$")
 
@@ -184,14 +189,24 @@ class Source:
         return None
 
     def _constant(self, name: str, at: int, depth: int) -> Shape | None:
+        found = self._constant_text(name, at)
+        return None if found is None else self.shape(found[0], found[1], depth + 1)
+
+    def _returned(self, name: str, at: int, depth: int) -> Shape | None:
+        found = self._returned_text(name)
+        return None if found is None else self.shape(found[0], found[1], depth + 1)
+
+    def _constant_text(self, name: str, at: int) -> tuple[str, int] | None:
+        """The expression a `const` of this name (the last before `at`) is set to."""
         definitions = list(re.finditer(rf"\bconst {re.escape(name)}(?::[^=]+)? = ", self.text))
         before = [d for d in definitions if d.start() < at] or definitions
         if not before:
             return None
         start = before[-1].end()
-        return self.shape(self.text[start : skip_code(self.text, start, ";")], start, depth + 1)
+        return self.text[start : skip_code(self.text, start, ";")], start
 
-    def _returned(self, name: str, at: int, depth: int) -> Shape | None:
+    def _returned_text(self, name: str) -> tuple[str, int] | None:
+        """The expression a method or function of this name returns."""
         head = re.search(
             rf"(?:^|\s)(?:private |function )?{re.escape(name)}\([^)]*\)(?::[^{{]+)?\{{\s*return ",
             self.text,
@@ -199,11 +214,67 @@ class Source:
         if head is None:
             return None
         start = head.end()
-        return self.shape(self.text[start : skip_code(self.text, start, ";")], start, depth + 1)
+        return self.text[start : skip_code(self.text, start, ";")], start
+
+    def entries(self, expression: str, at: int, depth: int = 0) -> dict[str, str]:
+        """An object literal's entries (key -> the text of its value), read through spreads,
+        constants and methods returning one; {} if it cannot be read."""
+        e = expression.strip()
+        if depth > 6:
+            return {}
+        if e.startswith("{") and skip_code(e, 1, "}") == len(e) - 1:
+            found: dict[str, str] = {}
+            i = 1
+            while i < len(e) - 1:
+                end = skip_code(e, i, ",}")
+                item = e[i:end].strip()
+                if item.startswith("..."):
+                    found |= self.entries(item[3:], at, depth + 1)
+                elif item:
+                    key_end = skip_code(item, 0, ":")
+                    key = item[:key_end].strip().strip("'\"")
+                    found[key] = item[key_end + 1 :].strip() if key_end < len(item) else key
+                i = end + 1
+            return found
+        named = None
+        if re.fullmatch(IDENTIFIER, e):
+            named = self._constant_text(e, at)
+        elif method := re.fullmatch(rf"(?:this\.)?({IDENTIFIER})\(\)", e):
+            named = self._returned_text(method.group(1))
+        return {} if named is None else self.entries(named[0], named[1], depth + 1)
+
+    def _filled(self, shape: Shape, values: dict[str, str], at: int) -> Shape:
+        """A client path's shape with each `{name}` replaced by the shape of its value (a
+        hole where that cannot be read)."""
+        filled: list[str | None] = []
+        for part in shape:
+            if part is None:
+                filled.append(None)
+                continue
+            for k, piece in enumerate(PLACEHOLDER.split(part)):
+                if k % 2 == 0:
+                    filled.extend([piece] if piece else [])
+                    continue
+                value = values.get(piece)
+                inner = None if value is None else self.shape(value, at)
+                filled.extend(inner if inner is not None else (None,))
+        return tuple(filled)
 
     def calls(self) -> list[Request]:
-        """Every api(…)/sendRaw(…)/XMLHttpRequest open(…) call, but for their definitions."""
+        """Every call of the generated client, every untyped(…) and XMLHttpRequest open(…)
+        call, but for their definitions."""
         found = []
+        for match in CLIENT_CALL.finditer(code_only(self.text)):
+            args, _ = arguments(self.text, match.end())
+            if not args:
+                continue
+            shape = self.shape(args[0], match.start())
+            options = self.entries(args[1], match.start()) if len(args) > 1 else {}
+            params = self.entries(options.get("params", "{}"), match.start())
+            values = self.entries(params.get("path", "{}"), match.start())
+            if shape is not None:
+                shape = self._filled(shape, values, match.start())
+            found.append(Request(self.name, match.group(1), shape))
         for match in CALL.finditer(code_only(self.text)):
             i = match.end()
             if self.text[i] == "<":  # type arguments: api<Thing<Other>>(

@@ -101,6 +101,24 @@ def test_the_scan_reads_calls_and_finds_a_forgotten_control() -> None:
     general = Source("general.ts", 'api("PUT", `/api/x/${encodeURIComponent(n)}`)')
     assert undeclared([general, narrow]) == []
     assert undeclared([Source("f.ts", 'api("PUT", `/api/x/frames.${n}`)'), general]) != []
+    # The generated client's calls: each {name} of the path as params.path gives it.
+    typed = Source(
+        "typed.ts",
+        """const where = { params: { path: { name: n } } };
+        await ok(client.PUT("/api/x/{name}", { params: { path: { name: `frames.${n}` } } }));
+        await ok(client.DELETE("/api/x/{name}/y", where));
+        await ok(client.POST("/api/x/{name}/call/{method}",
+          { ...where, params: { path: { name: n, method: "write" } }, body }));""",
+    )
+    assert [c.text() for c in typed.calls()] == [
+        "/api/x/frames.{}",
+        "/api/x/{}/y",
+        "/api/x/{}/call/write",
+    ]
+    assert undeclared([typed, narrow]) == [
+        "typed.ts: DELETE /api/x/{}/y",
+        "typed.ts: POST /api/x/{}/call/write",
+    ]
     jogging = Source("j.ts", 'new WebSocket(socketUrl("/api/jog/ws"))')
     assert undeclared([jogging]) == ["j.ts: WS /api/jog/ws"]
 

@@ -1,10 +1,10 @@
 import { LitElement, css, html } from "lit";
 import { t } from "./i18n";
-import { ApiError, api } from "./api";
+import { ApiError, client, ok } from "./api";
 import { feed } from "./live";
 import { ADMIN_PANELS, panels } from "./panels/registry";
 import { plugins } from "./plugins";
-import { type Me, session } from "./session";
+import { session } from "./session";
 import "./sign-in";
 import { shared } from "./styles";
 import "./status-bar";
@@ -157,7 +157,7 @@ export class OpApp extends LitElement {
   /** A session this browser already has (its cookie) signs it in without a screen. */
   private async resume(): Promise<void> {
     try {
-      await session.set(await api<Me>("GET", "/api/auth/me"));
+      await session.set(await ok(client.GET("/api/auth/me")));
     } catch (err) {
       // A cookie whose session ended lately (reloaded, or the tablet woke up): say why.
       if (err instanceof ApiError && err.code === "session_ended") {

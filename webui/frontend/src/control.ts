@@ -1,18 +1,12 @@
 // Control leases as this browser tab holds them: one holder name per device (kept across
 // reloads), one token per robot (kept for this tab only), renewed while held.
 
-import { api, ApiError } from "./api";
+import { ApiError, client, ok } from "./api";
 import { t } from "./i18n";
 import { type Request, request } from "./rights";
 
 const RENEW_EVERY_MS = 5000;
 
-interface Granted {
-  device: string;
-  holder: string;
-  token: string;
-  expires: number;
-}
 
 const HOLDER_KEY = "op.holder";
 export const HOLDER_MAX = 40;
@@ -63,12 +57,10 @@ export class Control extends EventTarget {
   async take(robot: string): Promise<void> {
     const token = this.token(robot);
     const asked = this.releases.get(robot) ?? 0;
-    const granted = await api<Granted>(
-      "POST",
-      `/api/devices/${encodeURIComponent(robot)}/lease`,
-      { holder: this.holder },
-      token ? { "X-Lease-Token": token } : {},
-    );
+    const granted = await ok(client.POST("/api/devices/{local_name}/lease", {
+      params: { path: { local_name: robot }, header: { "X-Lease-Token": token } },
+      body: { holder: this.holder },
+    }));
     if ((this.releases.get(robot) ?? 0) !== asked) {
       // Released while this was on its way: give the lease back, keep nothing.
       await this.giveBack(robot, granted.token);
@@ -87,9 +79,9 @@ export class Control extends EventTarget {
   }
 
   private async giveBack(robot: string, token: string): Promise<void> {
-    await api("DELETE", `/api/devices/${encodeURIComponent(robot)}/lease`, undefined, {
-      "X-Lease-Token": token,
-    }).catch(() => undefined);
+    await ok(client.DELETE("/api/devices/{local_name}/lease", {
+      params: { path: { local_name: robot }, header: { "X-Lease-Token": token } },
+    })).catch(() => undefined);
   }
 
   /** The server no longer honours our token (it lapsed, or the robot was removed). */

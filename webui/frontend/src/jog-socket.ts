@@ -1,5 +1,5 @@
 import { changeHeld } from "./activity";
-import { api } from "./api";
+import { client, ok } from "./api";
 import type { Words } from "./i18n/words";
 import { session } from "./session";
 import { closeSocket, SIGN_IN_ENDED, socketUrl } from "./socket";
@@ -32,11 +32,11 @@ let direct: string | null = null;
 async function jogSocketUrl(): Promise<string> {
   try {
     if (!direct) {
-      const settings = await api<{ socket_port: number | null }>("GET", "/api/jog/settings");
+      const settings = await ok(client.GET("/api/jog/settings"));
       if (settings.socket_port) direct = socketUrl("/jog/ws", settings.socket_port);
     }
     if (direct) {
-      const { ticket } = await api<{ ticket: string }>("POST", "/api/auth/ticket");
+      const { ticket } = await ok(client.POST("/api/auth/ticket"));
       return `${direct}?ticket=${encodeURIComponent(ticket)}`;
     }
   } catch {

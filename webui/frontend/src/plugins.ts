@@ -3,7 +3,7 @@
 // imported when the panel is first shown, so a plugin needs no rebuild of this UI. The module
 // defines a custom element, which gets `pendant` (the PendantHost below) before it is added.
 
-import { api } from "./api";
+import { client, ok, type Schemas, untyped } from "./api";
 import { control } from "./control";
 import { language } from "./i18n";
 import { feed } from "./live";
@@ -12,49 +12,19 @@ import { session } from "./session";
 import type { AddedDevice } from "./types";
 import { length, lengthUnit } from "./units";
 
-export interface PanelInfo {
-  id: string;
-  plugin: string;
-  element: string;
-  title: Record<string, string>;
-  icon: string;
-  /** Where its module is served; null for the panels built into this UI. */
-  module: string | null;
-  words: Record<string, Record<string, string>>;
-}
-
-export interface PluginInfo {
-  name: string;
-  description: string;
-  package: string;
-  version: string;
-  builtin: boolean;
-  kinds: string[];
-  drivers: string[];
-  blocks: string[];
-  services: string[];
-  panels: string[];
-}
-
-export interface PluginFailure {
-  plugin: string;
-  source: string;
-  error: string;
-  process: string;
-}
-
-export interface PluginReport {
-  plugins: PluginInfo[];
-  panels: PanelInfo[];
-  failures: PluginFailure[];
-}
+/** A panel; `module` is where it is served, null for the panels built into this UI. */
+export type PanelInfo = Schemas["PanelInfo"];
+export type PluginInfo = Schemas["PluginInfo"];
+export type PluginFailure = Schemas["PluginFailure"];
+export type PluginReport = Schemas["PluginReport"];
 
 /** What a plugin's panel may use of the UI. */
 export interface PendantHost {
   /** JSON to the runtime (`/api/…`); errors are thrown with the runtime's message. */
   api<T>(method: string, path: string, body?: unknown, headers?: Record<string, string>): Promise<T>;
   /** Call a method a device's kind declares, with this tablet's control lease if it holds one. */
-  call<T>(device: string, method: string, body?: unknown, args?: (string | number)[]): Promise<T>;
+  call<T>(device: string, method: string, body?: Record<string, unknown>,
+    args?: (string | number)[]): Promise<T>;
   /** The added devices (of one kind), with their status and who controls them. */
   devices(kind?: string): AddedDevice[];
   /** A device's newest state, as it streams it. */
@@ -82,15 +52,16 @@ export interface PendantHost {
 
 export function hostFor(panel: PanelInfo): PendantHost {
   return {
-    api: (method, path, body, headers) => api(method, path, body, headers),
-    call: (device, method, body, args = []) => {
+    // A plugin's own routes are installed after this UI was built: not in its document.
+    api: (method, path, body, headers) => untyped(method, path, body, headers),
+    call: async <T>(device: string, method: string, body?: Record<string, unknown>,
+      args: (string | number)[] = []) => {
       const token = control.token(device);
-      return api(
-        "POST",
-        `/api/devices/${encodeURIComponent(device)}/call/${encodeURIComponent(method)}`,
-        { args, body: body ?? null },
-        token ? { "X-Lease-Token": token } : {},
-      );
+      // What a method answers is its kind's to say (a plugin's kind, perhaps).
+      return (await ok(client.POST("/api/devices/{local_name}/call/{method}", {
+        params: { path: { local_name: device, method }, header: { "X-Lease-Token": token } },
+        body: { args, body: body ?? null },
+      }))) as T;
     },
     devices: (kind) => feed.devices.filter((d) => kind === undefined || d.kind === kind),
     state: <T>(device: string) => (feed.states.get(device) as T | undefined) ?? null,
@@ -134,7 +105,7 @@ class Plugins extends EventTarget {
 
   /** Read the report (again); listeners hear "change". */
   load(): Promise<void> {
-    this.loading ??= api<PluginReport>("GET", "/api/plugins")
+    this.loading ??= ok(client.GET("/api/plugins"))
       .then((report) => {
         this.report = report;
         this.dispatchEvent(new Event("change"));

@@ -4,7 +4,7 @@
 // every 3D view on the page; read whole at every (re)connection, since events missed while
 // it was down are lost.
 
-import { api } from "./api";
+import { client, ok } from "./api";
 import { ReconnectingSocket } from "./socket";
 import type { PoseJson } from "./three/scene";
 
@@ -63,7 +63,7 @@ export class RobotBases extends EventTarget {
     this.pending = [];
     let frames: StoredVariable[];
     try {
-      frames = await api<StoredVariable[]>("GET", "/api/variables?type=frame");
+      frames = await ok(client.GET("/api/variables", { params: { query: { type: "frame" } } }));
     } catch {
       if (round === this.round) this.pending = null; // the events alone until the next connection
       return;

@@ -3,32 +3,18 @@
 // policy.py, read at sign-in) that says what the role may do. The session itself is an
 // HttpOnly cookie the page never sees.
 
-import { api } from "./api";
+import { ApiError, client, ok, type Schemas } from "./api";
 import type { Words } from "./i18n/words";
 
-export type RoleName = "viewer" | "operator" | "programmer" | "admin";
+export type RoleName = Schemas["SignedIn"]["role"];
 const RANK: Record<RoleName, number> = { viewer: 1, operator: 2, programmer: 3, admin: 4 };
 
 /** What a request needs: a role, anyone ("public"), or only the runtime's own services. */
-export type Need = RoleName | "public" | "internal";
+export type Need = Schemas["Policy"]["otherwise"];
 
-export interface Me {
-  user: string;
-  role: RoleName;
-  csrf: string | null;
-}
-
-export interface AuthStatus {
-  set_up: boolean;
-  setup_needs_code: boolean;
-  signed_in: boolean;
-}
-
-/** GET /api/auth/policy. */
-interface Policy {
-  rules: { methods: string[]; pattern: string; need: Need }[];
-  otherwise: Need;
-}
+/** Who signed in (GET /api/auth/me; signing in answers it but for `via`). */
+export type Me = Schemas["SignedIn"];
+export type AuthStatus = Schemas["AuthStatus"];
 
 interface Rule {
   methods: Set<string>;
@@ -126,20 +112,17 @@ class Session extends EventTarget {
  * cannot say (restarting, unreachable: the next refusal asks again). */
 async function whyEnded(): Promise<Ended | undefined> {
   try {
-    const response = await fetch("/api/auth/me", { credentials: "same-origin" });
-    if (response.status !== 401) return undefined;
-    const body = (await response.json().catch(() => ({}))) as {
-      error?: { message?: string; words?: Words };
-    };
-    return { message: body.error?.message ?? "", words: body.error?.words ?? null };
-  } catch {
+    await ok(client.GET("/api/auth/me"));
     return undefined;
+  } catch (err) {
+    if (!(err instanceof ApiError) || err.status !== 401) return undefined;
+    return { message: err.message, words: err.words };
   }
 }
 
 async function readPolicy(): Promise<{ rules: Rule[]; otherwise: Need } | null> {
   try {
-    const policy = await api<Policy>("GET", "/api/auth/policy");
+    const policy = await ok(client.GET("/api/auth/policy"));
     return {
       rules: policy.rules.map((r) => ({
         methods: new Set(r.methods),

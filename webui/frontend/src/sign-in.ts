@@ -1,5 +1,5 @@
 import { LitElement, css, html } from "lit";
-import { ApiError, api, errorText } from "./api";
+import { ApiError, client, errorText, ok } from "./api";
 import { t } from "./i18n";
 import { worded } from "./i18n/words";
 import { type AuthStatus, type Me, session } from "./session";
@@ -91,7 +91,7 @@ export class OpSignIn extends LitElement {
 
   private async load(): Promise<void> {
     try {
-      this.status = await api<AuthStatus>("GET", "/api/auth/status");
+      this.status = await ok(client.GET("/api/auth/status"));
     } catch (err) {
       this.error = errorText(err);
       window.setTimeout(() => void this.load(), 2000);
@@ -122,14 +122,13 @@ export class OpSignIn extends LitElement {
     if (!this.status?.set_up) {
       if (this.field("password") !== this.field("repeat")) throw new Error(t("auth.mismatch"));
       const code = this.field("code").trim();
-      return api<Me>("POST", "/api/auth/setup", {
-        user,
-        password: this.field("password"),
-        code: code || null,
-      });
+      return ok(client.POST("/api/auth/setup",
+        { body: { user, password: this.field("password"), code: code || null } }));
     }
-    if (this.mode === "pin") return api<Me>("POST", "/api/auth/pin", { user, pin: this.field("pin") });
-    return api<Me>("POST", "/api/auth/login", { user, password: this.field("password") });
+    if (this.mode === "pin") {
+      return ok(client.POST("/api/auth/pin", { body: { user, pin: this.field("pin") } }));
+    }
+    return ok(client.POST("/api/auth/login", { body: { user, password: this.field("password") } }));
   }
 
   render() {

@@ -1,5 +1,5 @@
 import { LitElement, css, html } from "lit";
-import { ApiError, api, errorText } from "./api";
+import { ApiError, client, errorText, ok } from "./api";
 import { control } from "./control";
 import { FocusController, focus } from "./focus";
 import { linkLabel } from "./format";
@@ -17,8 +17,8 @@ let firstSpeedAsked: Promise<number | null> | null = null;
 
 /** The site's first speed override (a ratio), from the jog service; null if unknown. */
 function firstSpeed(): Promise<number | null> {
-  firstSpeedAsked ??= api<{ first_speed_ratio?: number }>("GET", "/api/jog/settings")
-    .then((settings) => settings.first_speed_ratio ?? null)
+  firstSpeedAsked ??= ok(client.GET("/api/jog/settings"))
+    .then((settings): number | null => settings.first_speed_ratio)
     .catch(() => {
       firstSpeedAsked = null; // asked again next time
       return null;
@@ -241,8 +241,10 @@ export class OpStatusBar extends LitElement {
     if (!robot) return;
     const token = control.token(robot);
     try {
-      await api("PUT", `/api/jog/robots/${encodeURIComponent(robot)}/speed`,
-        { ratio: focus.speed / 100 }, token ? { "X-Lease-Token": token } : {});
+      await ok(client.PUT("/api/jog/robots/{robot}/speed", {
+        params: { path: { robot }, header: { "X-Lease-Token": token } },
+        body: { ratio: focus.speed / 100 },
+      }));
       this.notice = "";
     } catch (err) {
       const ratio = feed.states.get(robot)?.speed_ratio;
@@ -258,9 +260,10 @@ export class OpStatusBar extends LitElement {
     window.dispatchEvent(new Event("op-stop")); // panels let go of what they hold
     const robots = feed.robots().map((r) => r.local_name);
     await Promise.allSettled([
-      ...robots.map((r) => api("POST", `/api/jog/robots/${encodeURIComponent(r)}/halt`)),
-      api("POST", "/api/programs/_stop"),
-      api("POST", "/api/devices/_stop"),
+      ...robots.map((r) => ok(client.POST("/api/jog/robots/{robot}/halt",
+        { params: { path: { robot: r } } }))),
+      ok(client.POST("/api/programs/_stop")),
+      ok(client.POST("/api/devices/_stop")),
     ]);
   }
 

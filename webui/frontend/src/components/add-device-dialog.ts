@@ -1,10 +1,10 @@
 import { LitElement, css, html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok } from "../api";
 import { LOCAL_NAME, withBold } from "../format";
 import { t } from "../i18n";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
-import type { AddedDevice, DetectedDevice } from "../types";
+import type { DetectedDevice } from "../types";
 import "./modal";
 
 // Choose the local name a detected device (or a device at a URL) is added under.
@@ -79,7 +79,7 @@ export class OpAddDeviceDialog extends LitElement {
       const where = this.device ? { uuid: this.device.uuid } : { url: this.url };
       const pairing = this.pairing.trim();
       const body = { ...where, local_name: this.localName, ...(pairing ? { pairing } : {}) };
-      const added = await api<AddedDevice>("POST", "/api/devices", body);
+      const added = await ok(client.POST("/api/devices", { body }));
       this.dispatchEvent(new CustomEvent("added", { detail: added, bubbles: true, composed: true }));
     } catch (err) {
       this.error = errorText(err);

@@ -3,7 +3,7 @@
 // others are asked for here, once per device (again a moment after a failure). A robot
 // removed, or whose name now stands for another device, is forgotten.
 
-import { api } from "../api";
+import { client, ok } from "../api";
 import { focus } from "../focus";
 import { feed } from "../live";
 import type { RobotModel } from "./robot-view";
@@ -52,7 +52,7 @@ export class CellModels {
       if (this.models.has(name) || name === focus.robot || device.status !== "connected") continue;
       const failed = this.failed.get(name);
       const due = failed === undefined || performance.now() - failed > RETRY_MS;
-      if (due && !this.fetching.has(name)) void this.fetch(name, device.uuid);
+      if (due && !this.fetching.has(name)) void this.loadModel(name, device.uuid);
     }
     return gone;
   }
@@ -63,11 +63,11 @@ export class CellModels {
     this.fetching.clear();
   }
 
-  private async fetch(name: string, uuid: string): Promise<void> {
+  private async loadModel(name: string, uuid: string): Promise<void> {
     const round = this.round;
     this.fetching.add(name);
     try {
-      const model = await api<RobotModel>("GET", `/api/jog/robots/${encodeURIComponent(name)}`);
+      const model = await ok(client.GET("/api/jog/robots/{robot}", { params: { path: { robot: name } } }));
       if (round !== this.round) return;
       this.failed.delete(name);
       const listed = feed.robots().find((d) => d.local_name === name)?.uuid === uuid;

@@ -1,15 +1,11 @@
 import { LitElement, css, html } from "lit";
-import { api } from "../api";
+import { client, ok, type Schemas } from "../api";
 import { t } from "../i18n";
 import { feed } from "../live";
 import { shared } from "../styles";
 import { roughLength } from "../units";
 
-interface Clearance {
-  distance: number | null;
-  robot_part?: string;
-  other?: string;
-}
+type Clearance = Schemas["Clearance"];
 
 const POLL_MS = 500;
 const NEAR = 0.05; // m: shown as a warning closer than this
@@ -58,8 +54,8 @@ export class OpClearanceChip extends LitElement {
     }
     this.busy = true;
     try {
-      const path = `/api/motion/robots/${encodeURIComponent(this.robot)}/clearance`;
-      this.clearance = await api<Clearance>("GET", path);
+      this.clearance = await ok(client.GET("/api/motion/robots/{robot}/clearance",
+        { params: { path: { robot: this.robot } } }));
     } catch {
       this.clearance = null;
     } finally {

@@ -1,9 +1,9 @@
 import { LitElement, css, html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok } from "../api";
 import { linkLabel } from "../format";
 import { t } from "../i18n";
 import { shared } from "../styles";
-import type { DeviceDetails } from "../types";
+import type { DeviceDetails, RobotInfo } from "../types";
 import { angle, angleUnit } from "../units";
 import "./modal";
 
@@ -68,7 +68,9 @@ export class OpDeviceDetails extends LitElement {
   async connectedCallback(): Promise<void> {
     super.connectedCallback();
     try {
-      this.details = await api<DeviceDetails>("GET", `/api/devices/${encodeURIComponent(this.name)}`);
+      this.details = await ok(
+        client.GET("/api/devices/{local_name}", { params: { path: { local_name: this.name } } }),
+      );
     } catch (err) {
       this.error = errorText(err);
     }
@@ -80,7 +82,8 @@ export class OpDeviceDetails extends LitElement {
 
   render() {
     const d = this.details;
-    const info = d?.info?.info;
+    // Any kind's driver info; a robot's names its joints' limits too.
+    const info = d?.info?.info as Partial<RobotInfo> | undefined;
     return html`<op-modal heading=${t("devices.details_heading", { name: this.name })}>
       ${this.error ? html`<p class="error">${this.error}</p>` : ""}
       ${d
@@ -100,7 +103,7 @@ export class OpDeviceDetails extends LitElement {
         : this.error
           ? ""
           : html`<p class="muted">${t("devices.loading")}</p>`}
-      ${info
+      ${info?.joints
         ? html`<table data-testid="joint-limits">
             <thead>
               <tr>

@@ -1,5 +1,5 @@
 import { LitElement, css, html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok } from "../api";
 import { control, leaseRequest } from "../control";
 import { t } from "../i18n";
 import { FeedController, feed } from "../live";
@@ -93,12 +93,10 @@ export class OpGripperCard extends LitElement {
   private command(name: string, action: Action): void {
     const token = control.token(name);
     void this.run(name, () =>
-      api(
-        "POST",
-        `/api/devices/${encodeURIComponent(name)}/call/${action}`,
-        action === "activate" ? {} : { body: {} },
-        token ? { "X-Lease-Token": token } : {},
-      ),
+      ok(client.POST("/api/devices/{local_name}/call/{method}", {
+        params: { path: { local_name: name, method: action }, header: { "X-Lease-Token": token } },
+        body: action === "activate" ? {} : { body: {} },
+      })),
     );
   }
 

@@ -1,5 +1,5 @@
 import { LitElement, css, html } from "lit";
-import { api } from "../api";
+import { client, ok, type Schemas } from "../api";
 import { FocusController, focus } from "../focus";
 import { t } from "../i18n";
 import { FeedController, feed } from "../live";
@@ -19,17 +19,8 @@ import type {
 // the arm about this late.
 const PARTS_EVERY_MS = 300;
 
-export interface RobotModel {
-  name: string; // the robot it describes: joints of another robot are never drawn on it
-  urdf: string | null;
-  packages: Record<string, string>;
-  info: {
-    base_link: string;
-    flange_link: string;
-    joints: { name: string }[];
-    capabilities: string[];
-  };
-}
+/** A robot's URDF and info: the joints of another robot are never drawn on it. */
+export type RobotModel = Schemas["RobotModel"];
 
 /** A robot's drawing: its URDF, drawn, still loading, or failed with the reason. */
 interface Drawing {
@@ -321,8 +312,8 @@ export class OpRobotView extends LitElement {
     else if (!document.hidden) {
       let parts: CellPart[] = [];
       try {
-        const path = `/api/devices/${encodeURIComponent(model.name)}/cell/parts`;
-        parts = await api<CellPart[]>("GET", path);
+        parts = await ok(client.GET("/api/devices/{local_name}/cell/parts",
+          { params: { path: { local_name: model.name } } }));
       } catch {
         parts = [];
       }

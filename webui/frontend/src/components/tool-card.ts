@@ -1,11 +1,11 @@
 import { LitElement, css, html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok } from "../api";
 import { control } from "../control";
 import { type StringKey, t } from "../i18n";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
-import type { Pose } from "../types";
+import type { RobotDetails, RobotInfo } from "../types";
 import {
   ANGLE_FIELD,
   asShown,
@@ -19,16 +19,7 @@ import {
 // payload weighs. Jogging, moves and waypoints use this TCP; the robot gets it again
 // whenever it connects. Changing it needs control of the robot, which halts first.
 
-interface Payload {
-  mass: number;
-  center_of_mass: number[];
-}
-
-interface ToolInfo {
-  tcp: Pose;
-  payload: Payload;
-  max_payload: number | null;
-}
+type ToolInfo = Pick<RobotInfo, "tcp" | "payload" | "max_payload">;
 
 /** The tool as edited: metres, radians and kilograms. */
 interface Draft {
@@ -155,8 +146,9 @@ export class OpToolCard extends LitElement {
     this.loaded = robot;
     this.draft = null;
     try {
-      const details = await api<{ info: { info: ToolInfo } | null }>(
-        "GET", `/api/devices/${encodeURIComponent(robot)}`);
+      // A robot's: its driver's info is the robot kind's.
+      const details = (await ok(client.GET("/api/devices/{local_name}",
+        { params: { path: { local_name: robot } } }))) as RobotDetails;
       if (robot !== this.robot) return;
       if (!details.info) {
         this.message = t("scene.tool.not_connected", { robot });
@@ -185,8 +177,11 @@ export class OpToolCard extends LitElement {
       payload: { mass: d.mass, center_of_mass: [d.cx, d.cy, d.cz] },
     };
     try {
-      const info = await api<ToolInfo>("PUT", `/api/devices/${encodeURIComponent(this.robot)}/tool`,
-        setup, { "X-Lease-Token": control.token(this.robot) ?? "" });
+      const info = await ok(client.PUT("/api/devices/{local_name}/tool", {
+        params: { path: { local_name: this.robot },
+          header: { "X-Lease-Token": control.token(this.robot) ?? "" } },
+        body: setup,
+      }));
       this.draft = draftOf(info);
       this.message = "";
       this.saved = t("scene.tool.saved");

@@ -1,18 +1,12 @@
 import { LitElement, css, html } from "lit";
+import type { Schemas } from "../api";
 import { t } from "../i18n";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
 import { length, lengthUnit } from "../units";
 import "./hold-button";
 
-export interface Waypoint {
-  name: string;
-  type: "joint_waypoint" | "pose_waypoint";
-  tags: string[];
-  doc: string;
-  updated: number;
-  tcp_position: [number, number, number];
-}
+export type Waypoint = Schemas["Waypoint"];
 
 /** A move to a waypoint under way: which, and how far the TCP still has to go. */
 export interface MoveProgress {

@@ -6,11 +6,14 @@
 
 import { LANGUAGES, language, t, type StringKey } from "./index";
 
-export type WordParam = string | number | Words;
-
+// As the runtime's answers have them (its Words model): a param is text, a number, or words.
 export interface Words {
   code: string;
-  params?: Record<string, WordParam>;
+  params?: Record<string, unknown>;
+}
+
+function isWords(value: unknown): value is Words {
+  return typeof value === "object" && value !== null && typeof (value as Words).code === "string";
 }
 
 const MAX_DEPTH = 4;
@@ -21,7 +24,7 @@ function say(words: Words, depth: number): string | null {
   const values: Record<string, string | number> = {};
   for (const [name, value] of Object.entries(words.params ?? {})) {
     if (typeof value === "object" && value !== null) {
-      const nested = say(value, depth + 1);
+      const nested = isWords(value) ? say(value, depth + 1) : null;
       if (nested === null) return null;
       values[name] = nested;
     } else {

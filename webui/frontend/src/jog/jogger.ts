@@ -5,7 +5,7 @@
 // closes.
 
 import type { ReactiveController, ReactiveControllerHost } from "lit";
-import { api } from "../api";
+import { client, ok } from "../api";
 import { control } from "../control";
 import { focus } from "../focus";
 import { holdStarting } from "../components/hold-button";
@@ -70,7 +70,7 @@ export class Jogger implements ReactiveController {
     window.addEventListener("blur", this.releaseAll);
     window.addEventListener("op-stop", this.releaseAll);
     try {
-      const settings = await api<{ heartbeat_ms: number }>("GET", "/api/jog/settings");
+      const settings = await ok(client.GET("/api/jog/settings"));
       this.socket.heartbeatMs = settings.heartbeat_ms;
     } catch {
       // keep the default heartbeat period

@@ -3,7 +3,7 @@
 // renamed and re-tagged, deleted. What they show goes on the panel: the list, the one last
 // used, the dialog and the message line.
 
-import { api, ApiError, errorText } from "../api";
+import { ApiError, client, errorText, ok } from "../api";
 import { t } from "../i18n";
 import type { Waypoint } from "../components/waypoint-list";
 
@@ -28,10 +28,8 @@ export class Teaching {
 
   async load(): Promise<boolean> {
     try {
-      this.view.waypoints = await api<Waypoint[]>(
-        "GET",
-        `/api/jog/robots/${encodeURIComponent(this.view.robot)}/waypoints`,
-      );
+      this.view.waypoints = await ok(client.GET("/api/jog/robots/{robot}/waypoints",
+        { params: { path: { robot: this.view.robot } } }));
       return true;
     } catch (err) {
       this.view.message = errorText(err);
@@ -52,8 +50,8 @@ export class Teaching {
     const view = this.view;
     const name = this.nextName();
     try {
-      await api("POST", `/api/jog/robots/${encodeURIComponent(view.robot)}/teach`, {
-        name, kind: type, frame });
+      await ok(client.POST("/api/jog/robots/{robot}/teach",
+        { params: { path: { robot: view.robot } }, body: { name, kind: type, frame } }));
       view.selected = name;
       view.message = t("jog.saved", { name });
       await this.load();
@@ -93,12 +91,10 @@ export class Teaching {
     const d = view.dialog;
     if (d?.kind !== "teach") return;
     try {
-      await api("POST", `/api/jog/robots/${encodeURIComponent(view.robot)}/teach`, {
-        name: d.name,
-        kind: d.type,
-        frame: d.frame,
-        overwrite: d.overwrite,
-      });
+      await ok(client.POST("/api/jog/robots/{robot}/teach", {
+        params: { path: { robot: view.robot } },
+        body: { name: d.name, kind: d.type, frame: d.frame, overwrite: d.overwrite },
+      }));
       view.dialog = null;
       view.selected = d.name;
       view.message = t("jog.saved", { name: d.name });
@@ -116,14 +112,15 @@ export class Teaching {
     if (d?.kind !== "rename") return;
     try {
       if (d.name !== d.from) {
-        await api("POST", `/api/variables/${encodeURIComponent(d.from)}/rename`, { to: d.name });
+        await ok(client.POST("/api/variables/{name}/rename",
+          { params: { path: { name: d.from } }, body: { to: d.name } }));
       }
-      const path = `/api/variables/${encodeURIComponent(d.name)}`;
-      const current = await api<{ type: string; value: unknown; tags: string[]; version: number }>(
-        "GET", path);
+      const variable = { params: { path: { name: d.name } } };
+      const current = await ok(client.GET("/api/variables/{name}", variable));
       if (current.tags.join(",") !== d.tags.join(",")) {
-        await api("PUT", path, { type: current.type, value: current.value, tags: d.tags,
-          expected_version: current.version });
+        await ok(client.PUT("/api/variables/{name}", { ...variable, body: {
+          type: current.type, value: current.value, tags: d.tags,
+          expected_version: current.version } }));
       }
       view.dialog = null;
       view.selected = d.name;
@@ -135,7 +132,7 @@ export class Teaching {
 
   async remove(name: string): Promise<void> {
     try {
-      await api("DELETE", `/api/variables/${encodeURIComponent(name)}`);
+      await ok(client.DELETE("/api/variables/{name}", { params: { path: { name } } }));
     } catch (err) {
       this.view.message = errorText(err);
     }

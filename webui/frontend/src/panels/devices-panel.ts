@@ -1,5 +1,5 @@
 import { LitElement, css, html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok } from "../api";
 import { suggestLocalName, withBold } from "../format";
 import { type StringKey, t } from "../i18n";
 import { FeedController, feed } from "../live";
@@ -123,7 +123,8 @@ export class OpDevicesPanel extends LitElement {
 
   private async removeDevice(device: AddedDevice) {
     try {
-      await api("DELETE", `/api/devices/${encodeURIComponent(device.local_name)}`);
+      await ok(client.DELETE("/api/devices/{local_name}",
+        { params: { path: { local_name: device.local_name } } }));
       this.dialog = null;
     } catch (err) {
       this.error = errorText(err);
@@ -133,7 +134,8 @@ export class OpDevicesPanel extends LitElement {
 
   private async repoint(device: AddedDevice, url: string) {
     try {
-      await api("PUT", `/api/devices/${encodeURIComponent(device.local_name)}/address`, { url });
+      await ok(client.PUT("/api/devices/{local_name}/address",
+        { params: { path: { local_name: device.local_name } }, body: { url } }));
       this.dialog = null;
     } catch (err) {
       this.error = errorText(err);

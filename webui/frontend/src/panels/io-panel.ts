@@ -1,5 +1,5 @@
 import { LitElement, css, html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok } from "../api";
 import { control, leaseRequest } from "../control";
 import { t } from "../i18n";
 import { FeedController, feed } from "../live";
@@ -22,9 +22,9 @@ interface IOState {
   error: string;
 }
 
-interface Details {
-  info: { info: { signals?: SignalInfo[] } } | null;
-}
+/** An I/O block's details: its driver's info names its signals (DeviceDetails has any
+ * kind's info). */
+type Details = { info: { info: { signals?: SignalInfo[] } } | null };
 
 /** A signal's name with a line break allowed after each "_", "." and "-" (the words of
  * `part_present_sensor_2`), and nowhere else while its words fit; a word of one or
@@ -140,7 +140,8 @@ export class OpIoPanel extends LitElement {
   /** Each block's signals, read once from its description (they do not change). */
   private async describe(name: string): Promise<void> {
     try {
-      const details = await api<Details>("GET", `/api/devices/${encodeURIComponent(name)}`);
+      const details = (await ok(client.GET("/api/devices/{local_name}",
+        { params: { path: { local_name: name } } }))) as Details;
       const signals = details.info?.info.signals;
       if (signals) this.signals = new Map(this.signals).set(name, signals);
     } catch (err) {
@@ -160,12 +161,10 @@ export class OpIoPanel extends LitElement {
   private write(device: string, signal: string, value: boolean | number): void {
     const token = control.token(device);
     void this.act(() =>
-      api(
-        "POST",
-        `/api/devices/${encodeURIComponent(device)}/call/write`,
-        { args: [signal], body: { value } },
-        token ? { "X-Lease-Token": token } : {},
-      ),
+      ok(client.POST("/api/devices/{local_name}/call/{method}", {
+        params: { path: { local_name: device, method: "write" }, header: { "X-Lease-Token": token } },
+        body: { args: [signal], body: { value } },
+      })),
     );
   }
 

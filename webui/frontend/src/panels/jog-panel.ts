@@ -1,5 +1,5 @@
 import { LitElement, css, html } from "lit";
-import { api, ApiError, errorText } from "../api";
+import { ApiError, client, errorText, ok } from "../api";
 import { control } from "../control";
 import { FocusController, focus } from "../focus";
 import { t } from "../i18n";
@@ -148,7 +148,7 @@ export class OpJogPanel extends LitElement {
   private async loadRobot(robot: string): Promise<boolean> {
     if (this.model?.name !== robot) this.model = null;
     try {
-      const model = await api<RobotModel>("GET", `/api/jog/robots/${encodeURIComponent(robot)}`);
+      const model = await ok(client.GET("/api/jog/robots/{robot}", { params: { path: { robot } } }));
       if (robot !== this.robot) return true; // the focus moved on meanwhile
       this.model = model;
       if (this.message === this.loadError) this.message = "";
@@ -175,9 +175,10 @@ export class OpJogPanel extends LitElement {
   private async power(command: PowerCommand): Promise<void> {
     this.message = "";
     try {
-      await api("POST", `/api/jog/robots/${encodeURIComponent(this.robot)}/${command}`, undefined, {
-        "X-Lease-Token": control.token(this.robot) ?? "",
-      });
+      await ok(client.POST(`/api/jog/robots/{robot}/${command}`, {
+        params: { path: { robot: this.robot },
+          header: { "X-Lease-Token": control.token(this.robot) ?? "" } },
+      }));
     } catch (err) {
       if (err instanceof ApiError && err.code === "lease_held") control.forget(this.robot);
       this.message = errorText(err);

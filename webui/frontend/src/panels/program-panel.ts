@@ -1,5 +1,5 @@
 import { LitElement, css, html, nothing } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok } from "../api";
 import { FocusController, focus } from "../focus";
 import { t } from "../i18n";
 import { FeedController, feed } from "../live";
@@ -146,7 +146,8 @@ export class OpProgramPanel extends LitElement {
     try {
       const [{ ProgramEditor }, catalog] = await Promise.all([
         import("../program/editor"),
-        api<BlockCatalog>("GET", "/api/programs/_blocks"),
+        // Blockly's JSON: the runtime types it as JSON objects, Blockly's types say more.
+        ok(client.GET("/api/programs/_blocks")).then((c) => c as unknown as BlockCatalog),
         refreshChoices().catch(() => undefined),
       ]);
       const host = this.renderRoot.querySelector<HTMLElement>(".host");
@@ -183,7 +184,7 @@ export class OpProgramPanel extends LitElement {
 
   private async loadModel(robot: string): Promise<boolean> {
     try {
-      const model = await api<RobotModel>("GET", `/api/jog/robots/${encodeURIComponent(robot)}`);
+      const model = await ok(client.GET("/api/jog/robots/{robot}", { params: { path: { robot } } }));
       if (robot === focus.robot) this.model = model;
       return true;
     } catch {

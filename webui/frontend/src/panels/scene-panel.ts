@@ -1,8 +1,8 @@
 import { LitElement, type TemplateResult, css, html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok, type Schemas } from "../api";
 import { FocusController, focus } from "../focus";
 import { type StringKey, t } from "../i18n";
-import { worded, type Words } from "../i18n/words";
+import { worded } from "../i18n/words";
 import { FeedController, feed } from "../live";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
 import { makes, request } from "../rights";
@@ -63,19 +63,7 @@ function mountOf(base: PoseJson | null): Mount {
   return { x: l(x), y: l(y), z: l(z), roll: a(roll), pitch: a(pitch), yaw: a(yaw) };
 }
 
-interface SceneResponse {
-  robots: Record<string, { base: PoseJson; joints: number[] }>;
-  objects: Record<string, SceneObject>;
-}
-
-interface PlanReport {
-  ok: boolean;
-  code: string;
-  message: string;
-  words?: Words | null;
-  collision: { robot_part: string; other: string; position: number[] } | null;
-  tcp_path: [number, number, number][];
-}
+type PlanReport = Schemas["PlanReport"];
 
 /** A tap's nudge, and the step of the length fields: 10 mm, or a round 0.5 in. */
 const nudgeStep = (): number => (units.length === "mm" ? 10 : 0.5);
@@ -281,13 +269,13 @@ export class OpScenePanel extends LitElement {
   }
 
   private async loadRobot(name: string): Promise<boolean> {
-    const robot = encodeURIComponent(name);
+    const robot = { params: { path: { robot: name } } };
     if (this.model?.name !== name) this.model = null;
     try {
-      const model = await api<RobotModel>("GET", `/api/jog/robots/${robot}`);
+      const model = await ok(client.GET("/api/jog/robots/{robot}", robot));
       if (name !== this.robot) return true; // the focus moved on meanwhile
       this.model = model;
-      this.waypoints = await api<Waypoint[]>("GET", `/api/jog/robots/${robot}/waypoints`);
+      this.waypoints = await ok(client.GET("/api/jog/robots/{robot}/waypoints", robot));
       await this.loadScene();
       if (this.message === this.loadError) this.message = "";
       this.loadError = "";
@@ -299,7 +287,7 @@ export class OpScenePanel extends LitElement {
   }
 
   private async loadScene(): Promise<void> {
-    const scene = await api<SceneResponse>("GET", "/api/motion/scene");
+    const scene = await ok(client.GET("/api/motion/scene"));
     this.objects = scene.objects;
     this.base = scene.robots[this.robot]?.base ?? null;
     this.mount = mountOf(this.base);
@@ -319,7 +307,7 @@ export class OpScenePanel extends LitElement {
     try {
       // Any variable's name is taken, not only scene objects': a new box must never
       // overwrite a waypoint.
-      const all = await api<{ name: string }[]>("GET", "/api/variables");
+      const all = await ok(client.GET("/api/variables"));
       names = new Set(all.map((v) => v.name));
     } catch (err) {
       this.message = errorText(err);
@@ -339,10 +327,10 @@ export class OpScenePanel extends LitElement {
 
   private async save(name: string, object: SceneObject): Promise<boolean> {
     try {
-      await api("PUT", `/api/variables/${encodeURIComponent(name)}`, {
-        type: "scene_object",
-        value: object,
-      });
+      await ok(client.PUT("/api/variables/{name}", {
+        params: { path: { name } },
+        body: { type: "scene_object", value: object },
+      }));
       this.message = "";
       await this.loadScene();
       await this.runPreview();
@@ -360,7 +348,7 @@ export class OpScenePanel extends LitElement {
     }
     const name = this.selected;
     try {
-      await api("DELETE", `/api/variables/${encodeURIComponent(name)}`);
+      await ok(client.DELETE("/api/variables/{name}", { params: { path: { name } } }));
       this.select("");
       await this.loadScene();
       await this.runPreview();
@@ -400,10 +388,10 @@ export class OpScenePanel extends LitElement {
       orientation: rpyToQuaternion(degrees(m.roll), degrees(m.pitch), degrees(m.yaw)),
     };
     try {
-      await api("PUT", `/api/variables/frames.${encodeURIComponent(this.robot)}`, {
-        type: "frame",
-        value: { pose },
-      });
+      await ok(client.PUT("/api/variables/{name}", {
+        params: { path: { name: `frames.${this.robot}` } },
+        body: { type: "frame", value: { pose } },
+      }));
       this.message = "";
       await this.loadScene();
       await this.runPreview();
@@ -443,18 +431,18 @@ export class OpScenePanel extends LitElement {
     }
     this.previewing = true;
     try {
-      this.preview = await api<PlanReport>(
-        "POST",
-        `/api/motion/robots/${encodeURIComponent(this.robot)}/plan`,
-        {
+      this.preview = await ok(client.POST("/api/motion/robots/{robot}/plan", {
+        params: { path: { robot: this.robot } },
+        body: {
           kind: this.kind,
           target: { waypoint: this.target },
           avoid_obstacles: this.kind === "joint" && this.around,
         },
-      );
+      }));
     } catch (err) {
-      this.preview = { ok: false, code: "error", message: errorText(err), collision: null,
-                       tcp_path: [] };
+      this.preview = { ok: false, code: "error", message: errorText(err), words: null,
+                       duration: 0, planned_around: false, collision: null, tcp_path: [],
+                       goal: [] };
     } finally {
       this.previewing = false;
     }

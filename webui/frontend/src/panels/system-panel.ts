@@ -1,5 +1,5 @@
 import { LitElement, css, html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok, type Schemas } from "../api";
 import { HOLDER_MAX, control } from "../control";
 import { LANGUAGES, type Language, type StringKey, language, setLanguage, t } from "../i18n";
 import { type Theme, currentTheme, setTheme } from "../theme";
@@ -7,15 +7,10 @@ import { makes, request } from "../rights";
 import { session } from "../session";
 import { shared } from "../styles";
 import { type PluginInfo, plugins } from "../plugins";
-import type { Health } from "../types";
 import { type AngleUnit, type LengthUnit, setUnits, units } from "../units";
 
-interface LogEntry {
-  time: string;
-  level: string;
-  service: string;
-  message: string;
-}
+type Health = Schemas["Health"];
+type LogEntry = Schemas["LogEntry"];
 
 // Service states and log levels the runtime is known to send; any other is shown as it comes.
 const SERVICE_STATUS: Record<string, StringKey> = {
@@ -211,9 +206,9 @@ export class OpSystemPanel extends LitElement {
       // The plugins' report failing hides neither health nor logs.
       // The runtime's logs are for programmers and administrators.
       const [health, logs] = await Promise.all([
-        api<Health>("GET", "/api/health"),
+        ok(client.GET("/api/health")),
         session.may("GET", "/api/logs")
-          ? api<LogEntry[]>("GET", `/api/logs?level=${this.logLevel}&limit=100`)
+          ? ok(client.GET("/api/logs", { params: { query: { level: this.logLevel, limit: 100 } } }))
           : Promise.resolve(null),
         plugins.load().catch(() => undefined),
       ]);
@@ -245,7 +240,7 @@ export class OpSystemPanel extends LitElement {
 
   private async signOut(): Promise<void> {
     try {
-      await api("POST", "/api/auth/logout");
+      await ok(client.POST("/api/auth/logout"));
     } catch (err) {
       this.error = errorText(err);
     }
@@ -345,7 +340,7 @@ export class OpSystemPanel extends LitElement {
                 </td>
                 <td translate="no">${s.version ?? ""}</td>
                 <td translate="no">
-                  ${s.uptime_s !== undefined
+                  ${s.uptime_s != null
                     ? t("system.seconds", { seconds: Math.round(s.uptime_s) })
                     : ""}
                 </td>

@@ -1,33 +1,13 @@
 import { LitElement, css, html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok, type Schemas } from "../api";
 import { t } from "../i18n";
 import { makes, request } from "../rights";
 import { type RoleName, session } from "../session";
 import { shared } from "../styles";
 
-interface UserRow {
-  name: string;
-  role: RoleName;
-  has_pin: boolean;
-}
-
-interface TokenRow {
-  id: string;
-  name: string;
-  role: RoleName;
-  last_used: number | null;
-}
-
-interface AuditRow {
-  seq: number;
-  ts: number;
-  user: string;
-  role: string;
-  address: string;
-  action: string;
-  target: string;
-  status: number;
-}
+type UserRow = Schemas["UserRow"];
+type TokenRow = Schemas["TokenRow"];
+type AuditRow = Schemas["AuditRow"];
 
 const ROLES: RoleName[] = ["viewer", "operator", "programmer", "admin"];
 
@@ -137,9 +117,9 @@ export class OpUsersPanel extends LitElement {
   private async load(): Promise<void> {
     try {
       [this.users, this.tokens, this.audit] = await Promise.all([
-        api<UserRow[]>("GET", "/api/auth/users"),
-        api<TokenRow[]>("GET", "/api/auth/tokens"),
-        api<AuditRow[]>("GET", "/api/auth/audit?limit=50"),
+        ok(client.GET("/api/auth/users")),
+        ok(client.GET("/api/auth/tokens")),
+        ok(client.GET("/api/auth/audit", { params: { query: { limit: 50 } } })),
       ]);
     } catch (err) {
       this.error = errorText(err);
@@ -163,18 +143,21 @@ export class OpUsersPanel extends LitElement {
   private addUser(e: Event): void {
     e.preventDefault();
     void this.act(() =>
-      api("POST", "/api/auth/users", {
-        name: this.value("new-user").trim(),
-        role: this.role,
-        password: this.value("new-password"),
-        confirm_password: this.value("confirm-user"),
-      }),
+      ok(client.POST("/api/auth/users", {
+        body: {
+          name: this.value("new-user").trim(),
+          role: this.role,
+          password: this.value("new-password"),
+          confirm_password: this.value("confirm-user"),
+        },
+      })),
     );
   }
 
   private removeUser(name: string): void {
     const confirm = this.value("confirm-user");
-    void this.act(() => api("DELETE", `/api/auth/users/${encodeURIComponent(name)}`, { confirm_password: confirm }));
+    void this.act(() => ok(client.DELETE("/api/auth/users/{name}",
+      { params: { path: { name } }, body: { confirm_password: confirm } })));
   }
 
   private edit(user: UserRow): void {
@@ -184,7 +167,7 @@ export class OpUsersPanel extends LitElement {
 
   private changeUser(e: Event, user: UserRow): void {
     e.preventDefault();
-    const change: Record<string, string> = { confirm_password: this.value("confirm-edit") };
+    const change: Schemas["UserChange"] = { confirm_password: this.value("confirm-edit") };
     if (this.editRole !== user.role) change.role = this.editRole;
     const password = this.value("edit-password");
     if (password) change.password = password;
@@ -193,7 +176,8 @@ export class OpUsersPanel extends LitElement {
     if (noPin) change.pin = "";
     else if (pin) change.pin = pin;
     void this.act(async () => {
-      await api("PUT", `/api/auth/users/${encodeURIComponent(user.name)}`, change);
+      await ok(client.PUT("/api/auth/users/{name}",
+        { params: { path: { name: user.name } }, body: change }));
       this.editing = "";
     });
   }
@@ -224,11 +208,13 @@ export class OpUsersPanel extends LitElement {
   private addToken(e: Event): void {
     e.preventDefault();
     void this.act(async () => {
-      const made = await api<{ token: string }>("POST", "/api/auth/tokens", {
-        name: this.value("token-name").trim(),
-        role: this.tokenRole,
-        confirm_password: this.value("confirm-token"),
-      });
+      const made = await ok(client.POST("/api/auth/tokens", {
+        body: {
+          name: this.value("token-name").trim(),
+          role: this.tokenRole,
+          confirm_password: this.value("confirm-token"),
+        },
+      }));
       this.newToken = made.token;
     });
   }

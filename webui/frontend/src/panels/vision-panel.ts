@@ -1,5 +1,5 @@
 import { LitElement, css, html } from "lit";
-import { api, errorText, sendRaw } from "../api";
+import { client, errorText, ok, type Schemas } from "../api";
 import { type StringKey, t } from "../i18n";
 import { FeedController, feed } from "../live";
 import { makes, request } from "../rights";
@@ -21,14 +21,7 @@ import "../vision/template-tab";
 type Step = "detect" | "intrinsic" | "placement" | "origin" | "template";
 const STEPS: Step[] = ["detect", "intrinsic", "placement", "origin", "template"];
 
-interface Calibration {
-  rms: number;
-}
-
-interface Stored<T> {
-  name: string;
-  value: T;
-}
+type Calibration = Schemas["CameraCalibration"];
 
 export class OpVisionPanel extends LitElement {
   static properties = {
@@ -134,12 +127,15 @@ export class OpVisionPanel extends LitElement {
     if (!camera) return;
     try {
       const [calibrations, frames] = await Promise.all([
-        api<Stored<Calibration>[]>("GET", "/api/variables?type=camera_calibration"),
-        api<Stored<{ parent: string }>[]>("GET", "/api/variables?type=frame"),
+        ok(client.GET("/api/variables", { params: { query: { type: "camera_calibration" } } })),
+        ok(client.GET("/api/variables", { params: { query: { type: "frame" } } })),
       ]);
       if (camera !== this.camera) return;
-      this.calibration = calibrations.find((v) => v.name === `calibration.${camera}`)?.value ?? null;
-      this.placed = frames.some((v) => v.name === `frames.${camera}` && v.value.parent === "world");
+      // A variable's value is its type's (the storage checked it on the way in).
+      const calibration = calibrations.find((v) => v.name === `calibration.${camera}`);
+      this.calibration = (calibration?.value as Calibration | undefined) ?? null;
+      this.placed = frames.some((v) => v.name === `frames.${camera}`
+        && (v.value as { parent?: unknown } | null)?.parent === "world");
     } catch (err) {
       this.error = errorText(err);
     }
@@ -152,8 +148,12 @@ export class OpVisionPanel extends LitElement {
     if (!file) return;
     this.error = "";
     try {
-      const path = `/api/vision/cameras/${encodeURIComponent(this.camera)}/calibration.yaml`;
-      await sendRaw("PUT", path, await file.text(), "application/x-yaml");
+      await ok(client.PUT("/api/vision/cameras/{camera}/calibration.yaml", {
+        params: { path: { camera: this.camera } },
+        body: await file.text(),
+        bodySerializer: (text: string) => text, // the file as it is, not as JSON
+        headers: { "content-type": "application/x-yaml" },
+      }));
     } catch (err) {
       this.error = errorText(err);
     }

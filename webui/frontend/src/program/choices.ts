@@ -3,9 +3,9 @@
 // the detectors stored. Waypoints taught, renamed or
 // deleted anywhere reach them at once over the waypoint feed.
 
-import { api } from "../api";
+import { client, ok } from "../api";
 import { feed } from "../live";
-import type { DeviceDetails } from "../types";
+import type { RobotInfo } from "../types";
 import { DETECTOR_PREFIX } from "../vision/detections";
 import { type WaypointChange, WaypointFeed } from "./waypoint-feed";
 
@@ -36,9 +36,8 @@ export async function refreshChoices(): Promise<void> {
   const withIO = feed.devices.filter((d) => d.kind === "robot" || d.kind === "io");
   const details = await Promise.all(
     withIO.map((d) =>
-      api<DeviceDetails>("GET", `/api/devices/${encodeURIComponent(d.local_name)}`).catch(
-        () => null,
-      ),
+      ok(client.GET("/api/devices/{local_name}", { params: { path: { local_name: d.local_name } } }))
+        .catch(() => null),
     ),
   );
   const inputs: string[] = [];
@@ -46,7 +45,8 @@ export async function refreshChoices(): Promise<void> {
   const analogs: string[] = [];
   const analogOutputs: string[] = [];
   for (const d of details) {
-    const info = d?.info?.info;
+    // Any kind's driver info: an I/O block's names its signals, a robot's its I/O counts.
+    const info = d?.info?.info as Partial<RobotInfo> | undefined;
     if (!d || !info) continue;
     if (d.kind === "io") {
       const signals = (info as unknown as { signals?: SignalInfo[] }).signals ?? [];
@@ -67,13 +67,13 @@ export async function refreshChoices(): Promise<void> {
   choices.analog_outputs = analogOutputs;
   const lists = await Promise.all(
     ["joint_waypoint", "pose_waypoint"].map((type) =>
-      api<{ name: string }[]>("GET", `/api/variables?type=${type}`).catch(() => []),
+      ok(client.GET("/api/variables", { params: { query: { type } } })).catch(() => []),
     ),
   );
   choices.waypoints = lists.flat().map((v) => v.name);
-  const detectors = await api<{ name: string }[]>("GET", "/api/variables?type=detector").catch(
-    () => [],
-  );
+  const detectors = await ok(
+    client.GET("/api/variables", { params: { query: { type: "detector" } } }),
+  ).catch(() => []);
   choices.detectors = detectors
     .filter((v) => v.name.startsWith(DETECTOR_PREFIX))
     .map((v) => v.name.slice(DETECTOR_PREFIX.length));

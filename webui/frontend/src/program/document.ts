@@ -5,10 +5,10 @@
 // as it was when the panel is shown again.
 
 import type { ReactiveController, ReactiveControllerHost } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok } from "../api";
 import { session } from "../session";
 import type { ProgramEditor } from "./editor";
-import type { Generated, Problem, Program, ProgramSummary, Saved } from "./types";
+import type { Problem, ProgramSummary } from "./types";
 
 const PREVIEW_DELAY_MS = 400;
 
@@ -19,10 +19,6 @@ interface Draft {
   breakpoints: string[];
 }
 let draft: Draft | null = null;
-
-function path(name: string, action = ""): string {
-  return `/api/programs/${encodeURIComponent(name)}${action ? `/${action}` : ""}`;
-}
 
 export class ProgramDocument implements ReactiveController {
   programs: ProgramSummary[] = [];
@@ -71,13 +67,13 @@ export class ProgramDocument implements ReactiveController {
   }
 
   async listPrograms(): Promise<void> {
-    this.programs = await api<ProgramSummary[]>("GET", "/api/programs");
+    this.programs = await ok(client.GET("/api/programs"));
     this.host.requestUpdate();
   }
 
   async open(name: string): Promise<void> {
     if (!this.editor) return;
-    const program = await api<Program>("GET", path(name));
+    const program = await ok(client.GET("/api/programs/{name}", { params: { path: { name } } }));
     this.name = program.name;
     this.source = program.source;
     this.editor.load(program.source === "blocks" ? program.workspace : null);
@@ -106,9 +102,10 @@ export class ProgramDocument implements ReactiveController {
   async saveAs(name: string): Promise<void> {
     if (!this.editor) return;
     const state = this.editor.state();
-    const saved = await api<Saved>("PUT", `/api/programs/${encodeURIComponent(name)}`, {
-      workspace: state,
-    });
+    const saved = await ok(client.PUT("/api/programs/{name}", {
+      params: { path: { name } },
+      body: { workspace: state },
+    }));
     this.name = saved.name;
     this.saved = JSON.stringify(state);
     this.dirty = JSON.stringify(this.editor.state()) !== this.saved;
@@ -119,19 +116,21 @@ export class ProgramDocument implements ReactiveController {
   }
 
   async rename(to: string): Promise<void> {
-    await api("POST", `/api/programs/${encodeURIComponent(this.name)}/rename`, { to });
+    await ok(client.POST("/api/programs/{name}/rename",
+      { params: { path: { name: this.name } }, body: { to } }));
     this.name = to;
     await this.listPrograms();
   }
 
   /** A copy of the program as saved, under another name; this one stays on show. */
   async duplicate(to: string): Promise<void> {
-    await api("POST", `/api/programs/${encodeURIComponent(this.name)}/duplicate`, { to });
+    await ok(client.POST("/api/programs/{name}/duplicate",
+      { params: { path: { name: this.name } }, body: { to } }));
     await this.listPrograms();
   }
 
   async remove(): Promise<void> {
-    await api("DELETE", `/api/programs/${encodeURIComponent(this.name)}`);
+    await ok(client.DELETE("/api/programs/{name}", { params: { path: { name: this.name } } }));
     this.dirty = false;
     this.host.requestUpdate();
   }
@@ -155,9 +154,9 @@ export class ProgramDocument implements ReactiveController {
     if (!session.may("POST", "/api/programs/_generate")) return;
     const ticket = ++this.previewing;
     try {
-      const generated = await api<Generated>("POST", "/api/programs/_generate", {
-        workspace: this.editor.state(),
-      });
+      const generated = await ok(client.POST("/api/programs/_generate", {
+        body: { workspace: this.editor.state() },
+      }));
       if (ticket !== this.previewing) return;
       this.python = generated.python;
       this.problem = "";

@@ -140,7 +140,7 @@ export class ProgramEditor extends EventTarget {
     this.changed("history");
   }
 
-  state(): object {
+  state(): Record<string, unknown> {
     return Blockly.serialization.workspaces.save(this.workspace);
   }
 

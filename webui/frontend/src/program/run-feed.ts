@@ -1,7 +1,7 @@
 // The program service's run statuses over one WebSocket: the latest status of each program
 // and the output of its current run, gaps filled from GET status?after=N. Reconnects itself.
 
-import { api } from "../api";
+import { client, ok } from "../api";
 import { ReconnectingSocket } from "../socket";
 import type { OutputEntry, RunStatus } from "./types";
 
@@ -62,10 +62,9 @@ export class RunFeed extends EventTarget {
 
   /** Lines the push left out (it carries the latest ones only). */
   private async fill(program: string, run: number, after: number): Promise<void> {
-    const status = await api<RunStatus>(
-      "GET",
-      `/api/programs/${encodeURIComponent(program)}/status?after=${after}`,
-    ).catch(() => null);
+    const status = await ok(client.GET("/api/programs/{name}/status", {
+      params: { path: { name: program }, query: { after } },
+    })).catch(() => null);
     const view = this.views.get(program);
     if (!status || !view || view.status.run !== run || status.run !== run) return;
     const merged = new Map(view.output.map((o) => [o.seq, o]));

@@ -4,7 +4,7 @@
 // step, stop, and breakpoints changed during a run. Errors are thrown: the panel says them.
 
 import type { ReactiveController, ReactiveControllerHost } from "lit";
-import { api } from "../api";
+import { client, ok } from "../api";
 import { control } from "../control";
 import { focus } from "../focus";
 import { feed } from "../live";
@@ -15,10 +15,6 @@ import { LIVE_STATES, type RunStatus } from "./types";
 export type RunCommand = "pause" | "resume" | "step" | "stop";
 
 const runs = new RunFeed();
-
-function path(program: string, action: string): string {
-  return `/api/programs/${encodeURIComponent(program)}/${action}`;
-}
 
 export class ProgramRunner implements ReactiveController {
   private highlighted: string | null = null;
@@ -67,7 +63,8 @@ export class ProgramRunner implements ReactiveController {
   }
 
   async fetchStatus(name: string): Promise<void> {
-    const status = await api<RunStatus>("GET", path(name, "status")).catch(() => null);
+    const status = await ok(client.GET("/api/programs/{name}/status",
+      { params: { path: { name } } })).catch(() => null);
     if (status) runs.answer(status);
     this.show();
   }
@@ -81,19 +78,17 @@ export class ProgramRunner implements ReactiveController {
       const token = control.token(device.local_name);
       if (token) leases[device.local_name] = token;
     }
-    const program = encodeURIComponent(this.program());
-    const status = await api<RunStatus>("POST", `/api/programs/${program}/run`, {
-      breakpoints: this.editor()?.liveBreakpoints() ?? [],
-      leases,
-      robot: robot || null,
-    });
+    const status = await ok(client.POST("/api/programs/{name}/run", {
+      params: { path: { name: this.program() } },
+      body: { breakpoints: this.editor()?.liveBreakpoints() ?? [], leases, robot: robot || null },
+    }));
     runs.answer(status);
   }
 
   async command(action: RunCommand): Promise<void> {
     const name = this.program();
     if (action === "stop" && runs.sendStop(name)) return; // its outcome is pushed
-    await api<RunStatus>("POST", `/api/programs/${encodeURIComponent(name)}/${action}`);
+    await ok(client.POST(`/api/programs/{name}/${action}`, { params: { path: { name } } }));
   }
 
   /** Breakpoints set or cleared while it runs apply to the run at once. */
@@ -101,8 +96,10 @@ export class ProgramRunner implements ReactiveController {
     const editor = this.editor();
     const status = this.status();
     if (editor && status && LIVE_STATES.includes(status.state)) {
-      const program = encodeURIComponent(this.program());
-      await api("PUT", `/api/programs/${program}/breakpoints`, { ids: editor.liveBreakpoints() });
+      await ok(client.PUT("/api/programs/{name}/breakpoints", {
+        params: { path: { name: this.program() } },
+        body: { ids: editor.liveBreakpoints() },
+      }));
     }
   }
 

@@ -1,79 +1,17 @@
-// Shapes of the program service's API (see runtime/program/models.py).
+// The program service's models (runtime/program/models.py), by their names in the API's
+// document (see api.ts).
 
-import type { Words } from "../i18n/words";
+import type { Schemas } from "../api";
 
-export interface ProgramSummary {
-  name: string;
-  source: "blocks" | "python";
-  version: number;
-  updated: number;
-}
-
-export interface Program extends ProgramSummary {
-  workspace: unknown;
-  python: string;
-}
-
+export type ProgramSummary = Schemas["ProgramSummary"];
+export type Program = Schemas["Program"];
 /** What keeps a program from running, at a block: an empty input, a loose block. */
-export interface Problem {
-  block: string;
-  message: string;
-  words?: Words | null;
-}
-
-export interface Saved {
-  name: string;
-  python: string;
-  version: number;
-  blocks: number;
-  problems: Problem[];
-}
-
-export interface Generated {
-  python: string;
-  blocks: number;
-  problems: Problem[];
-}
-
-export type RunState =
-  | "idle"
-  | "starting"
-  | "running"
-  | "paused"
-  | "stopped"
-  | "error"
-  | "finished";
-
-export interface OutputEntry {
-  seq: number;
-  text: string;
-  stream: string;
-  block: string | null;
-  ts: number;
-  words?: Words | null;
-}
-
-export interface RunError {
-  message: string;
-  kind: string;
-  line: number | null;
-  block: string | null;
-  code: string | null;
-  words?: Words | null;
-}
-
-export interface RunStatus {
-  program: string;
-  run: number;
-  state: RunState;
-  block: string | null;
-  pause_reason: string;
-  message: string;
-  output: OutputEntry[];
-  error: RunError | null;
-  robots: string[];
-  started: number | null;
-  ended: number | null;
-}
+export type Problem = Schemas["ProblemInfo"];
+export type Saved = Schemas["Saved"];
+export type Generated = Schemas["Generated"];
+export type RunStatus = Schemas["RunStatus"];
+export type RunState = RunStatus["state"];
+export type OutputEntry = Schemas["OutputEntry"];
+export type RunError = Schemas["ErrorInfo"];
 
 export const LIVE_STATES: RunState[] = ["starting", "running", "paused"];

@@ -53,7 +53,7 @@ function disposeTree(root: THREE.Object3D): void {
 
 export interface Marker {
   name: string;
-  position: [number, number, number]; // in the robot's base frame, metres
+  position: number[]; // x, y, z in the robot's base frame, metres
   selected: boolean;
 }
 
@@ -86,7 +86,7 @@ export interface Obstacle {
 
 /** A planned TCP path in the world frame, drawn green when clear and red when it collides. */
 export interface PathPreview {
-  points: [number, number, number][];
+  points: number[][]; // x, y, z
   ok: boolean;
   collision: [number, number, number] | null;
 }
@@ -305,7 +305,7 @@ export class RobotScene {
         new THREE.SphereGeometry(m.selected ? 0.022 : 0.014, 16, 12),
         new THREE.MeshStandardMaterial({ color }),
       );
-      sphere.position.set(...m.position);
+      sphere.position.fromArray(m.position);
       sphere.name = m.name;
       const tag = label(m.name, color);
       tag.position.set(0, 0, 0.045);

@@ -1,49 +1,30 @@
 import { html } from "lit";
-import { api } from "../api";
+import { client, ok, type Schemas } from "../api";
 import { t } from "../i18n";
 import { makes, request } from "../rights";
-import type { Pose } from "../types";
 import { lengthWithUnit } from "../units";
 import type { Overlay } from "./camera-view";
 
 // Detecting with a stored detector (`detectors.<name>`), and what the answer shows: boxes
 // laid over the picture, and a list of what was found with its place in the world.
 
-export interface Found {
-  label: string;
-  confidence: number;
-  box: { x: number; y: number; width: number; height: number };
-  pose: Pose | null;
-  world_pose: Pose | null;
-}
-
-export interface Detections {
-  ts: number;
-  age: number;
-  detector: string;
-  camera: string;
-  calibrated: boolean;
-  placed: boolean;
-  detections: Found[];
-}
-
-export interface DetectorVariable {
-  name: string;
-  value: { method: string; camera: string; label?: string };
-}
+export type Found = Schemas["Located"];
+export type Detections = Schemas["LocatedDetections"];
 
 export const DETECTOR_PREFIX = "detectors.";
 
 export async function detectorsOf(camera: string): Promise<string[]> {
-  const all = await api<DetectorVariable[]>("GET", "/api/variables?type=detector");
+  const all = await ok(client.GET("/api/variables", { params: { query: { type: "detector" } } }));
   return all
-    .filter((v) => v.name.startsWith(DETECTOR_PREFIX) && v.value.camera === camera)
+    .filter((v) => v.name.startsWith(DETECTOR_PREFIX)
+      && (v.value as { camera?: unknown } | null)?.camera === camera)
     .map((v) => v.name.slice(DETECTOR_PREFIX.length))
     .sort();
 }
 
 export function detect(name: string): Promise<Detections> {
-  return api<Detections>("POST", `/api/vision/detectors/${encodeURIComponent(name)}/detect`, {});
+  return ok(client.POST("/api/vision/detectors/{name}/detect",
+    { params: { path: { name } }, body: {} }));
 }
 
 /** On a control that detects with a detector (none chosen yet: nothing to declare). */

@@ -1,5 +1,5 @@
 import { LitElement, html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok } from "../api";
 import { session } from "../session";
 import { t } from "../i18n";
 import { makes, request } from "../rights";
@@ -69,7 +69,7 @@ export class OpDetectorForm extends LitElement {
 
   connectedCallback(): void {
     super.connectedCallback();
-    void api<string[]>("GET", "/api/vision/models")
+    void ok(client.GET("/api/vision/models"))
       .then((models) => {
         this.models = models;
         if (!this.draft.model && models.length) this.set({ model: models[0] });
@@ -165,7 +165,10 @@ export class OpDetectorForm extends LitElement {
     }
     this.busy = true;
     try {
-      await api("PUT", `/api/variables/${DETECTOR_PREFIX}${name}`, { type: "detector", value: this.value() });
+      await ok(client.PUT("/api/variables/{name}", {
+        params: { path: { name: `${DETECTOR_PREFIX}${name}` } },
+        body: { type: "detector", value: this.value() },
+      }));
       this.dispatchEvent(new CustomEvent("saved", { detail: name, bubbles: true, composed: true }));
     } catch (err) {
       this.error = errorText(err);

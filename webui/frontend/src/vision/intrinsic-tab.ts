@@ -1,10 +1,11 @@
 import { html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok, type Schemas } from "../api";
 import { type StringKey, t } from "../i18n";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
 import {
   type OperationStatus,
+  asKind,
   cancelOperation,
   follow,
   operationView,
@@ -19,54 +20,11 @@ import { visionStyles } from "./styles";
 // picture with what to show next, the frames with their errors (any dropped), the solve with
 // its progress and cancel, the result's quality, and Save (`calibration.<camera>`).
 
-export interface BoardSpec {
-  kind: "charuco" | "chessboard";
-  squares_x: number;
-  squares_y: number;
-  square: number;
-  marker: number;
-  dictionary: string;
-}
-
-interface Advice {
-  code: "start" | "show" | "tilt" | "more";
-  region: string;
-  count: number;
-}
-
-interface SessionView {
-  id: string;
-  camera: string;
-  board: BoardSpec;
-  frames: { index: number; corners: number; tilt: string; error: number | null; outlier: boolean }[];
-  rejected: number;
-  min_frames: number;
-  coverage: {
-    rows: number;
-    columns: number;
-    cells: number[][];
-    covered: number;
-    tilts: Record<string, number>;
-    advice: Advice[];
-    ready: boolean;
-  };
-}
-
-interface FrameReport {
-  accepted: boolean;
-  index: number | null;
-  reason: string;
-  corners: number;
-  points: number[][];
-  tilt: string;
-}
-
-interface Calibration {
-  rms: number;
-  intrinsics: { fx: number; fy: number; cx: number; cy: number; distortion: number[] };
-  uncertainty: Record<string, number>;
-  frame_errors: number[];
-}
+export type BoardSpec = Schemas["BoardSpec"];
+type Advice = Schemas["Advice"];
+type SessionView = Schemas["IntrinsicSessionView"];
+type FrameReport = Schemas["FrameReport"];
+type Calibration = Schemas["CameraCalibration"];
 
 const DEFAULT_BOARD: BoardSpec = {
   kind: "charuco",
@@ -122,13 +80,13 @@ export class OpIntrinsicTab extends VisionStep {
 
   private async loadBoard(): Promise<void> {
     try {
-      const stored = await api<{ name: string; value: BoardSpec }[]>(
-        "GET",
-        "/api/variables?type=calibration_board",
-      );
+      const stored = await ok(client.GET("/api/variables",
+        { params: { query: { type: "calibration_board" } } }));
       const setting = stored.find((v) => v.name === "vision.board");
       // None stored yet: the usual board's numbers to start from.
-      if (setting && !this.edited) this.board = { ...DEFAULT_BOARD, ...setting.value };
+      if (setting && !this.edited) {
+        this.board = { ...DEFAULT_BOARD, ...(setting.value as Partial<BoardSpec>) };
+      }
     } catch (err) {
       this.error = errorText(err);
     }
@@ -144,12 +102,14 @@ export class OpIntrinsicTab extends VisionStep {
     return `/api/vision/intrinsic/${encodeURIComponent(this.view!.id)}`;
   }
 
+  private sessionId() {
+    return { params: { path: { session_id: this.view!.id } } };
+  }
+
   private start(): Promise<void> {
     return this.act(async () => {
-      this.view = await api<SessionView>("POST", "/api/vision/intrinsic", {
-        camera: this.camera,
-        board: this.board,
-      });
+      this.view = await ok(client.POST("/api/vision/intrinsic",
+        { body: { camera: this.camera, board: this.board } }));
       this.report = null;
       this.op = null;
       this.saved = "";
@@ -159,15 +119,16 @@ export class OpIntrinsicTab extends VisionStep {
 
   private capture(): Promise<void> {
     return this.act(async () => {
-      this.report = await api<FrameReport>("POST", `${this.path()}/capture`);
-      this.view = await api<SessionView>("GET", this.path());
+      this.report = await ok(client.POST("/api/vision/intrinsic/{session_id}/capture", this.sessionId()));
+      this.view = await ok(client.GET("/api/vision/intrinsic/{session_id}", this.sessionId()));
       this.showOverlay();
     });
   }
 
   private drop(index: number): Promise<void> {
     return this.act(async () => {
-      this.view = await api<SessionView>("DELETE", `${this.path()}/frames/${index}`);
+      this.view = await ok(client.DELETE("/api/vision/intrinsic/{session_id}/frames/{index}",
+        { params: { path: { session_id: this.view!.id, index } } }));
       this.report = null;
       this.showOverlay();
     });
@@ -176,10 +137,13 @@ export class OpIntrinsicTab extends VisionStep {
   private solve(): Promise<void> {
     return this.act(async () => {
       this.saved = "";
-      const started = await api<OperationStatus<Calibration>>("POST", `${this.path()}/solve`);
+      const started = asKind<Calibration>(
+        await ok(client.POST("/api/vision/intrinsic/{session_id}/solve", this.sessionId())));
       const id = this.view!.id;
       const ended = await follow(started, (s) => (this.op = s), () => this.view?.id === id);
-      if (ended.state === "done") this.view = await api<SessionView>("GET", this.path());
+      if (ended.state === "done") {
+        this.view = await ok(client.GET("/api/vision/intrinsic/{session_id}", this.sessionId()));
+      }
       this.showOverlay();
     });
   }

@@ -1,25 +1,28 @@
 import { html, type TemplateResult } from "lit";
-import { api } from "../api";
+import { client, ok, type Schemas } from "../api";
 import { t } from "../i18n";
 import { makes, request } from "../rights";
 
 // A long vision operation (a solve, a robot-origin run): followed until it ends, its
 // progress and stage shown with a Cancel button; what it found is stored only on Save.
 
-export interface OperationStatus<R = Record<string, unknown>> {
-  id: string;
-  kind: "intrinsic" | "extrinsic" | "robot_origin";
-  state: "running" | "done" | "failed" | "cancelled";
-  progress: number;
-  stage: string;
-  error: string;
+type Found = NonNullable<Schemas["OperationStatus"]["result"]>;
+
+/** An operation's status, `result` what its kind finds: a camera calibration (intrinsic), a
+ * camera's placement (extrinsic), a robot's base (robot_origin). */
+export type OperationStatus<R extends Found = Found> = Omit<Schemas["OperationStatus"], "result"> & {
   result: R | null;
+};
+
+/** An operation's status as the runtime sends it, read as its kind's (see OperationStatus). */
+export function asKind<R extends Found>(status: Schemas["OperationStatus"]): OperationStatus<R> {
+  return status as OperationStatus<R>;
 }
 
 const POLL_MS = 250;
 
 /** Calls `seen` with each status until the operation ends (or `wanted` says stop). */
-export async function follow<R>(
+export async function follow<R extends Found>(
   started: OperationStatus<R>,
   seen: (status: OperationStatus<R>) => void,
   wanted: () => boolean,
@@ -28,10 +31,8 @@ export async function follow<R>(
   seen(status);
   while (status.state === "running" && wanted()) {
     await new Promise((resolve) => window.setTimeout(resolve, POLL_MS));
-    status = await api<OperationStatus<R>>(
-      "GET",
-      `/api/vision/operations/${encodeURIComponent(status.id)}`,
-    );
+    status = asKind<R>(await ok(client.GET("/api/vision/operations/{op_id}",
+      { params: { path: { op_id: status.id } } })));
     if (!wanted()) break; // the step moved on while this was asked
     seen(status);
   }
@@ -39,7 +40,7 @@ export async function follow<R>(
 }
 
 export function cancelOperation(id: string): Promise<unknown> {
-  return api("POST", `/api/vision/operations/${encodeURIComponent(id)}/cancel`);
+  return ok(client.POST("/api/vision/operations/{op_id}/cancel", { params: { path: { op_id: id } } }));
 }
 
 /** On a control that saves what an operation found. */
@@ -48,16 +49,14 @@ export function savesOperation(id: string) {
 }
 
 export async function saveOperation(id: string): Promise<string[]> {
-  const saved = await api<{ saved: string[] }>(
-    "POST",
-    `/api/vision/operations/${encodeURIComponent(id)}/save`,
-  );
+  const saved = await ok(client.POST("/api/vision/operations/{op_id}/save",
+    { params: { path: { op_id: id } } }));
   return saved.saved;
 }
 
 /** The operation's progress bar, stage and Cancel, or how it ended. */
 export function operationView(
-  op: OperationStatus<unknown> | null,
+  op: OperationStatus | null,
   cancel: () => void,
 ): TemplateResult | string {
   if (op === null) return "";

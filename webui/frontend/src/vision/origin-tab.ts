@@ -1,16 +1,16 @@
 import { html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok, type Schemas } from "../api";
 import { control, leaseRequest } from "../control";
 import { t } from "../i18n";
 import { feed } from "../live";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
-import type { Pose } from "../types";
 import { lengthWithUnit } from "../units";
 import { DICTIONARIES } from "./intrinsic-tab";
 import { lengthField, numberField } from "./fields";
 import {
   type OperationStatus,
+  asKind,
   cancelOperation,
   follow,
   operationView,
@@ -25,22 +25,7 @@ import { visionStyles } from "./styles";
 // the camera, which finds the tag at each. The run moves the robot under this tablet's
 // control of it; Cancel stops it. Saved as `frames.<robot>`.
 
-interface OriginPose {
-  index: number;
-  seen: boolean;
-  reason: string;
-  residual_px: number | null;
-  residual_mm: number | null;
-  outlier: boolean;
-}
-
-interface OriginResult {
-  base: Pose;
-  moved_mm: number;
-  moved_deg: number;
-  rms_px: number;
-  poses: OriginPose[];
-}
+type OriginResult = Schemas["RobotOriginResult"];
 
 // The run going on, kept beyond this element: the panel is made anew each time it is shown,
 // and a run that moves the robot must still show its progress and Cancel when it is back.
@@ -127,12 +112,8 @@ export class OpOriginTab extends VisionStep {
         poses: this.poses,
         speed: this.speed / 100,
       };
-      const started = await api<OperationStatus<OriginResult>>(
-        "POST",
-        "/api/vision/robot_origin",
-        body,
-        token ? { "X-Lease-Token": token } : {},
-      );
+      const started = asKind<OriginResult>(await ok(client.POST("/api/vision/robot_origin",
+        { params: { header: { "X-Lease-Token": token } }, body })));
       await this.watch(started);
     });
   }

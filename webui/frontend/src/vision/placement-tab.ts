@@ -1,14 +1,14 @@
 import { html } from "lit";
-import { api, errorText } from "../api";
+import { client, errorText, ok, type Schemas } from "../api";
 import { t } from "../i18n";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
-import type { Pose } from "../types";
 import { lengthWithUnit } from "../units";
 import { lengthField, numberField } from "./fields";
 import {
   type OperationStatus,
+  asKind,
   cancelOperation,
   follow,
   operationView,
@@ -22,18 +22,7 @@ import { visionStyles } from "./styles";
 // (the board's first corner and its turn; face up on the table is roll 180°) or a stored
 // frame or pose. Saved as `frames.<camera>`.
 
-interface Placement {
-  pose: Pose;
-  frames: number;
-  reprojection: number;
-  spread_mm: number;
-  spread_deg: number;
-}
-
-interface Stored {
-  name: string;
-  type: string;
-}
+type Placement = Schemas["ExtrinsicResult"];
 
 export class OpPlacementTab extends VisionStep {
   static properties = {
@@ -81,7 +70,7 @@ export class OpPlacementTab extends VisionStep {
 
   private async loadVariables(): Promise<void> {
     try {
-      const all = await api<Stored[]>("GET", "/api/variables");
+      const all = await ok(client.GET("/api/variables"));
       this.variables = all
         .filter((v) => (v.type === "frame" || v.type === "pose") && !v.name.startsWith("frames."))
         .map((v) => v.name)
@@ -95,10 +84,11 @@ export class OpPlacementTab extends VisionStep {
     return this.act(async () => {
       this.saved = "";
       const p = this.typed;
-      const body: Record<string, unknown> = { camera: this.camera, frames: this.frames };
+      const body: Schemas["ExtrinsicRequest"] = { camera: this.camera, frames: this.frames };
       if (this.variable) body.board_variable = this.variable;
       else body.board_pose = { position: [p.x, p.y, p.z], orientation: rpyToQuaternion(p.roll, p.pitch, p.yaw) };
-      const started = await api<OperationStatus<Placement>>("POST", "/api/vision/extrinsic", body);
+      const started = asKind<Placement>(
+        await ok(client.POST("/api/vision/extrinsic", { body })));
       const camera = this.camera;
       await follow(started, (s) => (this.op = s), () => this.camera === camera && this.isConnected);
     });

@@ -1,5 +1,5 @@
 import { html } from "lit";
-import { api } from "../api";
+import { client, ok } from "../api";
 import { t } from "../i18n";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
@@ -56,12 +56,12 @@ export class OpTemplateTab extends VisionStep {
   private teach(): Promise<void> {
     return this.act(async () => {
       if (!NAME.test(this.name)) throw new Error(t("vision.template.bad_name"));
-      await api("PUT", `/api/vision/detectors/${encodeURIComponent(this.name)}/template`, {
-        camera: this.camera,
-        box: this.box,
-        label: this.label.trim() || "part",
-        height: this.height,
-      });
+      const box = this.box;
+      if (!box) throw new Error(t("vision.template.draw"));
+      await ok(client.PUT("/api/vision/detectors/{name}/template", {
+        params: { path: { name: this.name } },
+        body: { camera: this.camera, box, label: this.label.trim() || "part", height: this.height },
+      }));
       this.taught = this.name;
       this.found = null;
     });
