@@ -251,10 +251,39 @@ KILLS = 50  # the issue's count
 MOTION = ("trajectory", "jog", "command_mode:trajectory", "command_mode:jog")
 
 
-def move_ends(cell: Cell, timeout: float = 10.0) -> None:
-    """Returns as a trajectory the robot was running has ended."""
-    wait_for(lambda: cell.robot.state()["flags"]["trajectory_running"], timeout, 0.005)
-    wait_for(lambda: not cell.robot.state()["flags"]["trajectory_running"], timeout, 0.005)
+# A move is refused on a link whose states stopped for 200 ms (the product's rule). On this
+# 2-core machine, under load, a state stream once stalled that long as a run began (its
+# error: "robot is stale: stale: no state for 200 ms"), and the run ended before it moved.
+# Such a run is started again once every service is up, and counted.
+STALLED = ("link_stale", "device_disconnected")
+
+
+def run_until_a_move_ends(cell: Cell, kill_no: int, again: list[int]) -> None:
+    body = {"leases": {"robot": cell.token}, "robot": "robot"}
+    asked = [0.0]
+
+    def moving_or_ended() -> str | dict[str, Any] | None:
+        if cell.robot.state()["flags"]["trajectory_running"]:
+            return "moving"
+        if time.monotonic() - asked[0] < 0.1:  # the run's status, not at every poll
+            return None
+        asked[0] = time.monotonic()
+        status: dict[str, Any] = cell.runtime.api("GET", "/programs/to_and_fro/status").json()
+        return status if status["state"] in ("error", "stopped", "finished") else None
+
+    for _ in range(3):
+        wait_for(lambda: healthy(cell), 30, what="every service up")
+        started = cell.runtime.api("POST", "/programs/to_and_fro/run", json=body)
+        assert started.status_code == 202, started.text
+        found = wait_for(moving_or_ended, 10, 0.005, what=f"kill {kill_no}: a move or the end")
+        if found == "moving":
+            wait_for(lambda: not cell.robot.state()["flags"]["trajectory_running"], 10, 0.005)
+            return
+        assert isinstance(found, dict)
+        code = (found.get("error") or {}).get("code")
+        assert code in STALLED, f"kill {kill_no}: the run ended before it moved: {found}"
+        again.append(kill_no)
+    raise AssertionError(f"kill {kill_no}: three runs ended on a stalled link before moving")
 
 
 def halt_since(cell: Cell, seq: int) -> dict[str, Any]:
@@ -277,16 +306,9 @@ def test_a_killed_program_service_never_has_its_next_move_run(ready: Cell) -> No
     assert saved.status_code == 200, saved.text
     rng = random.Random(31)
     delays = []
+    again: list[int] = []
     for kill_no in range(KILLS):
-        wait_for(lambda: healthy(ready), 30, what="every service up")
-        body = {"leases": {"robot": ready.token}, "robot": "robot"}
-        started = ready.runtime.api("POST", "/programs/to_and_fro/run", json=body)
-        assert started.status_code == 202, started.text
-        try:
-            move_ends(ready)
-        except TimeoutError:
-            status = ready.runtime.api("GET", "/programs/to_and_fro/status").json()
-            raise AssertionError(f"kill {kill_no}: no move ended; the run: {status}") from None
+        run_until_a_move_ends(ready, kill_no, again)
         delay = rng.uniform(0.0, 0.4)
         time.sleep(delay)
         delays.append(delay)
@@ -298,3 +320,4 @@ def test_a_killed_program_service_never_has_its_next_move_run(ready: Cell) -> No
         after = [c for c in ready.robot.commands(halt["seq"]) if c["type"] in MOTION]
         assert after == [], f"kill {kill_no} after {delay:.3f} s: {after} after {halt}"
     print(f"{KILLS} kills, {min(delays):.3f}-{max(delays):.3f} s after a move ended")
+    print(f"runs started again after a stalled link, before kill: {again}")
