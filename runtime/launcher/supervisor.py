@@ -20,6 +20,7 @@ import traceback
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import NoReturn
 
 log = logging.getLogger(__name__)
 
@@ -98,24 +99,44 @@ def fork_child(
     if pid:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
         return Forked(pid)
-    code = 1
     try:
         for signum in TERMINATING:
             signal.signal(signum, signal.SIG_DFL)
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
-        _die_with_parent()
         _name_process(name)
         out = os.open(log_path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
         nothing = os.open(os.devnull, os.O_RDONLY)
-        os.dup2(nothing, 0)
-        os.dup2(out, 1)
-        os.dup2(out, 2)
+    except BaseException:
+        traceback.print_exc()
+        os._exit(1)
+    become(main, argv, env, (nothing, out, out), keep)
+
+
+def become(
+    main: Main,
+    argv: list[str],
+    env: dict[str, str],
+    stdio: tuple[int, int, int],
+    keep: tuple[int, ...] = (),
+    prepare: Callable[[], None] | None = None,
+) -> NoReturn:
+    """In a forked child: run `main(argv)` as `python -m openpendant.runtime.cli` would, with
+    `env` as its environment, `stdio` as its standard streams and of the other descriptors
+    only `keep` open (`prepare` runs just before `main`). Never returns: the child ends here,
+    whatever happened, never back in its parent's code (the launcher's, the tests' zygote)."""
+    code = 1
+    try:
+        _die_with_parent()
+        for fd, target in zip(stdio, (0, 1, 2), strict=True):
+            os.dup2(fd, target)
         for fd in _open_fds():
             if fd > 2 and fd not in keep:
                 with contextlib.suppress(OSError):  # the listing's own, closed already
                     os.close(fd)
         os.environ.clear()
         os.environ.update(env)
+        if prepare is not None:
+            prepare()
         sys.argv = ["openpendant.runtime.cli", *argv]
         code = main(argv)
     except SystemExit as exc:
@@ -123,12 +144,10 @@ def fork_child(
     except BaseException:
         traceback.print_exc()
     finally:
-        # Never back into the launcher's own code: the child ends here, whatever happened.
         for stream in (sys.stdout, sys.stderr):
             with contextlib.suppress(BaseException):
                 stream.flush()
         os._exit(code)
-    raise AssertionError("unreachable")
 
 
 def _open_fds() -> list[int]:

@@ -26,9 +26,9 @@ import tempfile
 import threading
 import traceback
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, NoReturn
 
-from openpendant.runtime.launcher.supervisor import _die_with_parent, _open_fds
+from openpendant.runtime.launcher.supervisor import become
 
 ENV = "OPENPENDANT_TEST_ZYGOTE"  # "1": the harness starts `openpendant` commands from one
 MAX_REQUEST = 1 << 20
@@ -58,36 +58,22 @@ def preload() -> None:
     gc.freeze()
 
 
-def _child(request: dict[str, Any], fds: list[int]) -> None:
+def _child(request: dict[str, Any], fds: list[int]) -> NoReturn:
     """In the forked child: become the requested command, never return."""
-    code = 1
     try:
-        _die_with_parent()
-        for fd, target in zip(fds, (0, 1, 2), strict=True):
-            os.dup2(fd, target)
-        for fd in _open_fds():
-            if fd > 2:
-                with contextlib.suppress(OSError):
-                    os.close(fd)
+        from openpendant.runtime.cli import main
+    except BaseException:
+        traceback.print_exc()
+        os._exit(1)
+
+    def prepare() -> None:
         os.chdir(request["cwd"])
-        os.environ.clear()
-        os.environ.update(request["env"])
         if request["nice"]:
             os.nice(request["nice"])
         _forget_what_was_computed()
-        from openpendant.runtime.cli import main
 
-        sys.argv = [CLI, *request["args"]]
-        code = main(request["args"])
-    except SystemExit as exc:
-        code = 0 if exc.code is None else exc.code if isinstance(exc.code, int) else 1
-    except BaseException:
-        traceback.print_exc()
-    finally:
-        for stream in (sys.stdout, sys.stderr):
-            with contextlib.suppress(BaseException):
-                stream.flush()
-        os._exit(code)
+    stdio = (fds[0], fds[1], fds[2])
+    become(main, request["args"], request["env"], stdio, prepare=prepare)
 
 
 def _forget_what_was_computed() -> None:
