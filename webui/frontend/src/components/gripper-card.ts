@@ -2,6 +2,7 @@ import { LitElement, css, html } from "lit";
 import { client, errorText, ok } from "../api";
 import { control, leaseRequest } from "../control";
 import { t } from "../i18n";
+import { Listening } from "../listening";
 import { FeedController, feed } from "../live";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
@@ -63,19 +64,10 @@ export class OpGripperCard extends LitElement {
 
   constructor() {
     super();
+    new Listening(this, control, "change", this.onControl);
     new FeedController(this);
     this.busy = "";
     this.error = "";
-  }
-
-  connectedCallback(): void {
-    super.connectedCallback();
-    control.addEventListener("change", this.onControl);
-  }
-
-  disconnectedCallback(): void {
-    super.disconnectedCallback();
-    control.removeEventListener("change", this.onControl);
   }
 
   private async run(name: string, work: () => Promise<unknown>): Promise<void> {

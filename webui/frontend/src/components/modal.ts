@@ -1,4 +1,5 @@
 import { LitElement, css, html } from "lit";
+import { Listening } from "../listening";
 import { shared } from "../styles";
 
 // A modal sheet: large, centred on a tablet, full-width on a phone. Escape or the backdrop closes it.
@@ -36,6 +37,7 @@ export class OpModal extends LitElement {
 
   constructor() {
     super();
+    new Listening(this, window, "keydown", this.onKey as EventListener);
     this.heading = "";
   }
 
@@ -43,15 +45,6 @@ export class OpModal extends LitElement {
     if (e.key === "Escape") this.close();
   };
 
-  connectedCallback(): void {
-    super.connectedCallback();
-    window.addEventListener("keydown", this.onKey);
-  }
-
-  disconnectedCallback(): void {
-    window.removeEventListener("keydown", this.onKey);
-    super.disconnectedCallback();
-  }
 
   private close() {
     this.dispatchEvent(new CustomEvent("close", { bubbles: true, composed: true }));

@@ -2,6 +2,7 @@ import { LitElement, css, html } from "lit";
 import { client, ok, type Schemas } from "../api";
 import { FocusController, focus } from "../focus";
 import { t } from "../i18n";
+import { Listening } from "../listening";
 import { FeedController, feed } from "../live";
 import { robotBases } from "../robot-bases";
 import { shared } from "../styles";
@@ -109,6 +110,7 @@ export class OpRobotView extends LitElement {
 
   constructor() {
     super();
+    new Listening(this, robotBases, "change", this.basesChanged);
     new FeedController(this);
     new FocusController(this);
     this.model = null;
@@ -123,7 +125,6 @@ export class OpRobotView extends LitElement {
   connectedCallback(): void {
     super.connectedCallback();
     this.stopBases = robotBases.use();
-    robotBases.addEventListener("change", this.basesChanged);
   }
 
   disconnectedCallback(): void {
@@ -139,7 +140,6 @@ export class OpRobotView extends LitElement {
     this.shownJoints.clear();
     this.shownBases.clear();
     this.readyFor = null;
-    robotBases.removeEventListener("change", this.basesChanged);
     this.stopBases?.();
     this.stopBases = null;
     super.disconnectedCallback();

@@ -2,6 +2,7 @@ import { LitElement, css, html } from "lit";
 import { client, errorText, ok } from "../api";
 import { control } from "../control";
 import { type StringKey, t } from "../i18n";
+import { Listening } from "../listening";
 import { quaternionToRpy, rpyToQuaternion } from "../math";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
@@ -117,6 +118,7 @@ export class OpToolCard extends LitElement {
 
   constructor() {
     super();
+    new Listening(this, control, "change", this.onControl);
     this.robot = "";
     this.draft = null;
     this.rated = null;
@@ -124,13 +126,7 @@ export class OpToolCard extends LitElement {
     this.saved = "";
   }
 
-  connectedCallback(): void {
-    super.connectedCallback();
-    control.addEventListener("change", this.onControl);
-  }
-
   disconnectedCallback(): void {
-    control.removeEventListener("change", this.onControl);
     this.loaded = "";
     super.disconnectedCallback();
   }

@@ -2,6 +2,7 @@ import { LitElement, css, html } from "lit";
 import { client, errorText, ok } from "../api";
 import { control, leaseRequest } from "../control";
 import { t } from "../i18n";
+import { Listening } from "../listening";
 import { FeedController, feed } from "../live";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
@@ -118,19 +119,10 @@ export class OpIoPanel extends LitElement {
 
   constructor() {
     super();
+    new Listening(this, control, "change", this.onControl);
     new FeedController(this);
     this.signals = new Map();
     this.error = "";
-  }
-
-  connectedCallback(): void {
-    super.connectedCallback();
-    control.addEventListener("change", this.onControl);
-  }
-
-  disconnectedCallback(): void {
-    super.disconnectedCallback();
-    control.removeEventListener("change", this.onControl);
   }
 
   private blocks(): AddedDevice[] {

@@ -5,6 +5,7 @@ import { FocusController, focus } from "../focus";
 import { t } from "../i18n";
 import { worded } from "../i18n/words";
 import type { JogMessage } from "../jog-socket";
+import { Listening } from "../listening";
 import { FeedController, feed } from "../live";
 import { makes, request } from "../rights";
 import { RobotLoader } from "../robot-loader";
@@ -107,6 +108,7 @@ export class OpJogPanel extends LitElement {
 
   constructor() {
     super();
+    new Listening(this, control, "change", this.onControl);
     new FeedController(this);
     new FocusController(this);
     new RobotLoader(this, (robot) => this.loadRobot(robot));
@@ -118,16 +120,6 @@ export class OpJogPanel extends LitElement {
     this.waypoints = [];
     this.selected = "";
     this.dialog = null;
-  }
-
-  connectedCallback(): void {
-    super.connectedCallback();
-    control.addEventListener("change", this.onControl);
-  }
-
-  disconnectedCallback(): void {
-    control.removeEventListener("change", this.onControl);
-    super.disconnectedCallback();
   }
 
   // Robot selection and its model --------------------------------------------------------------

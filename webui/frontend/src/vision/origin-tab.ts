@@ -2,6 +2,7 @@ import { html } from "lit";
 import { client, errorText, ok, type Schemas } from "../api";
 import { control, leaseRequest } from "../control";
 import { t } from "../i18n";
+import { Listening } from "../listening";
 import { feed } from "../live";
 import { makes, request } from "../rights";
 import { shared } from "../styles";
@@ -63,6 +64,7 @@ export class OpOriginTab extends VisionStep {
 
   constructor() {
     super();
+    new Listening(this, control, "change", this.onControl);
     this.camera = "";
     this.robot = "";
     this.region = { centre: [0.4, 0, 0.4], size: [0.3, 0.3, 0.2], tilt: 30, spin: 60 };
@@ -75,7 +77,6 @@ export class OpOriginTab extends VisionStep {
 
   connectedCallback(): void {
     super.connectedCallback();
-    control.addEventListener("change", this.onControl);
     if (running !== null && this.op === null) void this.watch(running);
   }
 
@@ -89,11 +90,6 @@ export class OpOriginTab extends VisionStep {
       () => this.isConnected,
     );
     if (ended.state !== "running") running = null;
-  }
-
-  disconnectedCallback(): void {
-    super.disconnectedCallback();
-    control.removeEventListener("change", this.onControl);
   }
 
   private robots(): string[] {
