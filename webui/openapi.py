@@ -5,7 +5,6 @@ it (`make ui`: openapi-typescript), and `openpendant openapi` prints it for othe
 
 from __future__ import annotations
 
-import copy
 import json
 import tempfile
 import warnings
@@ -106,14 +105,19 @@ def _add(schemas: dict[str, Any], name: str, schema: dict[str, Any], source: str
     schemas.setdefault(name, schema)
 
 
-def _without_text(schema: Any) -> Any:
+def _without_text(schema: Any, names: bool = False) -> Any:
     """A schema without what does not change its type: titles, descriptions (one service
-    may word them otherwise) and defaults (FastAPI leaves some out of an answer's schema)."""
+    may word them otherwise) and defaults (FastAPI leaves some out of an answer's schema).
+    `names`: a map of field names to schemas (a field may be called "title")."""
     if isinstance(schema, dict):
-        return {k: _without_text(v) for k, v in schema.items() if k not in NOT_TYPE}
+        return {
+            k: _without_text(v, k in ("properties", "$defs"))
+            for k, v in schema.items()
+            if names or k not in NOT_TYPE
+        }
     if isinstance(schema, list):
         return [_without_text(v) for v in schema]
-    return copy.copy(schema)
+    return schema
 
 
 def write(out: Path | None) -> None:

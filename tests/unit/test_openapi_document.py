@@ -90,6 +90,11 @@ def test_two_models_of_one_name_are_refused() -> None:
     openapi._add(schemas, "Pose", {"type": "object", "title": "A pose"}, "jog")  # words only
     with pytest.raises(SchemaConflict, match="'Pose'"):
         openapi._add(schemas, "Pose", {"type": "array"}, "vision")
+    # A field called "description" is a field, not a model's description.
+    info = {"type": "object", "properties": {"description": {"type": "string"}}}
+    openapi._add(schemas, "Info", info, "motion")
+    with pytest.raises(SchemaConflict, match="'Info'"):
+        openapi._add(schemas, "Info", {"type": "object", "properties": {}}, "jog")
 
 
 def test_the_ui_calls_the_api_only_through_its_generated_client() -> None:
