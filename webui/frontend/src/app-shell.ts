@@ -1,6 +1,7 @@
 import { LitElement, css, html } from "lit";
 import { t } from "./i18n";
 import { ApiError, client, ok } from "./api";
+import { Listening } from "./listening";
 import { feed } from "./live";
 import { ADMIN_PANELS, panels } from "./panels/registry";
 import { plugins } from "./plugins";
@@ -124,6 +125,9 @@ export class OpApp extends LitElement {
 
   constructor() {
     super();
+    new Listening(this, window, "hashchange", this.onHash);
+    new Listening(this, plugins, "change", this.onPlugins);
+    new Listening(this, session, "change", this.onSession);
     this.panel = panelFromHash();
   }
 
@@ -148,9 +152,6 @@ export class OpApp extends LitElement {
 
   connectedCallback(): void {
     super.connectedCallback();
-    window.addEventListener("hashchange", this.onHash);
-    plugins.addEventListener("change", this.onPlugins);
-    session.addEventListener("change", this.onSession);
     void this.resume();
   }
 
@@ -170,9 +171,6 @@ export class OpApp extends LitElement {
   }
 
   disconnectedCallback(): void {
-    window.removeEventListener("hashchange", this.onHash);
-    plugins.removeEventListener("change", this.onPlugins);
-    session.removeEventListener("change", this.onSession);
     window.clearTimeout(this.retry);
     super.disconnectedCallback();
   }

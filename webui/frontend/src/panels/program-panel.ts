@@ -2,6 +2,7 @@ import { LitElement, css, html, nothing } from "lit";
 import { client, errorText, ok } from "../api";
 import { FocusController, focus } from "../focus";
 import { t } from "../i18n";
+import { Listening } from "../listening";
 import { FeedController, feed } from "../live";
 import { shared } from "../styles";
 import { RobotLoader } from "../robot-loader";
@@ -112,6 +113,7 @@ export class OpProgramPanel extends LitElement {
 
   constructor() {
     super();
+    new Listening(this, window, "beforeunload", this.onUnload as EventListener);
     this.loading = true;
     this.busy = false;
     this.notice = "";
@@ -133,12 +135,10 @@ export class OpProgramPanel extends LitElement {
   connectedCallback(): void {
     super.connectedCallback();
     waypointFeed.start();
-    window.addEventListener("beforeunload", this.onUnload);
   }
 
   disconnectedCallback(): void {
     waypointFeed.stop();
-    window.removeEventListener("beforeunload", this.onUnload);
     super.disconnectedCallback(); // the document keeps what is on the editor
   }
 
