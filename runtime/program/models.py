@@ -8,6 +8,7 @@ from typing import Any, Literal
 from pydantic import BaseModel, Field
 
 from openpendant.runtime.interfaces.common import Strict
+from openpendant.runtime.kit.bodies import described_body
 from openpendant.runtime.kit.errors import InvalidValue
 from openpendant.runtime.kit.words import Words, words
 
@@ -137,9 +138,4 @@ class BlockCatalog(BaseModel):
 
 
 # The body of PUT /programs/{name} and POST /programs/_generate, for the API's document.
-SOURCE_BODY = {
-    "requestBody": {
-        "required": True,
-        "content": {"application/json": {"schema": ProgramSource.model_json_schema()}},
-    }
-}
+SOURCE_BODY = described_body("application/json", ProgramSource.model_json_schema())

@@ -14,6 +14,7 @@ from pydantic import BaseModel, Field
 from openpendant.runtime.interfaces.common import Strict
 from openpendant.runtime.interfaces.variables import Variable
 from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.bodies import YAML_TEXT
 from openpendant.runtime.kit.errors import InvalidValue
 from openpendant.runtime.kit.settings import RuntimeSettings
 from openpendant.runtime.kit.websocket import Fanout
@@ -37,15 +38,6 @@ class PutVariable(Strict):
 
 class Imported(BaseModel):
     imported: int  # variables written
-
-
-# The body of POST /variables/_import (an export's YAML), read by the route itself.
-YAML_BODY = {
-    "requestBody": {
-        "required": True,
-        "content": {"application/x-yaml": {"schema": {"type": "string"}}},
-    }
-}
 
 
 class RenameVariable(Strict):
@@ -88,7 +80,7 @@ def variables_router(store: VariableStore, changes: Fanout) -> APIRouter:
             headers={"Content-Disposition": 'attachment; filename="openpendant-variables.yaml"'},
         )
 
-    @router.post("/_import", openapi_extra=YAML_BODY)
+    @router.post("/_import", openapi_extra=YAML_TEXT)
     async def import_variables(request: Request) -> Imported:
         raw = await request.body()
         if len(raw) > MAX_IMPORT_BYTES:

@@ -14,6 +14,7 @@ from fastapi.responses import PlainTextResponse
 from openpendant.runtime.clients.devices import Devices
 from openpendant.runtime.interfaces.detector import DetectRequest
 from openpendant.runtime.kit.app import create_app
+from openpendant.runtime.kit.bodies import YAML_TEXT
 from openpendant.runtime.kit.errors import InvalidValue
 from openpendant.runtime.kit.settings import RuntimeSettings
 from openpendant.runtime.motion.client import MotionClient
@@ -41,13 +42,6 @@ from openpendant.runtime.vision.origin_run import OriginRun
 
 LeaseToken = Annotated[str | None, Header(alias="X-Lease-Token", max_length=64)]
 CAMERA = re.compile(r"^[a-z][a-z0-9_]{0,31}\Z")
-# The body of PUT .../calibration.yaml, read by the route itself, for the API's document.
-YAML_BODY = {
-    "requestBody": {
-        "required": True,
-        "content": {"application/x-yaml": {"schema": {"type": "string"}}},
-    }
-}
 
 
 def _camera(name: str) -> str:
@@ -158,7 +152,7 @@ def vision_router(
             headers={"Content-Disposition": f'attachment; filename="{camera}.yaml"'},
         )
 
-    @router.put("/cameras/{camera}/calibration.yaml", openapi_extra=YAML_BODY)
+    @router.put("/cameras/{camera}/calibration.yaml", openapi_extra=YAML_TEXT)
     async def import_(camera: str, request: Request) -> CameraCalibration:
         """An OpenCV YAML calibration (another tool's, or one exported before) as this
         camera's."""
