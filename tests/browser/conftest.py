@@ -164,6 +164,14 @@ class PageErrors:
         if message.type == "error":
             self.errors.append(message.text)
 
+    def only_refusals(self) -> bool:
+        """Whether every error is the server refusing a request or a socket (401 or 403)."""
+        return all(any(word in e for word in REFUSALS) for e in self.errors)
+
+
+# Chromium words a socket handshake answered 401 without the number.
+REFUSALS = ("401", "403", "HTTP Authentication failed")
+
 
 @pytest.fixture
 def artifacts(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
