@@ -98,16 +98,24 @@ Listener = Callable[[], None]
 Process = asyncio.subprocess.Process
 
 
+# All a worker is given of the runtime's environment: where Python finds packages and how it
+# runs. Never the rest: it holds the runtime's internal token, the first start's set-up code
+# and device secrets, which one escape from the interpreter would otherwise hand over.
+WORKER_PASSES = ("PYTHONPATH", "PYTHONDONTWRITEBYTECODE", "PYTHONSAFEPATH", "LANG", "LC_ALL", "TZ")
+
+
 @cache
 def worker_env() -> dict[str, str]:
-    """The worker's environment: this one, and the plugins' sandbox functions named, so the
-    worker imports just those instead of reading every installed package's entry points."""
+    """The worker's environment, built from nothing: the variables above, and the plugins'
+    sandbox functions named, so the worker imports just those instead of reading every
+    installed package's entry points."""
     functions = {
         name: reference
         for block in registry().blocks.values()
         for name, reference in block.functions.items()
     }
-    return {**os.environ, FUNCTIONS_ENV: json.dumps(functions)}
+    passed = {name: os.environ[name] for name in WORKER_PASSES if name in os.environ}
+    return {"PATH": os.defpath, **passed, FUNCTIONS_ENV: json.dumps(functions)}
 
 
 async def spawn_worker(limits: str) -> Process:

@@ -8,7 +8,19 @@ import asyncio
 import os
 from pathlib import Path
 
-from openpendant.sandbox.supervisor import REFILL_DELAY, WorkerPool
+import pytest
+
+from openpendant.runtime.auth.setup import SETUP_CODE_ENV
+from openpendant.runtime.drivers.run import SECRET_ENV
+from openpendant.runtime.kit.internal import ENV as INTERNAL_ENV
+from openpendant.sandbox.protocol import FUNCTIONS_ENV
+from openpendant.sandbox.supervisor import (
+    REFILL_DELAY,
+    WORKER_PASSES,
+    WorkerPool,
+    spawn_worker,
+    worker_env,
+)
 
 LIMITS = '{"cpu_seconds": 60, "memory_mb": 256}'
 
@@ -28,6 +40,10 @@ def workers() -> set[int]:
         if parent == os.getpid() and b"sandbox.worker" in command:
             found.add(int(entry.name))
     return found
+
+
+def environ_of(pid: int) -> bytes:
+    return Path(f"/proc/{pid}/environ").read_bytes()
 
 
 async def settle(pool: WorkerPool, taken: list[int]) -> set[int]:
@@ -72,3 +88,37 @@ def test_closing_with_a_refill_pending_leaves_no_worker() -> None:
         await second.wait()
 
     asyncio.run(go())
+
+
+def test_a_worker_is_given_none_of_the_runtimes_secrets(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A worker's environment is built from nothing: the internal token that opens every
+    service, the set-up code and a device's secret are not in it, only where Python finds its
+    packages and the plugins' sandbox functions."""
+    secrets = {
+        INTERNAL_ENV: "internal-token-value",
+        SETUP_CODE_ENV: "set-up-code-value",
+        SECRET_ENV: "device-secret-value",
+        "OPENPENDANT_DATA_DIR": "/somewhere",
+    }
+    for name, value in secrets.items():
+        monkeypatch.setenv(name, value)
+    monkeypatch.setenv("PYTHONPATH", "/plugins/here")
+    worker_env.cache_clear()
+
+    async def go() -> bytes:
+        process = await spawn_worker(LIMITS)
+        try:
+            return environ_of(process.pid)
+        finally:
+            process.kill()
+            await process.wait()
+
+    try:
+        given = dict(
+            entry.split("=", 1) for entry in asyncio.run(go()).decode().split("\0") if entry
+        )
+    finally:
+        worker_env.cache_clear()
+    assert set(given) <= {"PATH", FUNCTIONS_ENV, *WORKER_PASSES}
+    assert given["PYTHONPATH"] == "/plugins/here"
+    assert not any(value in given.values() for value in secrets.values())
