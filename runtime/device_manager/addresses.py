@@ -80,7 +80,8 @@ def halt_route(kind: str) -> tuple[str, str] | None:
 async def halt_at(url: str, route: tuple[str, str], secret: str | None, device: str) -> None:
     """One halt, signed, to the device at `url` (outside any session)."""
     method, path = route
-    auth = DeviceAuth(secret) if secret else None
+    # A halt is good for whichever process of the driver answers: signed for its boot id.
+    auth = DeviceAuth(secret, follow_restarts=True) if secret else None
     try:
         async with httpx.AsyncClient(
             base_url=url, timeout=HALT_TIMEOUT, auth=auth, trust_env=False

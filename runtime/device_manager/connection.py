@@ -36,7 +36,7 @@ from openpendant.runtime.device_manager.tools import send_tool_setup
 from openpendant.runtime.interfaces.endpoints import endpoints
 from openpendant.runtime.interfaces.robot import Robot
 from openpendant.runtime.interfaces.variables import DeviceRecord
-from openpendant.runtime.kit.device_auth import HEADER, DeviceAuth, sign
+from openpendant.runtime.kit.device_auth import HEADER, DeviceAuth
 from openpendant.runtime.kit.discovery import clean_text
 from openpendant.runtime.kit.errors import OpenPendantError, Unavailable
 from openpendant.runtime.kit.settings import LinkSettings
@@ -109,6 +109,7 @@ class DeviceConnection:
     ) -> None:
         self.record = record
         self._secret = secret  # the device's pairing secret, read at each session's start
+        self._auth: DeviceAuth | None = None  # the session's signer
         self.timing = timing or LinkSettings()
         self.status: ConnectionStatus = "connecting"
         self.last_error = ""
@@ -262,7 +263,7 @@ class DeviceConnection:
                 words=link_words(self.name, self.status),
             )
         return await self._open(
-            self.record.url, path, self._secret(), query=query, max_size=MAX_STREAMED
+            self.record.url, path, self._auth, query=query, max_size=MAX_STREAMED
         )
 
     def _require(self, generation: int) -> None:
@@ -320,7 +321,9 @@ class DeviceConnection:
         state_ws: ClientConnection | None = None
         command_ws: ClientConnection | None = None
         secret = self._secret()
+        # Bound to the driver process that answers its first request (GET /info).
         auth = DeviceAuth(secret) if secret else None
+        self._auth = auth
         http = httpx.AsyncClient(base_url=url, timeout=CONNECT_TIMEOUT, auth=auth)
         try:
             try:
@@ -330,7 +333,7 @@ class DeviceConnection:
                         info = await self._apply_tool(http, info)
                     state_ws = await self._open(url, "/state/ws", None)
                     if has_session(self.record.kind):
-                        command_ws = await self._open(url, "/command/ws", secret)
+                        command_ws = await self._open(url, "/command/ws", auth)
                         timeout = self.timing.driver_timeout
                         await command_ws.send(json.dumps({"type": "session", "timeout": timeout}))
                     first = await state_ws.recv()
@@ -547,12 +550,12 @@ class DeviceConnection:
         self,
         url: str,
         path: str,
-        secret: str | None,
+        auth: DeviceAuth | None,
         query: str = "",
         max_size: int = MAX_STATE,
     ) -> ClientConnection:
         ws_url = url.replace("http://", "ws://", 1).replace("https://", "wss://", 1)
-        headers = {HEADER: sign(secret, "GET", path)} if secret else {}
+        headers = {HEADER: auth.header("GET", path)} if auth else {}
         return await websockets.connect(
             ws_url + path + (f"?{query}" if query else ""),
             open_timeout=CONNECT_TIMEOUT,

@@ -2,16 +2,25 @@
 request that changes something and every socket but the state stream must be signed with
 the device's secret. What it is and how it is (info, state, the command log) stays readable.
 Its proof of pairing covers the address the challenge reached it at: passed on by another
-host, it proves nothing for that host's address."""
+host, it proves nothing for that host's address. Every answer names this process's boot id,
+for which signatures are made: one made before a restart is refused after it."""
 
 from __future__ import annotations
 
 from urllib.parse import parse_qs
 
 from starlette.responses import JSONResponse
-from starlette.types import ASGIApp, Receive, Scope, Send
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from openpendant.runtime.kit.device_auth import HEADER, PROOF_PATH, Verifier, address_text, proof
+from openpendant.runtime.kit.device_auth import (
+    BOOT_HEADER,
+    HEADER,
+    PROOF_PATH,
+    Verifier,
+    address_text,
+    new_boot,
+    proof,
+)
 from openpendant.runtime.kit.service_guard import refuse
 
 OPEN_SOCKETS = frozenset({"/state/ws"})
@@ -20,6 +29,10 @@ OPEN_SOCKETS = frozenset({"/state/ws"})
 # does, not what the runtime commands. A real driver has none.
 WORLD_PREFIXES = ("/sim/", "/replay/")
 READS = frozenset({"GET", "HEAD"})
+# A signed request's body is read whole to check its digest: no command is near this size.
+MAX_SIGNED_BODY = 32 * 1024 * 1024
+# Messages that open an answer, to which the boot id is added.
+ANSWERS = frozenset({"http.response.start", "websocket.http.response.start", "websocket.accept"})
 
 
 def _header(scope: Scope) -> str | None:
@@ -30,13 +43,52 @@ def _header(scope: Scope) -> str | None:
     return None
 
 
+async def read_body(receive: Receive) -> bytes | None:
+    """A request's whole body; None if the client left or it is too long to be a command."""
+    body = bytearray()
+    while True:
+        message = await receive()
+        if message["type"] != "http.request":
+            return None
+        body += message.get("body", b"")
+        if len(body) > MAX_SIGNED_BODY:
+            return None
+        if not message.get("more_body", False):
+            return bytes(body)
+
+
+def replaying(body: bytes, receive: Receive) -> Receive:
+    """`receive` for an app after the body has been read: the body, then what follows."""
+    given = False
+
+    async def again() -> Message:
+        nonlocal given
+        if not given:
+            given = True
+            return {"type": "http.request", "body": body, "more_body": False}
+        return await receive()
+
+    return again
+
+
 class CommandGuard:
     def __init__(self, app: ASGIApp, secret: str) -> None:
         self.app = app
         self.secret = secret
-        self.verifier = Verifier(secret)
+        self.boot = new_boot()
+        self.verifier = Verifier(secret, self.boot)
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        boot = (BOOT_HEADER.lower().encode(), self.boot.encode())
+
+        async def naming_boot(message: Message) -> None:
+            if message["type"] in ANSWERS:
+                message = {**message, "headers": [*message.get("headers", []), boot]}
+            await send(message)
+
+        await self._guard(scope, receive, naming_boot)
+
+    async def _guard(self, scope: Scope, receive: Receive, send: Send) -> None:
         kind = scope["type"]
         if kind == "http" and scope["path"] == PROOF_PATH:
             query = parse_qs(bytes(scope.get("query_string", b"")).decode("latin-1"))
@@ -61,7 +113,15 @@ class CommandGuard:
             or (kind == "websocket" and scope["path"] not in OPEN_SOCKETS)
         )
         method = scope.get("method", "GET")
-        if guarded and not self.verifier.check(_header(scope), method, scope["path"]):
+        body = b""
+        if guarded and kind == "http":
+            read = await read_body(receive)
+            if read is None:
+                message = "a command's body must be whole and under 32 MiB"
+                await refuse(scope, receive, send, 413, "body_too_large", message)
+                return
+            body, receive = read, replaying(read, receive)
+        if guarded and not self.verifier.check(_header(scope), method, scope["path"], body):
             await refuse(
                 scope,
                 receive,

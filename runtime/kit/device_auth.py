@@ -3,10 +3,15 @@
 shows it as its pairing code, and the administrator gives it when adding the device).
 
 The secret itself never travels. Each command request and command socket carries
-`X-Device-Auth: <time>.<nonce>.<mac>`, the MAC an HMAC-SHA256 of time, nonce, method and path:
-good for a minute, once. A device that announces itself at a new address proves it has the
-secret by answering a fresh challenge (`GET /pair/proof?nonce=…`) before the runtime follows
-it; an impostor cannot. The proof covers the address the device serves the challenge from (the
+`X-Device-Auth: <time>.<nonce>.<mac>`, the MAC an HMAC-SHA256 of time, nonce, the driver's
+boot id, method, path and the body's SHA-256: good for a minute, once, for that body, and only
+by the driver process it was made for. The boot id is random at each start of a driver and
+sent in the `X-Device-Boot` header of its every answer, so a command or a socket's handshake
+captured before a restart (when the record of what was used is gone) is refused after it.
+
+A device that announces itself at a new address proves it has the secret by answering a
+fresh challenge (`GET /pair/proof?nonce=…`) before the runtime follows it; an impostor
+cannot. The proof covers the address the device serves the challenge from (the
 local end of the connection it came in on, so a device bound to every interface names the
 one it was reached at), and the runtime checks it against the address it reached: an
 impostor that passes the challenge on to the real device gets back a proof of the device's
@@ -31,6 +36,7 @@ import httpx
 from openpendant.runtime.kit.constant_time import same_secret
 
 HEADER = "X-Device-Auth"
+BOOT_HEADER = "X-Device-Boot"
 PROOF_PATH = "/pair/proof"
 MAX_PROOF = 4096  # bytes of a proof's answer
 WINDOW = 60.0  # s either side of the device's clock
@@ -94,10 +100,29 @@ def runtime_tag(data_dir: Path) -> str | None:
     return hashlib.sha256(f"openpendant runtime/{made}".encode()).hexdigest()[:16] if made else None
 
 
-def sign(secret: str, method: str, path: str, now: float | None = None) -> str:
+def new_boot() -> str:
+    """A driver process's boot id."""
+    return secrets.token_hex(8)
+
+
+def _signed_text(stamp: str, nonce: str, boot: str, method: str, path: str, body: bytes) -> str:
+    digest = hashlib.sha256(body).hexdigest()
+    return f"{stamp}.{nonce}.{boot}.{method.upper()}.{path}.{digest}"
+
+
+def sign(
+    secret: str,
+    method: str,
+    path: str,
+    *,
+    boot: str,
+    body: bytes = b"",
+    now: float | None = None,
+) -> str:
+    """The header's value for one request to the driver process whose boot id is `boot`."""
     stamp = f"{now if now is not None else time.time():.3f}"
     nonce = secrets.token_hex(8)
-    return f"{stamp}.{nonce}.{_mac(secret, f'{stamp}.{nonce}.{method.upper()}.{path}')}"
+    return f"{stamp}.{nonce}.{_mac(secret, _signed_text(stamp, nonce, boot, method, path, body))}"
 
 
 def address_text(host: str, port: int) -> str:
@@ -152,13 +177,21 @@ async def disproof(url: str, secret: str, timeout: float = 2.0) -> str | None:
 
 
 class Verifier:
-    """The device's side: each signature is good once, within the window."""
+    """The device's side: each signature is good once, within the window, for this process."""
 
-    def __init__(self, secret: str) -> None:
+    def __init__(self, secret: str, boot: str) -> None:
         self.secret = secret
+        self.boot = boot
         self.seen: OrderedDict[str, float] = OrderedDict()
 
-    def check(self, value: str | None, method: str, path: str, now: float | None = None) -> bool:
+    def check(
+        self,
+        value: str | None,
+        method: str,
+        path: str,
+        body: bytes = b"",
+        now: float | None = None,
+    ) -> bool:
         if not value or not value.isascii() or value.count(".") < 2 or len(value) > 200:
             return False
         stamp, nonce, mac = value.rsplit(".", 2)
@@ -169,7 +202,7 @@ class Verifier:
         now = time.time() if now is None else now
         if not math.isfinite(at) or abs(now - at) > WINDOW or value in self.seen:
             return False
-        expected = _mac(self.secret, f"{stamp}.{nonce}.{method.upper()}.{path}")
+        expected = _mac(self.secret, _signed_text(stamp, nonce, self.boot, method, path, body))
         if not same_secret(mac, expected):
             return False
         self.seen[value] = at
@@ -179,11 +212,33 @@ class Verifier:
 
 
 class DeviceAuth(httpx.Auth):
-    """Signs every request of an httpx client to one device."""
+    """Signs every request of an httpx client to one device, for the driver process whose
+    boot id it learned from the first answer. A command refused because it was signed for no
+    process or another is signed again for the boot id the refusal names and sent once more
+    (it is this client's own request, not a replay) only while no boot id is known, or, with
+    `follow_restarts`, after any restart (a halt, a test's view of a device). A runtime's
+    session follows none: a driver that restarted ends it, and nothing of the old session is
+    sent to the new process."""
 
-    def __init__(self, secret: str) -> None:
+    requires_request_body = True
+
+    def __init__(self, secret: str, boot: str | None = None, follow_restarts: bool = False):
         self.secret = secret
+        self.boot = boot or ""
+        self.follow_restarts = follow_restarts
+
+    def header(self, method: str, path: str, body: bytes = b"") -> str:
+        return sign(self.secret, method, path, boot=self.boot, body=body)
 
     def auth_flow(self, request: httpx.Request) -> Generator[httpx.Request, httpx.Response, None]:
-        request.headers[HEADER] = sign(self.secret, request.method, request.url.path)
-        yield request
+        request.headers[HEADER] = self.header(request.method, request.url.path, request.content)
+        response = yield request
+        named = response.headers.get(BOOT_HEADER, "")
+        if not named or named == self.boot or len(named) > 64:
+            return
+        if self.boot and not self.follow_restarts:
+            return
+        self.boot = named
+        if response.status_code == 401:
+            request.headers[HEADER] = self.header(request.method, request.url.path, request.content)
+            yield request

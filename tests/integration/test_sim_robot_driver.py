@@ -343,9 +343,17 @@ def test_the_driver_obeys_only_the_runtime_it_is_paired_with(
     with pytest.raises(InvalidStatus):
         connect(f"{robot.ws_url}/command/ws", open_timeout=5)
     # A signature is good once: replayed, it is refused.
-    header = {DEVICE_AUTH: sign(sim.secret, "POST", "/enable")}
+    header = {DEVICE_AUTH: sign(sim.secret, "POST", "/enable", boot=sim.boot())}
     assert httpx.post(f"{sim.url}/enable", headers=header).status_code == 200
     assert httpx.post(f"{sim.url}/enable", headers=header).status_code == 401
+    # A signature covers its body: another body under it is refused.
+    signed = sign(sim.secret, "PUT", "/command_mode", boot=sim.boot(), body=b'{"mode":"jog"}')
+    other = httpx.put(
+        f"{sim.url}/command_mode",
+        headers={DEVICE_AUTH: signed, "content-type": "application/json"},
+        content=b'{"mode":"halt"}',
+    )
+    assert other.status_code == 401
     # What it is and how it is stay readable; the proof answers a challenge, not the secret,
     # and covers the address the challenge reached it at.
     assert httpx.get(f"{sim.url}/state").status_code == 200
@@ -357,3 +365,38 @@ def test_the_driver_obeys_only_the_runtime_it_is_paired_with(
     assert answer == {"proof": proof(sim.secret, nonce, address), "address": address}
     assert sim.secret not in str(answer)
     assert np.abs(np.array(robot.state()["joint_position"]) - before).max() < STILL
+
+
+def test_a_command_captured_before_a_restart_is_refused_after_it(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> None:
+    """A `POST /disable` replayed to the restarted driver answered 200, and a replayed
+    command socket's handshake opened it: what a driver has used was remembered only in its
+    memory. A signature is for one process of the driver (its boot id) now."""
+    home = tmp_path_factory.mktemp("replayed")
+    first = SimRobotProc(home, name="replayed")
+    first.wait_ready()
+    try:
+        url, ws_url = first.url, first.url.replace("http://", "ws://")
+        boot = first.boot()
+        disable = {DEVICE_AUTH: sign(first.secret, "POST", "/disable", boot=boot)}
+        handshake = first.signed("/command/ws")
+        assert httpx.post(f"{url}/disable", headers=disable).status_code == 200
+        with connect(f"{ws_url}/command/ws", additional_headers=handshake, open_timeout=5):
+            pass
+    finally:
+        first.stop()
+    again = SimRobotProc(home, name="replayed", port=int(url.rsplit(":", 1)[1]))
+    again.wait_ready()
+    try:
+        assert again.url == url and again.boot() != boot
+        replayed = httpx.post(f"{url}/disable", headers=disable)
+        assert replayed.status_code == 401
+        assert replayed.json()["error"]["code"] == "device_auth"
+        with pytest.raises(InvalidStatus):
+            connect(f"{ws_url}/command/ws", additional_headers=handshake, open_timeout=5)
+        # Its paired runtime's own commands, signed for the new process, are obeyed.
+        with again.client() as paired:
+            assert paired.post("/disable").status_code == 200
+    finally:
+        again.stop()

@@ -271,19 +271,25 @@ def test_changes_to_users_ask_for_the_password_again(gateway: TestClient, store:
     assert gateway.post("/api/auth/pin", json={"user": "ada", "pin": "2468"}).status_code == 401
 
 
-def test_device_signatures_are_bound_to_method_path_and_time_and_good_once() -> None:
-    verifier = Verifier("the-device-secret")
-    signed = sign("the-device-secret", "POST", "/jog_joint", now=1000.0)
-    assert not verifier.check(signed, "PUT", "/jog_joint", now=1000.0)
-    assert not verifier.check(signed, "POST", "/enable", now=1000.0)
-    assert not verifier.check(signed, "POST", "/jog_joint", now=1000.0 + WINDOW + 1)
-    assert verifier.check(signed, "POST", "/jog_joint", now=1001.0)
-    assert not verifier.check(signed, "POST", "/jog_joint", now=1002.0)  # replayed
-    forged = sign("another-secret", "POST", "/jog_joint", now=1000.0)
+def test_device_signatures_are_bound_to_method_path_body_process_and_time_and_good_once() -> None:
+    verifier = Verifier("the-device-secret", boot="this-process")
+    body = b'{"velocity": [0.1, 0, 0, 0, 0, 0]}'
+    signed = sign(
+        "the-device-secret", "POST", "/jog_joint", boot="this-process", body=body, now=1000.0
+    )
+    assert not verifier.check(signed, "PUT", "/jog_joint", body, now=1000.0)
+    assert not verifier.check(signed, "POST", "/enable", body, now=1000.0)
+    assert not verifier.check(signed, "POST", "/jog_joint", b'{"velocity": [3, 0]}', now=1000.0)
+    assert not verifier.check(signed, "POST", "/jog_joint", body, now=1000.0 + WINDOW + 1)
+    restarted = Verifier("the-device-secret", boot="the-next-process")
+    assert not restarted.check(signed, "POST", "/jog_joint", body, now=1000.0)
+    assert verifier.check(signed, "POST", "/jog_joint", body, now=1001.0)
+    assert not verifier.check(signed, "POST", "/jog_joint", body, now=1002.0)  # replayed
+    forged = sign("another-secret", "POST", "/jog_joint", boot="this-process", now=1000.0)
     assert not verifier.check(forged, "POST", "/jog_joint", now=1000.0)
     nan = "nan." + signed.split(".", 2)[2]
     for junk in (None, "", "x.y", "1000.0.nonce." + "0" * 64, "a" * 500, nan, signed + "\u00e9"):
-        assert not verifier.check(junk, "POST", "/jog_joint", now=1000.0)
+        assert not verifier.check(junk, "POST", "/jog_joint", body, now=1000.0)
 
 
 @pytest.mark.parametrize(

@@ -143,7 +143,7 @@ class RobotView:
         self.url = device["url"]
         # Signed as the runtime signs (the device and the runtime keep its secret).
         secret = known_secret(runtime.data_dir, device["uuid"])
-        auth = DeviceAuth(secret) if secret else None
+        auth = DeviceAuth(secret, follow_restarts=True) if secret else None
         self.http = httpx.Client(base_url=self.url, timeout=5, auth=auth)
 
     def state(self) -> dict[str, Any]:

@@ -22,8 +22,8 @@ from openpendant.runtime.auth.roles import Role
 from openpendant.runtime.auth.setup import auth_path, create_token
 from openpendant.runtime.auth.store import AuthStore
 from openpendant.runtime.bench.harness.zygote import ZYGOTE, Spawned
+from openpendant.runtime.kit.device_auth import BOOT_HEADER, DeviceAuth, known_secret, sign
 from openpendant.runtime.kit.device_auth import HEADER as DEVICE_AUTH
-from openpendant.runtime.kit.device_auth import DeviceAuth, known_secret, sign
 from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
 from openpendant.runtime.kit.internal import HEADER as INTERNAL_HEADER
 from openpendant.runtime.kit.settings import DeviceSpec, default_devices
@@ -349,11 +349,16 @@ class SimRobotProc(Proc):
 
     def client(self, timeout: float = 5.0) -> httpx.Client:
         """An HTTP client whose commands the device obeys (signed with its secret)."""
-        return httpx.Client(base_url=self.url, timeout=timeout, auth=DeviceAuth(self.secret))
+        auth = DeviceAuth(self.secret, follow_restarts=True)
+        return httpx.Client(base_url=self.url, timeout=timeout, auth=auth)
+
+    def boot(self) -> str:
+        """The boot id of the process serving now (in every answer's headers)."""
+        return httpx.get(f"{self.url}/info", timeout=5).headers[BOOT_HEADER]
 
     def signed(self, path: str) -> dict[str, str]:
         """The header that opens one of its command sockets."""
-        return {DEVICE_AUTH: sign(self.secret, "GET", path)}
+        return {DEVICE_AUTH: sign(self.secret, "GET", path, boot=self.boot())}
 
 
 class DriverProc(SimRobotProc):
