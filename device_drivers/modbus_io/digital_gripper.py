@@ -26,6 +26,7 @@ from openpendant.runtime.interfaces.gripper import (
     GripperState,
 )
 from openpendant.runtime.interfaces.io import SignalWrite
+from openpendant.runtime.kit.bounded_yaml import load_yaml
 from openpendant.runtime.kit.errors import InvalidValue
 
 ROLES = {
@@ -56,7 +57,7 @@ class DigitalGripperMap(RegisterMap):
 
 def load_gripper_map(path: Path) -> DigitalGripperMap:
     try:
-        return DigitalGripperMap.model_validate(yaml.safe_load(path.read_text()))
+        return DigitalGripperMap.model_validate(load_yaml(path.read_text()))
     except (OSError, yaml.YAMLError, ValidationError) as exc:
         raise InvalidValue(f"gripper map {path}: {exc}") from exc
 

@@ -12,6 +12,7 @@ from openpendant.device_drivers.modbus_io.codec import DataType, Order, word_cou
 from openpendant.device_drivers.modbus_io.link import Table
 from openpendant.runtime.interfaces.common import Strict
 from openpendant.runtime.interfaces.io import SIGNAL_NAME, SignalInfo, SignalKind
+from openpendant.runtime.kit.bounded_yaml import load_yaml
 from openpendant.runtime.kit.errors import InvalidValue
 
 KIND: dict[Table, SignalKind] = {
@@ -130,7 +131,7 @@ class RegisterMap(Strict):
 
 def load_map(path: Path) -> RegisterMap:
     try:
-        data = yaml.safe_load(path.read_text())
+        data = load_yaml(path.read_text())
         return RegisterMap.model_validate(data)
     except (OSError, yaml.YAMLError, ValidationError) as exc:
         raise InvalidValue(f"register map {path}: {exc}") from exc

@@ -8,6 +8,7 @@ from typing import Any
 import yaml
 
 from openpendant.runtime.interfaces.robot import RobotInfo
+from openpendant.runtime.kit.bounded_yaml import load_yaml
 from openpendant.runtime.kit.errors import InvalidValue, NotFound
 from openpendant.runtime.paths import ROBOTS_DIR, resolve_package_uri
 from openpendant.runtime.robotics.dh_urdf import DHArm, dh_urdf, write_generated
@@ -38,7 +39,7 @@ def load_robot_info(model_or_path: str, directory: Path = ROBOTS_DIR) -> RobotIn
     then must give every joint's limits itself."""
     path = find_robot_info(model_or_path, directory)
     try:
-        raw: Any = yaml.safe_load(path.read_text())
+        raw: Any = load_yaml(path.read_text())
     except yaml.YAMLError as exc:
         raise InvalidValue(f"{path.name}: not valid YAML: {exc}") from exc
     if not isinstance(raw, dict):

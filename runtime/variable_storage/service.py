@@ -15,6 +15,7 @@ from openpendant.runtime.interfaces.common import Strict
 from openpendant.runtime.interfaces.variables import Variable
 from openpendant.runtime.kit.app import create_app
 from openpendant.runtime.kit.bodies import YAML_TEXT
+from openpendant.runtime.kit.bounded_yaml import load_yaml
 from openpendant.runtime.kit.errors import InvalidValue
 from openpendant.runtime.kit.settings import RuntimeSettings
 from openpendant.runtime.kit.websocket import Fanout
@@ -86,7 +87,7 @@ def variables_router(store: VariableStore, changes: Fanout) -> APIRouter:
         if len(raw) > MAX_IMPORT_BYTES:
             raise InvalidValue("import file is too large", code="too_large")
         try:
-            document = await asyncio.to_thread(yaml.safe_load, raw)
+            document = await asyncio.to_thread(load_yaml, raw)
         except yaml.YAMLError as exc:
             raise InvalidValue(f"not valid YAML: {exc}", code="invalid_import") from exc
         items = document.get("variables") if isinstance(document, dict) else None

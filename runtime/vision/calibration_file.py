@@ -12,6 +12,7 @@ import numpy as np
 import yaml
 
 from openpendant.runtime.interfaces.camera import Intrinsics
+from openpendant.runtime.kit.bounded_yaml import load_yaml, loader_with
 from openpendant.runtime.kit.errors import InvalidValue
 from openpendant.runtime.vision.models import CameraCalibration
 
@@ -35,11 +36,6 @@ def to_yaml(calibration: CameraCalibration) -> str:
     return str(storage.releaseAndGetString())
 
 
-class _Loader(yaml.SafeLoader):
-    """PyYAML's safe loader, knowing OpenCV's matrix tag (the file is untrusted input: it
-    is parsed in Python, not by OpenCV's C++ reader)."""
-
-
 def _matrix(loader: yaml.SafeLoader, node: yaml.Node) -> np.ndarray:
     fields = loader.construct_mapping(cast(yaml.MappingNode, node), deep=True)
     try:
@@ -52,7 +48,9 @@ def _matrix(loader: yaml.SafeLoader, node: yaml.Node) -> np.ndarray:
     return values.reshape(rows, cols)
 
 
-_Loader.add_constructor("tag:yaml.org,2002:opencv-matrix", _matrix)
+# The safe loader, knowing OpenCV's matrix tag (the file is untrusted input: it is parsed in
+# Python, within bounds, not by OpenCV's C++ reader).
+_LOADER = loader_with({"tag:yaml.org,2002:opencv-matrix": _matrix})
 
 
 def _read(text: str) -> dict[str, Any]:
@@ -62,7 +60,7 @@ def _read(text: str) -> dict[str, Any]:
     if lines and lines[0].startswith("%YAML:"):  # OpenCV's header, not YAML's
         lines = lines[1:]
     try:
-        data = yaml.load("\n".join(lines), Loader=_Loader)
+        data = load_yaml("\n".join(lines), _LOADER)
     except yaml.YAMLError as exc:
         raise InvalidValue(f"not a YAML file: {exc}", code="bad_file") from None
     if not isinstance(data, dict):

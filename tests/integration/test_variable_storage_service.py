@@ -193,6 +193,27 @@ def test_yaml_export_imports_into_a_fresh_storage(home: Path, storage: Storage) 
     assert [{k: v[k] for k in ("name", "type", "value", "tags", "doc")} for v in restored] == strip
 
 
+def test_an_alias_bomb_is_refused_before_it_is_built_and_changes_nothing(
+    storage: Storage,
+) -> None:
+    """A YAML of a few hundred bytes of nested aliases cost the storage 10-28 CPU-seconds and
+    about 580 MB, then a 504; a few thousand nested brackets, seconds in PyYAML's scanner."""
+    bomb = "a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n" + "".join(
+        f"{b}: &{b} [{', '.join([f'*{a}'] * 9)}]\n"
+        for a, b in zip("abcdefgh", "bcdefghi", strict=True)
+    )
+    with httpx.Client(base_url=storage.url, timeout=10) as client:
+        put(client, "kept", "number", 1.5)
+        for document in (bomb, "variables: &v [*v]\n", "[" * 5000 + "]" * 5000):
+            refused = client.post("/variables/_import", content=document)
+            assert refused.status_code == 422, document[:40]
+            assert refused.json()["error"]["code"] == "invalid_import"
+        assert (
+            "values" in client.post("/variables/_import", content=bomb).json()["error"]["message"]
+        )
+        assert [v["name"] for v in client.get("/variables").json()] == ["kept"]
+
+
 def test_history_over_http(storage: Storage) -> None:
     with httpx.Client(base_url=storage.url) as client:
         for i in range(3):
