@@ -26,6 +26,7 @@ from openpendant.runtime.kit.app import describe_validation_errors
 from openpendant.runtime.kit.device_auth import device_secret, runtime_tag
 from openpendant.runtime.kit.errors import OpenPendantError
 from openpendant.runtime.kit.logs import setup_logging
+from openpendant.runtime.kit.private_files import keep_private
 from openpendant.runtime.kit.settings import SETTINGS_ENV, load_settings, settings_from_env
 
 SECRET_ENV = "OPENPENDANT_DEVICE_SECRET"
@@ -104,6 +105,8 @@ def run_driver(name: str, argv: list[str] | None = None) -> int:
     else:
         settings = load_settings(args["config"], host=args["host"])
     setup_logging(name, settings.log_level)
+    if not os.environ.get(SETTINGS_ENV):  # the launcher's children have its umask already
+        keep_private(settings.data_dir)
     if spec.realtime:
         # The control loop thread must get the interpreter back within its cycle.
         sys.setswitchinterval(0.0005)

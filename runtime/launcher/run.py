@@ -24,6 +24,7 @@ from openpendant.runtime import __version__
 from openpendant.runtime.auth.setup import SETUP_CODE_ENV, needs_setup
 from openpendant.runtime.kit.internal import ENV as INTERNAL_ENV
 from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
+from openpendant.runtime.kit.private_files import keep_private
 from openpendant.runtime.kit.serve import listening_socket
 from openpendant.runtime.kit.settings import DeviceSpec, RuntimeSettings, settings_for_child
 from openpendant.runtime.launcher.supervisor import Child, Main, Supervisor, process_env
@@ -202,8 +203,7 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
     # alive in this process when it forks).
     for threads in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
         os.environ.setdefault(threads, "1")
-    settings.data_dir.mkdir(parents=True, exist_ok=True)
-    settings.logs.mkdir(parents=True, exist_ok=True)
+    keep_private(settings.data_dir, settings.logs)
     try:
         public = listening_socket(settings.host, settings.port)
     except OSError as exc:

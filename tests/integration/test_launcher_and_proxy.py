@@ -154,6 +154,19 @@ def test_the_ui_is_served_from_the_same_origin(runtime: Runtime) -> None:
     assert httpx.get(f"{runtime.url}{script}").status_code == 200
 
 
+def test_what_the_runtime_keeps_is_readable_by_its_owner_only(runtime: Runtime) -> None:
+    """The variables (programs, waypoints, calibrations) and the logs were world-readable."""
+    stored = runtime.api("PUT", "/variables/kept", json={"type": "number", "value": 2.5})
+    assert stored.status_code == 200
+    assert (runtime.data_dir / "logs").is_dir() and list((runtime.data_dir / "logs").iterdir())
+    opened = {
+        str(path.relative_to(runtime.data_dir)): oct(path.stat().st_mode & 0o777)
+        for path in [runtime.data_dir, *runtime.data_dir.rglob("*")]
+        if not path.is_symlink() and path.stat().st_mode & 0o077
+    }
+    assert opened == {}
+
+
 def test_a_port_in_use_is_a_clear_error(home: Path) -> None:
     with socket.socket() as busy:
         busy.bind(("127.0.0.1", 0))
