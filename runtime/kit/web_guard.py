@@ -65,6 +65,15 @@ def is_ip(host: str) -> bool:
     return True
 
 
+def same_address(origin_host: str, host_header: str | None) -> bool:
+    """Whether an Origin's IP address is the one the request's Host names."""
+    try:
+        named, _ = split_host(host_header or "")
+        return ipaddress.ip_address(origin_host) == ipaddress.ip_address(named)
+    except ValueError:
+        return False
+
+
 @dataclass(frozen=True)
 class Refusal:
     status: int
@@ -105,7 +114,10 @@ class WebPolicy:
             )
         return None
 
-    def check_origin(self, value: str | None) -> Refusal | None:
+    def check_origin(self, value: str | None, host_header: str | None = None) -> Refusal | None:
+        """A page's requests are accepted from the UI's own origin: a name of this computer
+        at the UI's port, or the address the request itself was sent to (any other address
+        at that port is another computer's page)."""
         if value is None:
             return None  # not a browser's cross-origin request (scripts, same-origin GETs)
         parsed = urlsplit(value)
@@ -114,7 +126,8 @@ class WebPolicy:
         except ValueError:
             port = None
         host = (parsed.hostname or "").lower()
-        if parsed.scheme in ("http", "https") and self.host_allowed(host) and port == self.ui_port:
+        ours = same_address(host, host_header) if is_ip(host) else host in self.names
+        if parsed.scheme in ("http", "https") and ours and port == self.ui_port:
             return None
         return Refusal(
             403, "origin_not_allowed", f"requests from pages of {value[:80]!r} are not accepted"
@@ -192,7 +205,7 @@ class WebGuard:
             return
         headers = _headers(scope)
         refusal = self.policy.check_host(headers.get("host")) or self.policy.check_origin(
-            headers.get("origin")
+            headers.get("origin"), headers.get("host")
         )
         if scope["type"] == "websocket":
             if refusal is not None:

@@ -62,9 +62,24 @@ def test_another_sites_page_changes_nothing_and_opens_no_socket() -> None:
     for origin in ("null", "http://127.0.0.1:9999", "file://", "http://127.0.0.1"):
         response = client.post("/echo", headers={"origin": origin})
         assert response.status_code == 403, origin
+    # Another computer's page at the UI's port: an address, but not the one asked.
+    for origin, host in (
+        ("http://10.0.0.5:8080", "10.0.0.7:8080"),
+        ("http://127.0.0.2:8080", "127.0.0.1:8080"),
+        ("http://[::1]:8080", "127.0.0.1:8080"),
+    ):
+        response = client.post("/echo", headers={"origin": origin, "host": host})
+        assert response.status_code == 403, origin
     assert seen == []
     own = client.post("/echo", content=b"{}", headers={**foreign, "origin": UI})
     assert own.status_code == 200
+    for origin, host in (
+        ("http://10.0.0.7:8080", "10.0.0.7:8080"),
+        ("http://[::1]:8080", "[::1]:8080"),
+    ):
+        own_page = {"origin": origin, "host": host, "content-type": "application/json"}
+        response = client.post("/echo", content=b"{}", headers=own_page)
+        assert response.status_code == 200, origin
     with pytest.raises(WebSocketDisconnect) as closed:  # noqa: SIM117
         with client.websocket_connect(
             "ws://127.0.0.1:8080/ws", headers={"origin": "http://attacker.example"}
