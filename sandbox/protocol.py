@@ -13,6 +13,19 @@ from typing import Any
 
 MAX_LINE_BYTES = 2 * 1024 * 1024
 MAX_OUTPUT_CHARS = 2000  # one printed line, as it reaches the output console
+# Every limit a worker takes where the system grants it, as its `ready` names them.
+ISOLATION = (
+    "memory",
+    "cpu",
+    "no-file-writes",
+    "no-network",
+    "read-only-files",
+    "unprivileged",
+    "no-processes",
+    "no-new-files",
+    "no-new-privileges",
+    "system-call-filter",
+)
 # The worker's environment names the plugins' sandbox functions: {name: "module:attribute"}.
 FUNCTIONS_ENV = "OPENPENDANT_SANDBOX_FUNCTIONS"
 

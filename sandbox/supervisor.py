@@ -25,6 +25,7 @@ from openpendant.plugins.registry import registry
 from openpendant.runtime.kit.words import Words, words, words_of
 from openpendant.sandbox.protocol import (
     FUNCTIONS_ENV,
+    ISOLATION,
     MAX_LINE_BYTES,
     MAX_OUTPUT_CHARS,
     ProtocolError,
@@ -130,6 +131,26 @@ async def spawn_worker(limits: str) -> Process:
         limit=MAX_LINE_BYTES + 1,
         env=worker_env(),
     )
+
+
+_said: list[tuple[str, ...]] = []
+
+
+def say_isolation(granted: list[str]) -> None:
+    """One log line, at the first run and whenever it changes: what the host granted a
+    program's worker, and what not."""
+    missing = tuple(i for i in ISOLATION if i not in granted)
+    if _said == [missing]:
+        return
+    _said[:] = [missing]
+    if missing:
+        log.warning(
+            "program workers run with %s; this host does not grant %s",
+            ", ".join(granted),
+            ", ".join(missing),
+        )
+    else:
+        log.info("program workers run with every limit: %s", ", ".join(granted))
 
 
 # A new worker's start-up is ~100 ms of CPU: not while the run just taken makes its first move.
@@ -311,6 +332,7 @@ class ProgramRun:
         kind = message["t"]
         if kind == "ready":
             self.isolation = [str(i) for i in message.get("isolation", [])]
+            say_isolation(self.isolation)
             self.state = RunState.running
         elif kind == "block":
             self.block = _block(message.get("id"))

@@ -1,14 +1,14 @@
 """The worker process that runs one program: `python -m openpendant.sandbox.worker <limits JSON>`.
 
 It limits itself before it reads any program code (memory, CPU, files, processes; its own
-network namespace and an unprivileged user where the system allows), then talks to the
-runtime only over its stdin/stdout pipes: the runtime answers every device request, and
+network and mount namespaces, a read-only view of the files, an unprivileged user, no new
+privileges and a filter of the system calls it may make, where the system allows), then
+talks to the runtime only over its stdin/stdout pipes: the runtime answers every device request, and
 sends pause, resume, step and breakpoints, which take effect at the next block marker."""
 
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import importlib
 import json
 import os
@@ -20,6 +20,7 @@ import traceback
 from dataclasses import dataclass, field
 from typing import Any, BinaryIO
 
+from openpendant.sandbox import syscalls
 from openpendant.sandbox.builtins import safe_builtins
 from openpendant.sandbox.guards import guard_globals
 from openpendant.sandbox.library import REGISTRY
@@ -33,7 +34,6 @@ from openpendant.sandbox.protocol import (
     encode,
 )
 
-CLONE_NEWNET = 0x40000000
 NOBODY = 65534
 BLOCK_REPORT_INTERVAL = 0.01  # s between unprompted block reports (a tight loop floods)
 OUTPUT_PER_SECOND = 200  # printed lines; beyond this the program is slowed down
@@ -56,8 +56,10 @@ class Limits:
         )
 
 
-def isolate(limits: Limits) -> list[str]:
-    """Limit this process for good (hard limits too); returns what was applied."""
+def isolate_process(limits: Limits) -> list[str]:
+    """Limit this process for good (hard limits too) while it has one thread: namespaces
+    are a thread's own, so they are made before the reply thread starts. Returns what the
+    system granted."""
     applied = []
     memory = limits.memory_mb * 1024 * 1024
     resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
@@ -67,9 +69,10 @@ def isolate(limits: Limits) -> list[str]:
     applied += ["memory", "cpu", "no-file-writes"]
     with contextlib.suppress(OSError):
         os.nice(limits.nice)
-    libc = ctypes.CDLL(None, use_errno=True)
-    if libc.unshare(CLONE_NEWNET) == 0:
+    if syscalls.unshare(syscalls.CLONE_NEWNET):
         applied.append("no-network")
+    if syscalls.unshare(syscalls.CLONE_NEWNS) and syscalls.read_only_mounts():
+        applied.append("read-only-files")
     if os.geteuid() == 0:
         try:
             os.setgroups([])
@@ -78,11 +81,21 @@ def isolate(limits: Limits) -> list[str]:
             applied.append("unprivileged")
         except OSError:
             pass
-    # No process may be started, and no file or socket opened beyond the pipes held now.
+    return applied
+
+
+def close_off() -> list[str]:
+    """The last limits, once the reply thread runs: no process or thread may be started,
+    no file or socket opened beyond the pipes held now, no privilege gained, and only the
+    system calls a running program needs made (for every thread)."""
     resource.setrlimit(resource.RLIMIT_NPROC, (0, 0))
     highest = max(int(fd) for fd in os.listdir("/proc/self/fd"))
     resource.setrlimit(resource.RLIMIT_NOFILE, (highest + 1, highest + 1))
-    applied += ["no-processes", "no-new-files"]
+    applied = ["no-processes", "no-new-files"]
+    if syscalls.no_new_privileges():
+        applied.append("no-new-privileges")
+    if syscalls.filter_system_calls():
+        applied.append("system-call-filter")
     return applied
 
 
@@ -341,11 +354,12 @@ def main() -> None:
     limits = Limits.from_json(sys.argv[1] if len(sys.argv) > 1 else "{}")
     stdin, stdout = sys.stdin.buffer, sys.stdout.buffer
     sys.stdout = sys.stderr  # nothing but protocol messages on the pipe
+    isolation = isolate_process(limits)
     worker = Worker(stdin, stdout)
     start = worker.read_start()
     threading.Thread(target=worker.serve_replies, daemon=True).start()
     try:
-        run(worker, start, isolate(limits))
+        run(worker, start, isolation + close_off())
     except BaseException:  # our own failure: say so on stderr, never hang or abort
         traceback.print_exc()
         sys.stderr.flush()
