@@ -84,7 +84,7 @@ def isolate_process(limits: Limits) -> list[str]:
     return applied
 
 
-def close_off() -> list[str]:
+def close_off(syscall_filter: Any) -> list[str]:
     """The last limits, once the reply thread runs: no process or thread may be started,
     no file or socket opened beyond the pipes held now, no privilege gained, and only the
     system calls a running program needs made (for every thread)."""
@@ -94,7 +94,7 @@ def close_off() -> list[str]:
     applied = ["no-processes", "no-new-files"]
     if syscalls.no_new_privileges():
         applied.append("no-new-privileges")
-    if syscalls.filter_system_calls():
+    if syscalls.load(syscall_filter):
         applied.append("system-call-filter")
     return applied
 
@@ -355,11 +355,12 @@ def main() -> None:
     stdin, stdout = sys.stdin.buffer, sys.stdout.buffer
     sys.stdout = sys.stderr  # nothing but protocol messages on the pipe
     isolation = isolate_process(limits)
+    syscall_filter = syscalls.system_call_filter()
     worker = Worker(stdin, stdout)
     start = worker.read_start()
     threading.Thread(target=worker.serve_replies, daemon=True).start()
     try:
-        run(worker, start, isolation + close_off())
+        run(worker, start, isolation + close_off(syscall_filter))
     except BaseException:  # our own failure: say so on stderr, never hang or abort
         traceback.print_exc()
         sys.stderr.flush()

@@ -14,11 +14,13 @@ from openpendant.sandbox.protocol import ISOLATION
 PROBE = r"""
 import ctypes, errno, json, os, platform, socket, sys
 
+from openpendant.sandbox.syscalls import system_call_filter
 from openpendant.sandbox.worker import Limits, close_off, isolate_process
 
 libc = ctypes.CDLL(None, use_errno=True)
 KEYCTL = {"x86_64": 250, "aarch64": 219}[platform.machine()]
-granted = isolate_process(Limits()) + close_off() if sys.argv[1] == "isolated" else []
+isolated = sys.argv[1] == "isolated"
+granted = isolate_process(Limits()) + close_off(system_call_filter()) if isolated else []
 
 
 def call(fn, *args):
