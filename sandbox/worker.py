@@ -84,7 +84,7 @@ def isolate_process(limits: Limits) -> list[str]:
     return applied
 
 
-def close_off(syscall_filter: Any) -> list[str]:
+def close_off(syscall_filter: int | None) -> list[str]:
     """The last limits, once the reply thread runs: no process or thread may be started,
     no file or socket opened beyond the pipes held now, no privilege gained, and only the
     system calls a running program needs made (for every thread)."""
