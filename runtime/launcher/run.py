@@ -27,6 +27,7 @@ from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
 from openpendant.runtime.kit.private_files import keep_private
 from openpendant.runtime.kit.serve import listening_socket
 from openpendant.runtime.kit.settings import DeviceSpec, RuntimeSettings, settings_for_child
+from openpendant.runtime.launcher.notify import Notifier, Watchdog
 from openpendant.runtime.launcher.supervisor import Child, Main, Supervisor, process_env
 from openpendant.runtime.services import URLS_ENV, WEBUI, all_services, services
 
@@ -199,6 +200,7 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
     """`entry`: what a forked child runs with its command line (the `openpendant` command's
     main: passed down, so that the launcher does not import the command above it)."""
     started = time.monotonic()
+    notifier = Notifier()  # before any child could inherit systemd's variables
     # Small matrices only: one thread each (no BLAS or OpenMP pools per process, and none
     # alive in this process when it forks).
     for threads in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
@@ -270,6 +272,9 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
         supervisor.stop_all()
         return 1
 
+    notifier.send("READY=1", f"STATUS=OpenPendant UI at {ui_url}", f"MAINPID={os.getpid()}")
+    watchdog = Watchdog(notifier, {**urls, WEBUI.name: ui_url.rstrip("/")})
+    watchdog.start()
     names = [c.name for c in supervisor.children if c.name not in all_services()]
     devices = ", ".join(names) or "none"
     print(
@@ -294,6 +299,8 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
         supervisor.poll()
         time.sleep(0.1)
     print("Stopping OpenPendant…", flush=True)
+    notifier.send("STOPPING=1")
+    watchdog.stop()
     supervisor.stop_all()
     print("Stopped.", flush=True)
     return 0

@@ -211,6 +211,74 @@ def test_ctrl_c_stops_everything(home: Path) -> None:
     runtime.stop()
 
 
+class Systemd:
+    """systemd's side of the notification protocol: a datagram socket, every message heard."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+        self.sock.bind(str(path))
+        self.sock.settimeout(0.2)
+        self.messages: list[str] = []
+        self.closed = threading.Event()
+        self.thread = threading.Thread(target=self._listen, daemon=True)
+        self.thread.start()
+
+    def _listen(self) -> None:
+        while not self.closed.is_set():
+            try:
+                self.messages.append(self.sock.recv(4096).decode())
+            except TimeoutError:
+                continue
+
+    def heard(self, field: str) -> int:
+        return sum(field in message.split("\n") for message in list(self.messages))
+
+    def close(self) -> None:
+        self.closed.set()
+        self.thread.join()
+        self.sock.close()
+
+
+def test_systemd_hears_ready_once_healthy_and_watchdog_pings_only_while_it_stays_so(
+    home: Path,
+) -> None:
+    systemd = Systemd(home / "notify.sock")
+    env = child_env(home, NOTIFY_SOCKET=str(systemd.path), WATCHDOG_USEC="1500000")
+    runtime = Runtime(home, port=free_port(), env=env)
+    try:
+        runtime.wait_ready()
+        wait_for(lambda: systemd.heard("READY=1"), 5, what="READY=1")
+        ready = next(m for m in systemd.messages if "READY=1" in m.split("\n"))
+        assert f"MAINPID={runtime.popen.pid}" in ready.split("\n")
+        assert runtime.api("GET", "/health").json()["status"] == "ok"
+        wait_for(lambda: systemd.heard("WATCHDOG=1") >= 2, 10, what="watchdog pings")
+        # A service that hangs: alive, answering nothing. The pings stop...
+        pid = int(health(runtime)["motion"]["pid"])
+        os.kill(pid, signal.SIGSTOP)
+        try:
+            time.sleep(1.5)  # a check under way when it froze may still have passed
+            pinged = systemd.heard("WATCHDOG=1")
+            time.sleep(3.0)  # six of the watchdog's intervals
+            assert systemd.heard("WATCHDOG=1") == pinged
+        finally:
+            os.kill(pid, signal.SIGCONT)
+        # ... and start again once it answers.
+        wait_for(lambda: systemd.heard("WATCHDOG=1") > pinged, 10, what="pings again")
+        # No child of the launcher was given the socket to speak for it.
+        assert all(
+            b"NOTIFY_SOCKET" not in Path(f"/proc/{int(s['pid'])}/environ").read_bytes()
+            for s in health(runtime).values()
+            if "pid" in s
+        )
+        runtime.popen.send_signal(signal.SIGINT)
+        assert runtime.popen.wait(20) == 0
+        assert systemd.heard("STOPPING=1") == 1
+    finally:
+        runtime.stop()
+        systemd.close()
+
+
 def test_a_bad_config_file_stops_start_up_with_its_reason(home: Path) -> None:
     config = home / "bad.yaml"
     config.write_text("port: 8080\ndevices:\n  - {driver: sim-robot, nmae: typo}\n")

@@ -1,0 +1,30 @@
+"""The launcher's side of systemd's notification protocol, read from the environment."""
+
+from __future__ import annotations
+
+import os
+import socket
+import uuid
+
+from openpendant.runtime.launcher.notify import PINGS_PER_PERIOD, Notifier
+
+
+def test_the_variables_are_taken_out_and_the_watchdog_is_ours_only_if_it_names_us() -> None:
+    environ = {"NOTIFY_SOCKET": "/run/x", "WATCHDOG_USEC": "3000000", "KEEP": "1"}
+    notifier = Notifier(environ)
+    assert environ == {"KEEP": "1"}  # no child inherits them
+    assert notifier.watchdog == 3.0 / PINGS_PER_PERIOD
+    other = Notifier({"NOTIFY_SOCKET": "/run/x", "WATCHDOG_USEC": "3000000", "WATCHDOG_PID": "1"})
+    assert other.watchdog is None
+    assert Notifier({"WATCHDOG_USEC": "junk"}).watchdog is None
+    assert Notifier({}).send("READY=1") is False  # not started by systemd: nothing sent
+
+
+def test_an_abstract_socket_is_written_with_a_leading_at() -> None:
+    name = f"openpendant-test-{uuid.uuid4().hex}"
+    with socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM) as systemd:
+        systemd.bind("\0" + name)
+        systemd.settimeout(5)
+        notifier = Notifier({"NOTIFY_SOCKET": f"@{name}", "WATCHDOG_PID": str(os.getpid())})
+        assert notifier.send("READY=1", "STATUS=up")
+        assert systemd.recv(100) == b"READY=1\nSTATUS=up"
