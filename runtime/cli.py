@@ -84,6 +84,18 @@ def _token(args: argparse.Namespace) -> int:
     return 0
 
 
+def _device(args: argparse.Namespace) -> int:
+    from openpendant.runtime.drivers.device_file import run_device_file
+
+    return run_device_file(args.file)
+
+
+def _install_service(args: argparse.Namespace) -> int:
+    from openpendant.runtime.launcher.install_service import install_service
+
+    return install_service(args.root, args.driver, runtime=args.runtime, enable=args.enable)
+
+
 def _drivers(rest: list[str]) -> int:
     if not rest or rest[0].startswith("-"):
         from openpendant.plugins.registry import registry
@@ -113,6 +125,36 @@ def parser() -> argparse.ArgumentParser:
     )
     sub.add_parser("sim-robot", help="the same as driver sim-robot", add_help=False)
     sub.add_parser("spacemouse", help="the same as driver spacemouse", add_help=False)
+
+    device = sub.add_parser(
+        "device", help="serve one device described by a file (a driver board's one command)"
+    )
+    device.add_argument("file", type=Path, help="YAML: driver, name, host, port, options")
+    device.set_defaults(handler=_device)
+
+    install = sub.add_parser(
+        "install-service", help="write (and enable) systemd units for the runtime and drivers"
+    )
+    install.add_argument(
+        "--root", type=Path, default=Path("/"), help="install below this folder (default /)"
+    )
+    install.add_argument(
+        "--driver",
+        action="append",
+        default=[],
+        metavar="DRIVER:NAME",
+        help="a device served by its own unit (repeatable), e.g. modbus-gripper:gripper",
+    )
+    install.add_argument(
+        "--no-runtime",
+        dest="runtime",
+        action="store_false",
+        help="only the drivers (a driver board)",
+    )
+    install.add_argument(
+        "--no-enable", dest="enable", action="store_false", help="write the units only"
+    )
+    install.set_defaults(handler=_install_service)
 
     service = sub.add_parser("service", help="run one service (the launcher does this)")
     service.add_argument("name", help="the service's name")

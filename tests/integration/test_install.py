@@ -125,6 +125,22 @@ def test_the_installed_runtime_is_its_own(installed: Path) -> None:
     assert (Path(found[1]) / "index.html").is_file()
 
 
+def test_the_installed_command_writes_its_own_systemd_units(
+    installed: Path, tmp_path: Path
+) -> None:
+    """The units ship in the wheel, and name the installed command."""
+    command = installed / "bin" / "openpendant"
+    done = subprocess.run(
+        [str(command), "install-service", "--root", str(tmp_path), "--no-enable"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    unit = (tmp_path / "etc" / "systemd" / "system" / "openpendant.service").read_text()
+    assert f"ExecStart={command} run " in unit
+
+
 def test_the_installed_runtime_runs_serves_its_ui_and_detects_its_robot(
     installed: Path, tmp_path: Path
 ) -> None:
