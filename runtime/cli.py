@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 from openpendant.runtime import __version__
@@ -96,6 +97,35 @@ def _install_service(args: argparse.Namespace) -> int:
     return install_service(args.root, args.driver, runtime=args.runtime, enable=args.enable)
 
 
+def _backup(args: argparse.Namespace) -> int:
+    from openpendant.runtime.kit.settings import load_settings
+    from openpendant.runtime.launcher.backup import BackupError, backup
+
+    data_dir = args.data_dir or load_settings(args.config).data_dir
+    output = args.output or Path(f"openpendant-backup-{time.strftime('%Y%m%d-%H%M%S')}.tar.gz")
+    try:
+        backup(data_dir, output, args.config)
+    except (BackupError, OSError) as exc:
+        print(f"openpendant backup: {exc}", file=sys.stderr)
+        return 2
+    print(f"backed up {data_dir} to {output}")
+    return 0
+
+
+def _restore(args: argparse.Namespace) -> int:
+    from openpendant.runtime.kit.settings import load_settings
+    from openpendant.runtime.launcher.backup import BackupError, restore
+
+    data_dir = args.data_dir or load_settings(args.config).data_dir
+    try:
+        kept = restore(args.file, data_dir)
+    except (BackupError, OSError) as exc:
+        print(f"openpendant restore: {exc}", file=sys.stderr)
+        return 2
+    print(f"restored {args.file} into {data_dir}; what was there is kept in {kept}")
+    return 0
+
+
 def _drivers(rest: list[str]) -> int:
     if not rest or rest[0].startswith("-"):
         from openpendant.plugins.registry import registry
@@ -155,6 +185,19 @@ def parser() -> argparse.ArgumentParser:
         "--no-enable", dest="enable", action="store_false", help="write the units only"
     )
     install.set_defaults(handler=_install_service)
+
+    saved = sub.add_parser(
+        "backup", help="one archive of the databases, device secrets and config (online)"
+    )
+    saved.add_argument("--output", type=Path, default=None, help="the archive to write")
+    saved.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
+    saved.add_argument("--config", type=Path, default=None, help="site config YAML (kept too)")
+    saved.set_defaults(handler=_backup)
+    back = sub.add_parser("restore", help="put a backup in place (the runtime stopped)")
+    back.add_argument("file", type=Path, help="an archive made by openpendant backup")
+    back.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
+    back.add_argument("--config", type=Path, default=None, help="site config YAML")
+    back.set_defaults(handler=_restore)
 
     service = sub.add_parser("service", help="run one service (the launcher does this)")
     service.add_argument("name", help="the service's name")

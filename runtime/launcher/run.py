@@ -3,6 +3,7 @@ supervise until Ctrl-C or SIGTERM."""
 
 from __future__ import annotations
 
+import contextlib
 import gc
 import json
 import logging
@@ -27,6 +28,7 @@ from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
 from openpendant.runtime.kit.private_files import keep_private
 from openpendant.runtime.kit.serve import listening_socket
 from openpendant.runtime.kit.settings import DeviceSpec, RuntimeSettings, settings_for_child
+from openpendant.runtime.launcher.backup import BackupError, check_databases, data_lock
 from openpendant.runtime.launcher.notify import Notifier, Watchdog
 from openpendant.runtime.launcher.supervisor import Child, Main, Supervisor, process_env
 from openpendant.runtime.services import URLS_ENV, WEBUI, all_services, services
@@ -206,6 +208,13 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
     for threads in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"):
         os.environ.setdefault(threads, "1")
     keep_private(settings.data_dir, settings.logs)
+    using = contextlib.ExitStack()  # held until this process ends: one runtime per data dir
+    try:
+        using.enter_context(data_lock(settings.data_dir))
+        check_databases(settings.data_dir)
+    except BackupError as exc:
+        print(f"openpendant: {exc}", file=sys.stderr)
+        return 1
     try:
         public = listening_socket(settings.host, settings.port)
     except OSError as exc:

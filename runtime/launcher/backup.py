@@ -1,0 +1,184 @@
+"""What a cell keeps, kept safe: `openpendant backup` copies every database online (SQLite's
+backup API: a consistent copy while the runtime runs and writes), the devices' pairing
+secrets, the installation's id, the site config and the installed plugins' names into one
+archive with a manifest of SHA-256 sums; `openpendant restore` refuses while a runtime uses
+the data directory, checks every sum and every database, and keeps the directory it
+replaces beside the new one. At start, every database must pass `PRAGMA quick_check`: a
+damaged one stops the start with its name and the command that restores it, and is never
+made anew in silence."""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import hashlib
+import io
+import json
+import os
+import sqlite3
+import tarfile
+import tempfile
+import time
+from collections.abc import Iterator
+from importlib.metadata import entry_points
+from pathlib import Path
+
+from openpendant.runtime import __version__
+
+DATABASES = ("variables.sqlite", "auth.sqlite", "audit.sqlite")
+KEPT = ("runtime-id",)  # files kept as they are (the installation's id: its devices' uuids)
+SECRETS = "device-secrets"
+LOCK = "runtime.lock"
+MANIFEST = "manifest.json"
+FORMAT = 1
+
+
+class BackupError(Exception):
+    """What is wrong, said for the person at the keyboard."""
+
+
+@contextlib.contextmanager
+def data_lock(data_dir: Path) -> Iterator[None]:
+    """Held while a runtime uses the data directory (by the launcher, for its whole run)."""
+    data_dir.mkdir(parents=True, exist_ok=True)
+    fd = os.open(data_dir / LOCK, os.O_RDWR | os.O_CREAT, 0o600)
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise BackupError(f"a runtime is using {data_dir}: stop it first") from None
+        yield
+    finally:
+        os.close(fd)
+
+
+def damaged(database: Path) -> str | None:
+    """Why a database is not whole (its quick check's first complaint), or None."""
+    try:
+        with contextlib.closing(sqlite3.connect(f"{database.as_uri()}?mode=ro", uri=True)) as db:
+            found = db.execute("PRAGMA quick_check").fetchone()
+    except sqlite3.DatabaseError as exc:
+        return str(exc)
+    return None if found and found[0] == "ok" else str(found[0] if found else "no answer")
+
+
+def check_databases(data_dir: Path) -> None:
+    for name in DATABASES:
+        path = data_dir / name
+        if path.exists() and (why := damaged(path)) is not None:
+            raise BackupError(
+                f"{path} is damaged ({why}); nothing was started. Restore the last backup: "
+                f"openpendant restore FILE --data-dir {data_dir}"
+            )
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def _plugins() -> list[str]:
+    found = {
+        f"{ep.dist.name} {ep.dist.version}" if ep.dist else ep.value
+        for ep in entry_points(group="openpendant.plugins")
+    }
+    return sorted(found)
+
+
+def backup(data_dir: Path, output: Path, config: Path | None = None) -> Path:
+    """One archive of everything a cell keeps (written 0600, never over another file)."""
+    if not (data_dir / DATABASES[0]).exists():
+        raise BackupError(f"{data_dir} holds no runtime's data")
+    members: dict[str, bytes] = {}
+    with tempfile.TemporaryDirectory() as scratch:
+        for name in DATABASES:
+            source = data_dir / name
+            if not source.exists():
+                continue
+            copy = Path(scratch) / name
+            with (
+                contextlib.closing(sqlite3.connect(f"{source.as_uri()}?mode=ro", uri=True)) as db,
+                contextlib.closing(sqlite3.connect(copy)) as target,
+            ):
+                db.backup(target)
+            members[name] = copy.read_bytes()
+    for name in KEPT:
+        if (data_dir / name).is_file():
+            members[name] = (data_dir / name).read_bytes()
+    secrets = data_dir / SECRETS
+    for path in sorted(secrets.iterdir()) if secrets.is_dir() else []:
+        if path.is_file():
+            members[f"{SECRETS}/{path.name}"] = path.read_bytes()
+    if config is not None:
+        members["config/openpendant.yaml"] = config.read_bytes()
+    manifest = {
+        "format": FORMAT,
+        "version": __version__,
+        "made": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "plugins": _plugins(),
+        "files": {name: _sha256(data) for name, data in members.items()},
+    }
+    members[MANIFEST] = json.dumps(manifest, indent=2).encode()
+    fd = os.open(output, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+    with os.fdopen(fd, "wb") as raw, tarfile.open(fileobj=raw, mode="w:gz") as archive:
+        for name, data in members.items():
+            info = tarfile.TarInfo(name)
+            info.size, info.mode, info.mtime = len(data), 0o600, int(time.time())
+            archive.addfile(info, io.BytesIO(data))
+    return output
+
+
+def read_archive(archive_path: Path) -> dict[str, bytes]:
+    """The archive's files, each checked against its manifest."""
+    try:
+        with tarfile.open(archive_path, mode="r:gz") as archive:
+            members = {}
+            for info in archive.getmembers():
+                if not info.isfile() or info.name.startswith("/") or ".." in info.name.split("/"):
+                    raise BackupError(f"{archive_path}: {info.name!r} is no backup's file")
+                extracted = archive.extractfile(info)
+                assert extracted is not None
+                members[info.name] = extracted.read()
+    except (OSError, tarfile.TarError) as exc:
+        raise BackupError(f"{archive_path} is not a backup: {exc}") from None
+    try:
+        manifest = json.loads(members.pop(MANIFEST))
+        sums = dict(manifest["files"])
+    except (KeyError, ValueError, TypeError):
+        raise BackupError(f"{archive_path} has no readable manifest") from None
+    if manifest.get("format") != FORMAT:
+        raise BackupError(f"{archive_path} is of another format ({manifest.get('format')!r})")
+    if set(sums) != set(members):
+        raise BackupError(f"{archive_path}: its files are not those its manifest lists")
+    for name, data in members.items():
+        if _sha256(data) != sums[name]:
+            raise BackupError(f"{archive_path}: {name} is not what was backed up (checksum)")
+    return members
+
+
+def restore(archive_path: Path, data_dir: Path) -> Path:
+    """The backup in place of `data_dir`; returns where the directory it replaced is kept."""
+    members = read_archive(archive_path)
+    with data_lock(data_dir):
+        staging = Path(tempfile.mkdtemp(prefix=".restoring-", dir=data_dir.parent))
+        os.chmod(staging, 0o700)
+        for name, data in members.items():
+            if name.startswith("config/"):
+                continue  # the site's config is the administrator's to put back
+            target = staging / name
+            target.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+            fd = os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+            with os.fdopen(fd, "wb") as out:
+                out.write(data)
+        try:
+            check_databases(staging)
+        except BackupError as exc:
+            raise BackupError(f"{archive_path} holds a damaged database: {exc}") from None
+        kept = data_dir.with_name(
+            f"{data_dir.name}.before-restore-{time.strftime('%Y%m%d-%H%M%S')}"
+        )
+        logs = data_dir / "logs"
+        if logs.is_dir():
+            logs.rename(staging / "logs")  # the logs stay with the installation
+        data_dir.rename(kept)
+        staging.rename(data_dir)
+    return kept

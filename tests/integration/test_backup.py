@@ -1,0 +1,134 @@
+"""A cell's data, backed up and restored: `openpendant backup` while the runtime runs,
+`restore` refused while it does, then after a loss everything is back (a taught waypoint, a
+saved program, a user, the paired robot with its secret) and the restored runtime moves the
+robot with that program; a damaged database stops the next start, naming the file and the
+restore command; a backup whose bytes were changed is refused."""
+
+from __future__ import annotations
+
+import io
+import sqlite3
+import subprocess
+import sys
+import tarfile
+from pathlib import Path
+
+import numpy as np
+
+from openpendant.runtime.auth.setup import auth_path
+from openpendant.runtime.auth.store import AuthStore
+from openpendant.runtime.bench.harness.jog import Cell
+from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
+from tests.support.programs import teach
+
+TARGET = [1.0, -1.2, 1.4, -1.5, -1.57, 0.5]
+
+
+def openpendant(home: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "openpendant.runtime.cli", *args],
+        env=child_env(home),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+
+
+def users(data_dir: Path) -> list[str]:
+    store = AuthStore(auth_path(data_dir))
+    try:
+        return [u.name for u in store.users()]
+    finally:
+        store.close()
+
+
+def test_backup_then_restore_brings_everything_back_and_the_robot_moves(tmp_path: Path) -> None:
+    home = tmp_path / "cell"
+    runtime = Runtime(home)
+    runtime.wait_ready()
+    archive = tmp_path / "cell-backup.tar.gz"
+    try:
+        Cell(runtime)  # the robot added and paired
+        teach(runtime, {"target": TARGET})
+        saved = runtime.api(
+            "PUT", "/programs/to_target", json={"python": "move_joint(waypoint('target'))\n"}
+        )
+        assert saved.status_code == 200, saved.text
+        runtime.user("operator")
+        made = openpendant(
+            home, "backup", "--data-dir", str(runtime.data_dir), "--output", str(archive)
+        )
+        assert made.returncode == 0, made.stderr
+        assert archive.stat().st_mode & 0o777 == 0o600
+        busy = openpendant(home, "restore", str(archive), "--data-dir", str(runtime.data_dir))
+        assert busy.returncode == 2 and "stop it first" in busy.stderr
+    finally:
+        runtime.stop()
+
+    # Lost: the databases and the pairing secrets (a disk replaced, a wrong command).
+    for name in ("variables.sqlite", "auth.sqlite"):
+        (runtime.data_dir / name).unlink()
+    for secret in (runtime.data_dir / "device-secrets").iterdir():
+        secret.unlink()
+    restored = openpendant(home, "restore", str(archive), "--data-dir", str(runtime.data_dir))
+    assert restored.returncode == 0, restored.stderr
+    assert list(tmp_path.joinpath("cell").glob("openpendant.before-restore-*"))
+    assert "operator-user" in users(runtime.data_dir)
+
+    again = Runtime(home)
+    again.wait_ready()
+    try:
+        assert again.api("GET", "/variables/target").json()["value"]["joints"] == TARGET
+        assert [d["local_name"] for d in again.api("GET", "/devices").json()] == ["robot"]
+        cell = Cell(again)  # already added: it connects with the restored secret
+        cell.ready()
+        ran = again.api("POST", "/programs/to_target/run", json={"leases": {"robot": cell.token}})
+        assert ran.status_code == 202, ran.text
+        wait_for(
+            lambda: again.api("GET", "/programs/to_target/status").json()["state"] == "finished",
+            60,
+            what="the restored program's end",
+        )
+        assert np.abs(cell.robot.q() - np.array(TARGET)).max() < 1e-3
+    finally:
+        again.stop()
+
+    # A damaged database: the next start refuses, naming it and the way back.
+    database = runtime.data_dir / "variables.sqlite"
+    with database.open("r+b") as raw:
+        raw.seek(2 * 4096)
+        raw.write(b"\xa5" * 4096)
+    refused = openpendant(home, "run", "--port", "0", "--data-dir", str(runtime.data_dir))
+    assert refused.returncode == 1
+    assert str(database) in refused.stderr and "openpendant restore" in refused.stderr
+
+
+def test_a_changed_backup_is_refused_and_nothing_is_replaced(tmp_path: Path) -> None:
+    data_dir = tmp_path / "data"
+    source = tmp_path / "source"
+    source.mkdir()
+    with sqlite3.connect(source / "variables.sqlite") as db:
+        db.execute("CREATE TABLE t (v)")
+        db.execute("INSERT INTO t VALUES (1)")
+    archive = tmp_path / "b.tar.gz"
+    assert (
+        openpendant(
+            tmp_path, "backup", "--data-dir", str(source), "--output", str(archive)
+        ).returncode
+        == 0
+    )
+    with tarfile.open(archive) as original:
+        members = {m.name: original.extractfile(m).read() for m in original.getmembers()}  # type: ignore[union-attr]
+    members["variables.sqlite"] = members["variables.sqlite"].replace(b"\x01", b"\x02", 1)
+    changed = tmp_path / "changed.tar.gz"
+    with tarfile.open(changed, "w:gz") as out:
+        for name, data in members.items():
+            info = tarfile.TarInfo(name)
+            info.size = len(data)
+            out.addfile(info, io.BytesIO(data))
+    data_dir.mkdir()
+    (data_dir / "variables.sqlite").write_bytes(b"")
+    refused = openpendant(tmp_path, "restore", str(changed), "--data-dir", str(data_dir))
+    assert refused.returncode == 2 and "checksum" in refused.stderr
+    assert sorted(p.name for p in data_dir.iterdir()) == ["variables.sqlite"]
+    assert not list(tmp_path.glob("data.before-restore-*"))
