@@ -59,13 +59,16 @@ def identify(store: AuthStore, headers: dict[str, str], *, touch: bool = True) -
 
 
 def need_of(scope: Scope) -> policy.Need | None:
-    """None: not the API (the UI's files, /health) — served to anyone."""
+    """None: not the API (the UI's files, /health) — served to anyone. `/metrics` (for the
+    plant's monitoring) is any signed-in role's or token's to read."""
     path: str = scope["path"]
     method = scope.get("method", "WS") if scope["type"] == "http" else "WS"
     if path in DOCS or path.startswith("/docs/"):
         return Role.admin
     if path == "/api" or path.startswith("/api/"):
         return policy.need(method, path[4:] or "/")
+    if path == "/metrics":
+        return Role.viewer if method in SAFE_METHODS else Role.admin
     return None
 
 

@@ -13,6 +13,7 @@ import httpx
 from fastapi import FastAPI, Query, Request, Response, WebSocket
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
+from prometheus_client import CONTENT_TYPE_LATEST
 from pydantic import BaseModel, ConfigDict
 
 from openpendant.runtime.auth.audit import AUDIT_FILE, AuditLog
@@ -27,6 +28,7 @@ from openpendant.runtime.services import web_policy
 from openpendant.webui.access import AccessGuard
 from openpendant.webui.auth_routes import auth_router
 from openpendant.webui.logs import MAX_ENTRIES, LogEntry, recent_entries
+from openpendant.webui.metrics import gathered
 from openpendant.webui.plugins import plugins_router
 from openpendant.webui.proxy import ServiceProxy
 
@@ -105,7 +107,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             store.close()
             audit.close()
 
-    app = create_app("webui", lifespan=lifespan)
+    app = create_app("webui", lifespan=lifespan, metrics_route=False)
     store = auth_store(settings)
     audit = AuditLog(settings.data_dir / AUDIT_FILE)
     # Outermost first: the guard of what a browser may send, then who it is.
@@ -128,6 +130,12 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
         return Health.model_validate({"status": "ok" if ok else "degraded", "services": services})
 
     app.include_router(plugins_router(urls, proxy.http))
+
+    @app.get("/metrics", include_in_schema=False)
+    async def metrics() -> Response:
+        """Every service's series for Prometheus (webui/metrics.py)."""
+        named = {spec.name: urls[spec.name] for spec in declared_services() if spec.name in urls}
+        return Response(await gathered(proxy.http, named), media_type=CONTENT_TYPE_LATEST)
 
     @app.get("/api/robot-files/{package}/{path:path}")
     async def robot_file(package: str, path: str) -> FileResponse:

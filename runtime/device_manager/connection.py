@@ -14,6 +14,7 @@ import contextlib
 import functools
 import json
 import logging
+import re
 import time
 from collections import OrderedDict
 from collections.abc import Awaitable, Callable
@@ -44,6 +45,9 @@ from openpendant.runtime.kit.words import link_words, words
 from openpendant.runtime.links.freshness import Freshness, state_stamp
 
 log = logging.getLogger(__name__)
+
+# A state saying the robot is in a protective stop (found without parsing the whole state).
+PROTECTIVE_STOP = re.compile(r'"protective_stop"\s*:\s*true')
 
 
 def has_session(kind: str) -> bool:
@@ -110,6 +114,10 @@ class DeviceConnection:
         self.record = record
         self._secret = secret  # the device's pairing secret, read at each session's start
         self._auth: DeviceAuth | None = None  # the session's signer
+        # For the plant's monitoring (device_manager/metrics.py).
+        self.states_received = 0
+        self.protective_stops = 0
+        self._protective = False
         self.timing = timing or LinkSettings()
         self.status: ConnectionStatus = "connecting"
         self.last_error = ""
@@ -498,6 +506,11 @@ class DeviceConnection:
 
     def _state(self, text: str) -> None:
         self.last_state = text
+        self.states_received += 1
+        stopped = PROTECTIVE_STOP.search(text) is not None
+        if stopped and not self._protective:
+            self.protective_stops += 1
+        self._protective = stopped
         self._on_state(self, text)
 
     async def _watch_wake(self) -> None:

@@ -433,7 +433,7 @@ class DeviceRegistry:
             controlled_by=lease.holder,
             control_expires=lease.expires,
             link=conn.generation,
-            state_age=_state_age(conn),
+            state_age=state_age(conn),
             address_claim=self.claims.get(r.local_name),
         )
 
@@ -571,7 +571,7 @@ class DeviceRegistry:
             self.links.on_devices(message)
 
 
-def _state_age(conn: DeviceConnection) -> float | None:
+def state_age(conn: DeviceConnection) -> float | None:
     if conn.status != "connected":
         return None
     fresh = conn.freshness

@@ -9,10 +9,12 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, FastAPI, Header, Response, WebSocket
 from fastapi.responses import JSONResponse
+from prometheus_client import REGISTRY
 
 from openpendant.runtime.device_manager.calls import CallRequest, call_device, stop_all
 from openpendant.runtime.device_manager.cell import cell_parts
 from openpendant.runtime.device_manager.frames import relay_frames
+from openpendant.runtime.device_manager.metrics import LinkCollector
 from openpendant.runtime.device_manager.models import (
     AddDeviceRequest,
     AddedDevice,
@@ -158,6 +160,8 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
 
     @contextlib.asynccontextmanager
     async def lifespan(_: FastAPI) -> AsyncIterator[None]:
+        links = LinkCollector(registry)
+        REGISTRY.register(links)
         await browser.start()
         loader = asyncio.create_task(registry.load())
         sweeper = asyncio.create_task(registry.sweep_leases())
@@ -169,6 +173,7 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
             await browser.stop()
             await registry.close()
             await storage.aclose()
+            REGISTRY.unregister(links)
 
     async def health() -> dict[str, Any]:
         if not registry.loaded:

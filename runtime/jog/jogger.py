@@ -22,6 +22,7 @@ from openpendant.runtime.interfaces.robot import (
 )
 from openpendant.runtime.jog.actions import Action, MouseJog, RampedJog
 from openpendant.runtime.kit.errors import OpenPendantError, RobotError
+from openpendant.runtime.kit.metrics import PATH_DEVIATIONS
 from openpendant.runtime.kit.words import Words, words, words_of
 from openpendant.runtime.links.hub import LINK_FAULTS
 from openpendant.runtime.robotics.avoidance import SAFETY
@@ -294,6 +295,7 @@ class Jogger:
                 if self.action is action:
                     self.action = None
                     log.warning("jog on %s ended: %s", self.link.name, exc.message)
+                    PATH_DEVIATIONS.labels(self.link.name).inc()
                     await self._protective_stop(action, exc.message)
                     self._end(action, "halted", exc.code, exc.message, exc.words)
             except OpenPendantError as exc:

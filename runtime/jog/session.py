@@ -45,6 +45,7 @@ from openpendant.runtime.jog.models import (
 from openpendant.runtime.jog.waypoints import joint_goal, teach
 from openpendant.runtime.kit.app import describe_validation_errors
 from openpendant.runtime.kit.errors import InvalidValue, OpenPendantError, RobotError
+from openpendant.runtime.kit.metrics import DEADMAN_HALTS
 from openpendant.runtime.kit.settings import MotionSettings
 from openpendant.runtime.kit.websocket import Fanout
 from openpendant.runtime.kit.words import Words, words
@@ -423,6 +424,7 @@ class JogSession:
             )
             said = words("jog.deadman", ms=window)
             reason = f"no heartbeat for {window} ms"
+            DEADMAN_HALTS.labels(held.robot).inc()
             self._spawn(self._stop(held.robot, press, reason, halt=True, said=said))
 
     async def _release(self, press: str) -> None:

@@ -19,6 +19,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from openpendant.runtime import __version__
 from openpendant.runtime.kit.deadline import DeadlineMiddleware
 from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.kit.metrics import serve_metrics
 
 log = logging.getLogger(__name__)
 
@@ -105,7 +106,10 @@ def create_app(
     *,
     lifespan: Lifespan | None = None,
     health: HealthProbe | None = None,
+    metrics_route: bool = True,
 ) -> FastAPI:
+    """`metrics_route`: serve this process's own series at /metrics (the gateway serves
+    everyone's there instead)."""
     started = time.time()
 
     @asynccontextmanager
@@ -121,6 +125,7 @@ def create_app(
     app = FastAPI(title=f"OpenPendant {service}", version=__version__, lifespan=_lifespan)
     install_error_handlers(app)
     app.add_middleware(DeadlineMiddleware)
+    serve_metrics(app, route=metrics_route)
 
     @app.get("/health")
     async def _health() -> dict[str, Any]:

@@ -20,6 +20,7 @@ from openpendant.runtime.interfaces.robot import (
     TrajectoryWaypoint,
 )
 from openpendant.runtime.kit.errors import OpenPendantError, RobotError
+from openpendant.runtime.kit.metrics import PATH_DEVIATIONS
 from openpendant.runtime.kit.words import words
 from openpendant.runtime.robotics.path_monitor import PathDeviation, PathMonitor
 from openpendant.runtime.robotics.timing import TimedPath
@@ -131,6 +132,7 @@ class Execution:
         except BaseException as exc:
             await self.link.halt("motion: stop")
             if isinstance(exc, PathDeviation):
+                PATH_DEVIATIONS.labels(self.link.name).inc()
                 # As a controller's path monitor would: held until errors are reset, and
                 # shown as the robot's fault with the distance.
                 with contextlib.suppress(OpenPendantError):

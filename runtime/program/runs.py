@@ -11,6 +11,7 @@ import time
 
 from openpendant.runtime.clients.devices import Devices
 from openpendant.runtime.kit.errors import Conflict, NotFound, OpenPendantError
+from openpendant.runtime.kit.metrics import PROGRAM_RUNS
 from openpendant.runtime.kit.websocket import Fanout
 from openpendant.runtime.kit.words import Words, words
 from openpendant.runtime.motion.client import MotionClient
@@ -133,6 +134,7 @@ class Runs:
 
     async def _finish(self, active: Active) -> None:
         await active.run.wait()
+        PROGRAM_RUNS.labels(active.run.state.value).inc()
         await active.host.close()
         await active.run.close()
         name = next((n for n, a in self.runs.items() if a is active), None)

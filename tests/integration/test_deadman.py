@@ -8,7 +8,9 @@ import signal
 import time
 from collections.abc import Iterator
 
+import httpx
 import pytest
+from prometheus_client.parser import text_string_to_metric_families
 
 from openpendant.runtime.bench.harness.jog import Cell, JogClient
 from openpendant.runtime.bench.harness.processes import Runtime, wait_for
@@ -133,3 +135,65 @@ def test_service_errors_stay_clean_after_a_deliberate_kill(cell: Cell) -> None:
     """The jog service was killed on purpose above; nothing else may have logged errors."""
     errors = [e for e in cell.runtime.service_errors() if not e.startswith("jog.log")]
     assert errors == []
+
+
+def scraped(runtime: Runtime) -> dict[str, dict[tuple[tuple[str, str], ...], float]]:
+    """GET /metrics as Prometheus reads it (prometheus-client's own parser), with a viewer's
+    token: {sample name: {labels: value}}."""
+    answer = httpx.get(f"{runtime.url}/metrics", headers=runtime.auth("viewer"), timeout=10)
+    assert answer.status_code == 200, answer.text
+    found: dict[str, dict[tuple[tuple[str, str], ...], float]] = {}
+    for family in text_string_to_metric_families(answer.text):
+        found.setdefault(family.name, {})
+        for sample in family.samples:
+            found.setdefault(sample.name, {})[tuple(sorted(sample.labels.items()))] = sample.value
+    return found
+
+
+def value(series: dict[tuple[tuple[str, str], ...], float], **labels: str) -> float:
+    return sum(v for key, v in series.items() if set(labels.items()) <= set(key))
+
+
+def test_metrics_carry_every_series_and_change_under_a_jog(cell: Cell, jog: JogClient) -> None:
+    assert httpx.get(f"{cell.runtime.url}/metrics", timeout=10).status_code == 401
+    before = scraped(cell.runtime)
+    families = {
+        "openpendant_service_up",
+        "openpendant_device_link_up",
+        "openpendant_device_state_age_seconds",
+        "openpendant_device_states",
+        "openpendant_protective_stops",
+        "openpendant_deadman_halts",
+        "openpendant_path_deviations",
+        "openpendant_program_runs",
+        "openpendant_request_seconds",
+        "process_resident_memory_bytes",
+        "process_cpu_seconds",
+    }
+    assert families <= set(before)
+    services = ("webui", "device_manager", "jog", "motion", "program", "variable_storage", "vision")
+    for service in services:
+        assert value(before["openpendant_service_up"], service=service) == 1.0
+        assert value(before["process_resident_memory_bytes"], service=service) > 0
+    assert value(before["openpendant_device_link_up"], device="robot") == 1.0
+    assert value(before["openpendant_device_state_age_seconds"], device="robot") >= 0
+    assert value(before["openpendant_program_runs_total"], end="error") == 0
+
+    press = jog.press(kind="joint", axis=0, direction=1, speed=0.3)
+    for _ in range(5):  # held, then the tablet goes quiet: the deadman halts it
+        jog.send({"type": "heartbeat", "press": press})
+        jog.drain(0.03)
+    jog.status(press, ("halted",), timeout=2)
+    cell.robot.wait_stopped(2)
+
+    after = scraped(cell.runtime)
+    assert (
+        value(after["openpendant_deadman_halts_total"], robot="robot")
+        == value(before.get("openpendant_deadman_halts_total", {}), robot="robot") + 1
+    )
+    states = "openpendant_device_states_total"
+    assert value(after[states], device="robot") > value(before[states], device="robot")
+    jog_requests = "openpendant_request_seconds_count"
+    assert value(after[jog_requests]) > value(before[jog_requests])
+    cpu = "process_cpu_seconds_total"
+    assert value(after[cpu], service="jog") >= value(before[cpu], service="jog")
