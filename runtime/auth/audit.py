@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from openpendant.runtime.auth.store import private
+from openpendant.runtime.kit.schema import AUDIT, mark_version, refuse_newer
 
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS audit (
@@ -53,11 +54,13 @@ class AuditLog:
         self.clock = clock
         path.parent.mkdir(parents=True, exist_ok=True)
         self._db = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+        refuse_newer(self._db, path, AUDIT)  # before anything is written
         self._db.execute("PRAGMA journal_mode = WAL")
         # Written on the gateway's loop after each change: no fsync per entry (WAL keeps
         # the file whole; a power cut may lose the last moment's entries).
         self._db.execute("PRAGMA synchronous = NORMAL")
         self._db.executescript(SCHEMA)
+        mark_version(self._db, AUDIT)
         private(path)
         self._lock = threading.Lock()
 

@@ -23,6 +23,7 @@ from argon2.exceptions import InvalidHashError, VerificationError
 
 from openpendant.runtime.auth.roles import Role
 from openpendant.runtime.kit.errors import Conflict, InvalidValue, NotFound, OpenPendantError
+from openpendant.runtime.kit.schema import AUTH, mark_version, refuse_newer
 
 USERNAME = re.compile(r"^[a-z][a-z0-9_.-]{0,31}\Z")
 MIN_PASSWORD = 10
@@ -164,9 +165,11 @@ class AuthStore:
         self.hasher = PasswordHasher(time_cost=2, memory_cost=19456, parallelism=1)
         path.parent.mkdir(parents=True, exist_ok=True)
         self._db = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+        refuse_newer(self._db, path, AUTH)  # before anything is written
         self._db.execute("PRAGMA foreign_keys = ON")
         self._db.execute("PRAGMA journal_mode = WAL")
         self._db.executescript(SCHEMA)
+        mark_version(self._db, AUTH)
         private(path)
         self._lock = threading.Lock()
         self._touched: dict[str, float] = {}  # session id -> last use not yet written

@@ -24,8 +24,9 @@ from importlib.metadata import entry_points
 from pathlib import Path
 
 from openpendant.runtime import __version__
+from openpendant.runtime.kit.schema import KNOWN, SchemaTooNew, refuse_newer
 
-DATABASES = ("variables.sqlite", "auth.sqlite", "audit.sqlite")
+DATABASES = tuple(KNOWN)  # every database a runtime keeps
 KEPT = ("runtime-id",)  # files kept as they are (the installation's id: its devices' uuids)
 SECRETS = "device-secrets"
 LOCK = "runtime.lock"
@@ -63,13 +64,21 @@ def damaged(database: Path) -> str | None:
 
 
 def check_databases(data_dir: Path) -> None:
+    """Every database whole, and none written by a newer release."""
     for name in DATABASES:
         path = data_dir / name
-        if path.exists() and (why := damaged(path)) is not None:
+        if not path.exists():
+            continue
+        if (why := damaged(path)) is not None:
             raise BackupError(
                 f"{path} is damaged ({why}); nothing was started. Restore the last backup: "
                 f"openpendant restore FILE --data-dir {data_dir}"
             )
+        with contextlib.closing(sqlite3.connect(f"{path.as_uri()}?mode=ro", uri=True)) as db:
+            try:
+                refuse_newer(db, path, KNOWN[name])
+            except SchemaTooNew as exc:
+                raise BackupError(f"{exc}; nothing was started") from None
 
 
 def _sha256(data: bytes) -> str:

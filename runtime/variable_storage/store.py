@@ -24,11 +24,12 @@ from pydantic import BaseModel
 from openpendant.runtime.interfaces.variables import NAME_PATTERN, Variable
 from openpendant.runtime.kit import deadline
 from openpendant.runtime.kit.errors import Conflict, InvalidValue, NotFound
+from openpendant.runtime.kit.schema import VARIABLES, mark_version, refuse_newer
 from openpendant.runtime.variable_storage.types import validate_value
 
 TAG_PATTERN = re.compile(r"^[A-Za-z0-9_.:\-]{1,64}\Z")
 WRITER_PATTERN = re.compile(r"^[A-Za-z0-9_.:\-]{1,128}\Z")
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = VARIABLES
 # What a version costs besides its texts: its numbers, SQLite's record and index entries and
 # the pages' slack (measured: 60-100 bytes). Charged so that a writer of many tiny values is
 # bounded too.
@@ -111,6 +112,7 @@ class VariableStore:
         self.history_depth = history_depth
         self._lock = threading.Lock()
         self._db = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+        refuse_newer(self._db, path, SCHEMA_VERSION)  # before anything is written
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=FULL")
         self._db.execute("PRAGMA foreign_keys=ON")
@@ -127,6 +129,7 @@ class VariableStore:
                 "INSERT OR REPLACE INTO meta (key, value) VALUES ('schema_version', ?)",
                 (str(SCHEMA_VERSION),),
             )
+            mark_version(self._db, SCHEMA_VERSION)
 
     def close(self) -> None:
         with self._lock:
