@@ -126,6 +126,14 @@ def _restore(args: argparse.Namespace) -> int:
     return 0
 
 
+def _doctor(args: argparse.Namespace) -> int:
+    from openpendant.runtime.kit.settings import load_settings
+    from openpendant.runtime.launcher.doctor import doctor
+
+    overrides = {"data_dir": args.data_dir, "port": args.port, "host": args.host}
+    return doctor(load_settings(args.config, **overrides))
+
+
 def _drivers(rest: list[str]) -> int:
     if not rest or rest[0].startswith("-"):
         from openpendant.plugins.registry import registry
@@ -198,6 +206,15 @@ def parser() -> argparse.ArgumentParser:
     back.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
     back.add_argument("--config", type=Path, default=None, help="site config YAML")
     back.set_defaults(handler=_restore)
+
+    check = sub.add_parser(
+        "doctor", help="check this computer for a cell: data, ports, multicast, clock, devices"
+    )
+    check.add_argument("--config", type=Path, default=None, help="site config YAML")
+    check.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
+    check.add_argument("--port", type=int, default=None, help="UI port (default 8080)")
+    check.add_argument("--host", default=None, help="UI address")
+    check.set_defaults(handler=_doctor)
 
     service = sub.add_parser("service", help="run one service (the launcher does this)")
     service.add_argument("name", help="the service's name")

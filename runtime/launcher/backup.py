@@ -53,6 +53,21 @@ def data_lock(data_dir: Path) -> Iterator[None]:
         os.close(fd)
 
 
+def runtime_running(data_dir: Path) -> bool:
+    """Whether a runtime holds the data directory now (nothing is made or changed)."""
+    try:
+        fd = os.open(data_dir / LOCK, os.O_RDWR)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    finally:
+        os.close(fd)  # closing releases a lock it took
+    return False
+
+
 def damaged(database: Path) -> str | None:
     """Why a database is not whole (its quick check's first complaint), or None."""
     try:
