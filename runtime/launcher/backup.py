@@ -15,6 +15,7 @@ import hashlib
 import io
 import json
 import os
+import shutil
 import sqlite3
 import tarfile
 import tempfile
@@ -29,6 +30,7 @@ from openpendant.runtime.kit.schema import KNOWN, SchemaTooNew, refuse_newer
 DATABASES = tuple(KNOWN)  # every database a runtime keeps
 KEPT = ("runtime-id",)  # files kept as they are (the installation's id: its devices' uuids)
 SECRETS = "device-secrets"
+FOLDERS = (SECRETS, "models")  # kept whole: pairing secrets, installed detector networks
 LOCK = "runtime.lock"
 MANIFEST = "manifest.json"
 FORMAT = 1
@@ -110,6 +112,7 @@ def _plugins() -> list[str]:
 
 def backup(data_dir: Path, output: Path, config: Path | None = None) -> Path:
     """One archive of everything a cell keeps (written 0600, never over another file)."""
+    data_dir = data_dir.resolve()  # systemd's state directory is a link to a private one
     if not (data_dir / DATABASES[0]).exists():
         raise BackupError(f"{data_dir} holds no runtime's data")
     members: dict[str, bytes] = {}
@@ -128,10 +131,10 @@ def backup(data_dir: Path, output: Path, config: Path | None = None) -> Path:
     for name in KEPT:
         if (data_dir / name).is_file():
             members[name] = (data_dir / name).read_bytes()
-    secrets = data_dir / SECRETS
-    for path in sorted(secrets.iterdir()) if secrets.is_dir() else []:
-        if path.is_file():
-            members[f"{SECRETS}/{path.name}"] = path.read_bytes()
+    for folder in FOLDERS:
+        for path in sorted((data_dir / folder).rglob("*")):
+            if path.is_file() and not path.is_symlink():
+                members[path.relative_to(data_dir).as_posix()] = path.read_bytes()
     if config is not None:
         members["config/openpendant.yaml"] = config.read_bytes()
     manifest = {
@@ -182,27 +185,45 @@ def read_archive(archive_path: Path) -> dict[str, bytes]:
 def restore(archive_path: Path, data_dir: Path) -> Path:
     """The backup in place of `data_dir`; returns where the directory it replaced is kept."""
     members = read_archive(archive_path)
+    data_dir = data_dir.resolve()  # renamed where it is, not a link to it
+    owner = data_dir.stat() if data_dir.exists() else None
     with data_lock(data_dir):
         staging = Path(tempfile.mkdtemp(prefix=".restoring-", dir=data_dir.parent))
-        os.chmod(staging, 0o700)
-        for name, data in members.items():
-            if name.startswith("config/"):
-                continue  # the site's config is the administrator's to put back
-            target = staging / name
-            target.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
-            fd = os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-            with os.fdopen(fd, "wb") as out:
-                out.write(data)
         try:
-            check_databases(staging)
-        except BackupError as exc:
-            raise BackupError(f"{archive_path} holds a damaged database: {exc}") from None
-        kept = data_dir.with_name(
-            f"{data_dir.name}.before-restore-{time.strftime('%Y%m%d-%H%M%S')}"
-        )
+            _stage(staging, members, archive_path, owner)
+        except BaseException:
+            shutil.rmtree(staging, ignore_errors=True)
+            raise
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        kept = data_dir.with_name(f"{data_dir.name}.before-restore-{stamp}")
         logs = data_dir / "logs"
         if logs.is_dir():
             logs.rename(staging / "logs")  # the logs stay with the installation
         data_dir.rename(kept)
         staging.rename(data_dir)
     return kept
+
+
+def _stage(
+    staging: Path, members: dict[str, bytes], archive_path: Path, owner: os.stat_result | None
+) -> None:
+    """The archive's files written into `staging`, checked, and owned as the data was."""
+    os.chmod(staging, 0o700)
+    for name, data in members.items():
+        if name.startswith("config/"):
+            continue  # the site's config is the administrator's to put back
+        target = staging / name
+        target.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+        fd = os.open(target, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+        with os.fdopen(fd, "wb") as out:
+            out.write(data)
+            out.flush()
+            os.fsync(out.fileno())
+    try:
+        check_databases(staging)
+    except BackupError as exc:
+        raise BackupError(f"{archive_path} holds a damaged database: {exc}") from None
+    if owner is not None and os.geteuid() == 0:
+        # Restored by root for a runtime that runs as its own user: the files are its.
+        for path in (staging, *staging.rglob("*")):
+            os.chown(path, owner.st_uid, owner.st_gid)

@@ -55,6 +55,8 @@ def test_backup_then_restore_brings_everything_back_and_the_robot_moves(tmp_path
         )
         assert saved.status_code == 200, saved.text
         runtime.user("operator")
+        (runtime.data_dir / "models").mkdir()
+        (runtime.data_dir / "models" / "parts.onnx").write_bytes(b"a network")
         made = openpendant(
             home, "backup", "--data-dir", str(runtime.data_dir), "--output", str(archive)
         )
@@ -74,6 +76,7 @@ def test_backup_then_restore_brings_everything_back_and_the_robot_moves(tmp_path
     assert restored.returncode == 0, restored.stderr
     assert list(tmp_path.joinpath("cell").glob("openpendant.before-restore-*"))
     assert "operator-user" in users(runtime.data_dir)
+    assert (runtime.data_dir / "models" / "parts.onnx").read_bytes() == b"a network"
 
     again = Runtime(home)
     again.wait_ready()
@@ -132,3 +135,26 @@ def test_a_changed_backup_is_refused_and_nothing_is_replaced(tmp_path: Path) -> 
     assert refused.returncode == 2 and "checksum" in refused.stderr
     assert sorted(p.name for p in data_dir.iterdir()) == ["variables.sqlite"]
     assert not list(tmp_path.glob("data.before-restore-*"))
+
+
+def test_a_data_directory_reached_through_a_link_is_restored_where_it_is(tmp_path: Path) -> None:
+    """systemd's state directory (/var/lib/openpendant) is a link to a private one: restoring
+    through the link replaced the link and left the data behind it live."""
+    private = tmp_path / "private" / "openpendant"
+    private.mkdir(parents=True)
+    with sqlite3.connect(private / "variables.sqlite") as db:
+        db.execute("CREATE TABLE t (v)")
+    link = tmp_path / "openpendant"
+    link.symlink_to(private)
+    archive = tmp_path / "b.tar.gz"
+    assert (
+        openpendant(
+            tmp_path, "backup", "--data-dir", str(link), "--output", str(archive)
+        ).returncode
+        == 0
+    )
+    done = openpendant(tmp_path, "restore", str(archive), "--data-dir", str(link))
+    assert done.returncode == 0, done.stderr
+    assert link.is_symlink() and link.resolve() == private.resolve()
+    assert (private / "variables.sqlite").is_file()
+    assert list((tmp_path / "private").glob("openpendant.before-restore-*"))
