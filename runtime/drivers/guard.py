@@ -7,17 +7,21 @@ for which signatures are made: one made before a restart is refused after it."""
 
 from __future__ import annotations
 
+import asyncio
 from urllib.parse import parse_qs
 
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from openpendant.runtime.kit.constant_time import same_secret
 from openpendant.runtime.kit.device_auth import (
     BOOT_HEADER,
+    EMPTY_BODY,
     HEADER,
     PROOF_PATH,
     Verifier,
     address_text,
+    body_digest,
     new_boot,
     proof,
 )
@@ -31,6 +35,7 @@ WORLD_PREFIXES = ("/sim/", "/replay/")
 READS = frozenset({"GET", "HEAD"})
 # A signed request's body is read whole to check its digest: no command is near this size.
 MAX_SIGNED_BODY = 32 * 1024 * 1024
+BODY_SECONDS = 10.0  # a body that takes longer is not the runtime's
 # Messages that open an answer, to which the boot id is added.
 ANSWERS = frozenset({"http.response.start", "websocket.http.response.start", "websocket.accept"})
 
@@ -43,18 +48,28 @@ def _header(scope: Scope) -> str | None:
     return None
 
 
+class BodyRefused(Exception):
+    def __init__(self, status: int, code: str, message: str) -> None:
+        self.status, self.code, self.message = status, code, message
+
+
 async def read_body(receive: Receive) -> bytes | None:
-    """A request's whole body; None if the client left or it is too long to be a command."""
+    """A request's whole body (within MAX_SIGNED_BODY and BODY_SECONDS); None if the
+    client left."""
     body = bytearray()
-    while True:
-        message = await receive()
-        if message["type"] != "http.request":
-            return None
-        body += message.get("body", b"")
-        if len(body) > MAX_SIGNED_BODY:
-            return None
-        if not message.get("more_body", False):
-            return bytes(body)
+    try:
+        async with asyncio.timeout(BODY_SECONDS):
+            while True:
+                message = await receive()
+                if message["type"] != "http.request":
+                    return None
+                body += message.get("body", b"")
+                if len(body) > MAX_SIGNED_BODY:
+                    raise BodyRefused(413, "body_too_large", "a command's body is under 32 MiB")
+                if not message.get("more_body", False):
+                    return bytes(body)
+    except TimeoutError:
+        raise BodyRefused(408, "body_timeout", "the command's body did not arrive") from None
 
 
 def replaying(body: bytes, receive: Receive) -> Receive:
@@ -113,22 +128,31 @@ class CommandGuard:
             or (kind == "websocket" and scope["path"] not in OPEN_SOCKETS)
         )
         method = scope.get("method", "GET")
-        body = b""
-        if guarded and kind == "http":
-            read = await read_body(receive)
-            if read is None:
-                message = "a command's body must be whole and under 32 MiB"
-                await refuse(scope, receive, send, 413, "body_too_large", message)
+        if guarded:
+            # The header first: only this device's runtime can make it read a body.
+            digest = self.verifier.check_header(_header(scope), method, scope["path"])
+            if digest is not None and kind == "http":
+                try:
+                    body = await read_body(receive)
+                except BodyRefused as refused:
+                    await refuse(
+                        scope, receive, send, refused.status, refused.code, refused.message
+                    )
+                    return
+                if body is None:
+                    return  # the client left
+                receive = replaying(body, receive)
+                genuine = same_secret(digest, body_digest(body))
+            else:
+                genuine = digest is not None and digest == EMPTY_BODY
+            if not genuine:
+                await refuse(
+                    scope,
+                    receive,
+                    send,
+                    401,
+                    "device_auth",
+                    "this device obeys only the runtime it is paired with",
+                )
                 return
-            body, receive = read, replaying(read, receive)
-        if guarded and not self.verifier.check(_header(scope), method, scope["path"], body):
-            await refuse(
-                scope,
-                receive,
-                send,
-                401,
-                "device_auth",
-                "this device obeys only the runtime it is paired with",
-            )
-            return
         await self.app(scope, receive, send)

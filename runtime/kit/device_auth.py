@@ -3,9 +3,11 @@
 shows it as its pairing code, and the administrator gives it when adding the device).
 
 The secret itself never travels. Each command request and command socket carries
-`X-Device-Auth: <time>.<nonce>.<mac>`, the MAC an HMAC-SHA256 of time, nonce, the driver's
-boot id, method, path and the body's SHA-256: good for a minute, once, for that body, and only
-by the driver process it was made for. The boot id is random at each start of a driver and
+`X-Device-Auth: <time>.<nonce>.<body digest>.<mac>`, the MAC an HMAC-SHA256 of time, nonce,
+the driver's boot id, method, path and the body's SHA-256: good for a minute, once, for that
+body, and only by the driver process it was made for. The driver checks the MAC before it
+reads a byte of the body (only its runtime makes it read one), then the body against the
+digest. The boot id is random at each start of a driver and
 sent in the `X-Device-Boot` header of its every answer, so a command or a socket's handshake
 captured before a restart (when the record of what was used is gone) is refused after it.
 
@@ -105,8 +107,14 @@ def new_boot() -> str:
     return secrets.token_hex(8)
 
 
-def _signed_text(stamp: str, nonce: str, boot: str, method: str, path: str, body: bytes) -> str:
-    digest = hashlib.sha256(body).hexdigest()
+def body_digest(body: bytes) -> str:
+    return hashlib.sha256(body).hexdigest()
+
+
+EMPTY_BODY = body_digest(b"")
+
+
+def _signed_text(stamp: str, nonce: str, boot: str, method: str, path: str, digest: str) -> str:
     return f"{stamp}.{nonce}.{boot}.{method.upper()}.{path}.{digest}"
 
 
@@ -122,7 +130,9 @@ def sign(
     """The header's value for one request to the driver process whose boot id is `boot`."""
     stamp = f"{now if now is not None else time.time():.3f}"
     nonce = secrets.token_hex(8)
-    return f"{stamp}.{nonce}.{_mac(secret, _signed_text(stamp, nonce, boot, method, path, body))}"
+    digest = body_digest(body)
+    mac = _mac(secret, _signed_text(stamp, nonce, boot, method, path, digest))
+    return f"{stamp}.{nonce}.{digest}.{mac}"
 
 
 def address_text(host: str, port: int) -> str:
@@ -184,6 +194,29 @@ class Verifier:
         self.boot = boot
         self.seen: OrderedDict[str, float] = OrderedDict()
 
+    def check_header(
+        self, value: str | None, method: str, path: str, now: float | None = None
+    ) -> str | None:
+        """The body digest a genuine, fresh, unused header vouches for (the header is used
+        up); None for any other header."""
+        if not value or not value.isascii() or value.count(".") < 4 or len(value) > 300:
+            return None
+        stamp, nonce, digest, mac = value.rsplit(".", 3)
+        try:
+            at = float(stamp)
+        except ValueError:
+            return None
+        now = time.time() if now is None else now
+        if not math.isfinite(at) or abs(now - at) > WINDOW or value in self.seen:
+            return None
+        expected = _mac(self.secret, _signed_text(stamp, nonce, self.boot, method, path, digest))
+        if not same_secret(mac, expected):
+            return None
+        self.seen[value] = at
+        while self.seen and next(iter(self.seen.values())) < now - 2 * WINDOW:
+            self.seen.popitem(last=False)
+        return digest
+
     def check(
         self,
         value: str | None,
@@ -192,23 +225,8 @@ class Verifier:
         body: bytes = b"",
         now: float | None = None,
     ) -> bool:
-        if not value or not value.isascii() or value.count(".") < 2 or len(value) > 200:
-            return False
-        stamp, nonce, mac = value.rsplit(".", 2)
-        try:
-            at = float(stamp)
-        except ValueError:
-            return False
-        now = time.time() if now is None else now
-        if not math.isfinite(at) or abs(now - at) > WINDOW or value in self.seen:
-            return False
-        expected = _mac(self.secret, _signed_text(stamp, nonce, self.boot, method, path, body))
-        if not same_secret(mac, expected):
-            return False
-        self.seen[value] = at
-        while self.seen and next(iter(self.seen.values())) < now - 2 * WINDOW:
-            self.seen.popitem(last=False)
-        return True
+        digest = self.check_header(value, method, path, now)
+        return digest is not None and same_secret(digest, body_digest(body))
 
 
 class DeviceAuth(httpx.Auth):

@@ -279,7 +279,12 @@ def test_device_signatures_are_bound_to_method_path_body_process_and_time_and_go
     )
     assert not verifier.check(signed, "PUT", "/jog_joint", body, now=1000.0)
     assert not verifier.check(signed, "POST", "/enable", body, now=1000.0)
-    assert not verifier.check(signed, "POST", "/jog_joint", b'{"velocity": [3, 0]}', now=1000.0)
+    # Another body under a genuine header: refused (and that header is used up).
+    spent = sign(
+        "the-device-secret", "POST", "/jog_joint", boot="this-process", body=body, now=1000.0
+    )
+    assert not verifier.check(spent, "POST", "/jog_joint", b'{"velocity": [3, 0]}', now=1000.0)
+    assert not verifier.check(spent, "POST", "/jog_joint", body, now=1000.0)
     assert not verifier.check(signed, "POST", "/jog_joint", body, now=1000.0 + WINDOW + 1)
     restarted = Verifier("the-device-secret", boot="the-next-process")
     assert not restarted.check(signed, "POST", "/jog_joint", body, now=1000.0)
