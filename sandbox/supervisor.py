@@ -102,7 +102,18 @@ Process = asyncio.subprocess.Process
 # All a worker is given of the runtime's environment: where Python finds packages and how it
 # runs. Never the rest: it holds the runtime's internal token, the first start's set-up code
 # and device secrets, which one escape from the interpreter would otherwise hand over.
-WORKER_PASSES = ("PYTHONPATH", "PYTHONDONTWRITEBYTECODE", "PYTHONSAFEPATH", "LANG", "LC_ALL", "TZ")
+WORKER_PASSES = (
+    "PYTHONPATH",
+    "PYTHONDONTWRITEBYTECODE",
+    "PYTHONSAFEPATH",
+    "LANG",
+    "LC_ALL",
+    "TZ",
+    # One BLAS thread, as in every runtime process (a pool per core would be started before
+    # the worker limits itself).
+    "OPENBLAS_NUM_THREADS",
+    "OMP_NUM_THREADS",
+)
 
 
 @cache

@@ -40,7 +40,8 @@ KEPT_OPTIONS = {
 # What a program's worker does once it runs: read and write its pipes, wait, sleep, keep
 # time, manage memory, take signals, end. Measured by tracing every worker of the program
 # tests (futex, write, clock_nanosleep, read, exit_group, mmap, munmap, brk, mprotect,
-# rt_sigreturn), with the calls the interpreter makes on paths those runs did not take.
+# rt_sigreturn), with the calls the interpreter makes on paths those runs did not take, and
+# their 32-bit spellings (mmap2, _llseek, fstat64, the *_time64 clocks).
 # Everything else (open, socket, ptrace, mount, unshare, keyctl, kill, ioctl, …) is refused
 # with EPERM, never run.
 ALLOWED = (
@@ -75,6 +76,13 @@ ALLOWED = (
     "close",
     "exit",
     "exit_group",
+    "mmap2",
+    "_llseek",
+    "fstat64",
+    "clock_gettime64",
+    "clock_nanosleep_time64",
+    "clock_getres_time64",
+    "futex_time64",
 )
 
 _libc = ctypes.CDLL(None, use_errno=True)
@@ -128,7 +136,10 @@ def no_new_privileges() -> bool:
 # the library up with ctypes.util.find_library, which runs `ldconfig -p` twice in every new
 # worker (about 17 ms of its start).
 SCMP_ACT_ALLOW = 0x7FFF0000
+SCMP_ACT_KILL_PROCESS = 0x80000000
+SCMP_FLTATR_ACT_BADARCH = 2
 SCMP_FLTATR_CTL_TSYNC = 4
+NR_SCMP_ERROR = -1  # a name libseccomp does not know on any architecture
 
 
 def scmp_act_errno(code: int) -> int:
@@ -173,12 +184,23 @@ def system_call_filter() -> int | None:
     if not made:
         return None
     for name in ALLOWED:
+        # Negative numbers other than the error are libseccomp's for calls this
+        # architecture lacks (mmap on i386): allowed as such, never an error.
         number = _seccomp.seccomp_syscall_resolve_name(name.encode())
-        if number < 0 or _seccomp.seccomp_rule_add_array(made, SCMP_ACT_ALLOW, number, 0, None):
+        if number == NR_SCMP_ERROR:
+            log.debug("libseccomp does not know %s", name)
+            continue
+        if _seccomp.seccomp_rule_add_array(made, SCMP_ACT_ALLOW, number, 0, None):
             log.debug("the filter cannot allow %s", name)
             return None
-    if _seccomp.seccomp_attr_set(made, SCMP_FLTATR_CTL_TSYNC, 1):
-        return None
+    # A call through another architecture's entry ends the whole process, not one thread
+    # (a thread left alone would hold the run open).
+    for attribute, value in (
+        (SCMP_FLTATR_ACT_BADARCH, SCMP_ACT_KILL_PROCESS),
+        (SCMP_FLTATR_CTL_TSYNC, 1),
+    ):
+        if _seccomp.seccomp_attr_set(made, attribute, value):
+            return None
     return made
 
 

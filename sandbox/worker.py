@@ -17,6 +17,7 @@ import sys
 import threading
 import time
 import traceback
+import unicodedata  # noqa: F401  # compiling a non-ASCII name imports it: not after close_off
 from dataclasses import dataclass, field
 from typing import Any, BinaryIO
 
