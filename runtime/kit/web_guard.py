@@ -65,13 +65,16 @@ def is_ip(host: str) -> bool:
     return True
 
 
-def same_address(origin_host: str, host_header: str | None) -> bool:
-    """Whether an Origin's IP address is the one the request's Host names."""
+def same_host(origin_host: str, host_header: str | None) -> bool:
+    """Whether an Origin names the host the request's Host names (addresses compared as
+    addresses, names without case)."""
     try:
         named, _ = split_host(host_header or "")
-        return ipaddress.ip_address(origin_host) == ipaddress.ip_address(named)
     except ValueError:
         return False
+    if is_ip(origin_host) and is_ip(named):
+        return ipaddress.ip_address(origin_host) == ipaddress.ip_address(named)
+    return origin_host.lower() == named.lower()
 
 
 @dataclass(frozen=True)
@@ -115,9 +118,9 @@ class WebPolicy:
         return None
 
     def check_origin(self, value: str | None, host_header: str | None = None) -> Refusal | None:
-        """A page's requests are accepted from the UI's own origin: a name of this computer
-        at the UI's port, or the address the request itself was sent to (any other address
-        at that port is another computer's page)."""
+        """A page's requests are accepted from the UI's own origin: the name or address the
+        request itself was sent to (one this computer answers to), at the UI's port. A page of
+        another computer's address, or of `localhost` on the tablet itself, is not the UI."""
         if value is None:
             return None  # not a browser's cross-origin request (scripts, same-origin GETs)
         parsed = urlsplit(value)
@@ -126,7 +129,7 @@ class WebPolicy:
         except ValueError:
             port = None
         host = (parsed.hostname or "").lower()
-        ours = same_address(host, host_header) if is_ip(host) else host in self.names
+        ours = self.host_allowed(host) and same_host(host, host_header)
         if parsed.scheme in ("http", "https") and ours and port == self.ui_port:
             return None
         return Refusal(

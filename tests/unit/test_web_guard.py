@@ -67,6 +67,7 @@ def test_another_sites_page_changes_nothing_and_opens_no_socket() -> None:
         ("http://10.0.0.5:8080", "10.0.0.7:8080"),
         ("http://127.0.0.2:8080", "127.0.0.1:8080"),
         ("http://[::1]:8080", "127.0.0.1:8080"),
+        ("http://localhost:8080", "10.0.0.7:8080"),  # a page on the tablet itself
     ):
         response = client.post("/echo", headers={"origin": origin, "host": host})
         assert response.status_code == 403, origin
@@ -76,6 +77,7 @@ def test_another_sites_page_changes_nothing_and_opens_no_socket() -> None:
     for origin, host in (
         ("http://10.0.0.7:8080", "10.0.0.7:8080"),
         ("http://[::1]:8080", "[::1]:8080"),
+        ("http://LocalHost:8080", "localhost:8080"),
     ):
         own_page = {"origin": origin, "host": host, "content-type": "application/json"}
         response = client.post("/echo", content=b"{}", headers=own_page)
