@@ -59,9 +59,13 @@ async def gathered(http: httpx.AsyncClient, urls: dict[str, str]) -> bytes:
     labelled("webui", own, families)
     up.add_metric(["webui"], 1.0)
     for name, text in zip(urls, texts, strict=True):
-        up.add_metric([name], 0.0 if text is None else 1.0)
-        if text is not None:
-            labelled(name, text_string_to_metric_families(text), families)
+        try:
+            parsed = list(text_string_to_metric_families(text)) if text is not None else None
+        except ValueError:  # a service that answered nonsense is counted as down
+            parsed = None
+        up.add_metric([name], 0.0 if parsed is None else 1.0)
+        if parsed is not None:
+            labelled(name, parsed, families)
     exposition = CollectorRegistry(auto_describe=False)
     exposition.register(Gathered([up, *families.values()]))
     return generate_latest(exposition)

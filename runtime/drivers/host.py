@@ -106,7 +106,8 @@ def build_driver_app(
             await driver.shutdown()
 
     name = f"{driver.kind}-driver:{driver.identity.name}"
-    app = create_app(name, lifespan=lifespan)
+    # No /metrics on a device's port: it answers anyone on the network.
+    app = create_app(name, lifespan=lifespan, metrics_route=False)
     log = CommandLog()
     app.include_router(device_router(driver, stream))
     app.include_router(interface_router(driver, log))

@@ -23,10 +23,10 @@ from openpendant.plugins.api import Driver, resolve
 from openpendant.plugins.registry import registry
 from openpendant.runtime.drivers.host import serve_driver
 from openpendant.runtime.kit.app import describe_validation_errors
-from openpendant.runtime.kit.device_auth import device_secret, runtime_tag
+from openpendant.runtime.kit.device_auth import device_secret, runtime_tag, secret_path
 from openpendant.runtime.kit.errors import OpenPendantError
 from openpendant.runtime.kit.logs import setup_logging
-from openpendant.runtime.kit.private_files import keep_private
+from openpendant.runtime.kit.private_files import keep_private, shown_secret
 from openpendant.runtime.kit.settings import SETTINGS_ENV, load_settings, settings_from_env
 
 SECRET_ENV = "OPENPENDANT_DEVICE_SECRET"
@@ -143,7 +143,13 @@ def run_driver(name: str, argv: list[str] | None = None) -> int:
     )
     if not launched:
         # Started by hand (a board on the LAN): the administrator gives this when adding it.
-        print(f"openpendant driver {name}: pairing code {secret}", file=sys.stderr, flush=True)
+        kept = secret_path(settings.data_dir, driver.identity.uuid)
+        shown = (
+            shown_secret(secret, kept, sys.stderr)
+            if kept.is_file() and kept.read_text().strip() == secret
+            else (secret if sys.stderr.isatty() else "as given (--secret or its variable)")
+        )
+        print(f"openpendant driver {name}: pairing code {shown}", file=sys.stderr, flush=True)
     serve_driver(
         driver,
         host=args["host"],

@@ -25,7 +25,7 @@ from openpendant.runtime import __version__
 from openpendant.runtime.auth.setup import SETUP_CODE_ENV, needs_setup
 from openpendant.runtime.kit.internal import ENV as INTERNAL_ENV
 from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
-from openpendant.runtime.kit.private_files import keep_private
+from openpendant.runtime.kit.private_files import keep_private, shown_secret
 from openpendant.runtime.kit.serve import listening_socket
 from openpendant.runtime.kit.settings import DeviceSpec, RuntimeSettings, settings_for_child
 from openpendant.runtime.launcher.backup import BackupError, check_databases, data_lock
@@ -100,6 +100,9 @@ def _service_child(
         pass_fds=tuple(fds),
         main=main,
     )
+
+
+SETUP_FILE = "setup-code"
 
 
 def run_secrets(data_dir: Path) -> tuple[str, str]:
@@ -286,6 +289,7 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
     watchdog.start()
     names = [c.name for c in supervisor.children if c.name not in all_services()]
     devices = ", ".join(names) or "none"
+    setup_file = settings.data_dir / SETUP_FILE
     print(
         f"OpenPendant {__version__} is running (started in "
         f"{time.monotonic() - started:.1f} s).\n"
@@ -295,7 +299,7 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
         f"  Devices: {devices}\n"
         + (
             f"  First start: open the UI to create the administrator (from another computer "
-            f"give the set-up code {setup_code}).\n"
+            f"give the set-up code {shown_secret(setup_code, setup_file, sys.stdout)}).\n"
             if needs_setup(settings.data_dir)
             else ""
         )

@@ -54,3 +54,19 @@ def test_a_data_directory_from_before_is_made_private_and_stays_so(
     (logs / "runtime.log").write_text("made afterwards")
     (data / "new").mkdir()
     assert mode(logs / "runtime.log") == 0o600 and mode(data / "new") == 0o700
+
+
+def test_a_logs_folder_elsewhere_keeps_what_is_not_ours(
+    tmp_path: Path, restored_umask: None
+) -> None:
+    """`log_dir` may be a shared folder (/var/log): only the runtime's own logs in it change."""
+    shared = tmp_path / "var-log"
+    shared.mkdir(mode=0o755)
+    shared.chmod(0o755)
+    (shared / "syslog").write_text("someone else's")
+    (shared / "syslog").chmod(0o644)
+    (shared / "webui.log").write_text("ours")
+    (shared / "webui.log").chmod(0o644)
+    keep_private(tmp_path / "data", shared)
+    assert mode(shared) == 0o755 and mode(shared / "syslog") == 0o644
+    assert mode(shared / "webui.log") == 0o600
