@@ -176,3 +176,10 @@ def test_the_worker_is_isolated() -> None:
     assert run.state is RunState.finished
     for feature in ("memory", "cpu", "no-file-writes", "no-processes", "no-new-files"):
         assert feature in run.isolation
+
+
+def test_a_program_with_non_ascii_names_runs_in_the_limited_worker() -> None:
+    """Compiling `höhe = 1` imports unicodedata, which a worker cannot open once limited."""
+    run, _ = run_program("höhe = 2\nprint(höhe * 3)")
+    assert run.state is RunState.finished, run.error
+    assert [o.text for o in run.output if o.stream == "out"] == ["6"]
