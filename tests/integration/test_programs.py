@@ -35,6 +35,7 @@ from openpendant.runtime.bench.harness.jog import Cell
 from openpendant.runtime.bench.harness.processes import STILL, Runtime, wait_for
 from openpendant.runtime.robotics.kinematics import Kinematics
 from openpendant.runtime.robotics.robot_info import load_robot_info
+from openpendant.sandbox.protocol import ISOLATION
 from tests.support.programs import HOME, PICK_AND_PLACE_WAYPOINTS, PLACE, pick_and_place, teach
 
 FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]
@@ -118,6 +119,11 @@ def test_a_pick_and_place_program_runs_to_completion(ready: Cell) -> None:
         assert started["state"] in ("starting", "running")
         final = watch(ready, "pick_and_place", ("finished", "error", "stopped"))
     assert final["state"] == "finished", final
+    # The worker had every limit this machine grants (all of them, as root), and the
+    # program service said so in its log.
+    assert final["isolation"] == list(ISOLATION)
+    log = (ready.runtime.data_dir / "logs" / "program.log").read_text()
+    assert "program workers run with every limit" in log
     outputs = [(o["text"], o["block"]) for o in final["output"]]
     printed = [t for t, _ in outputs]
     assert printed == ["done pick", "done place", "cycle complete"]
