@@ -99,12 +99,19 @@ def _install_service(args: argparse.Namespace) -> int:
 
 def _backup(args: argparse.Namespace) -> int:
     from openpendant.runtime.kit.settings import load_settings
-    from openpendant.runtime.launcher.backup import BackupError, backup
+    from openpendant.runtime.launcher.backup import BackupError, backup, scheduled_backup
 
-    data_dir = args.data_dir or load_settings(args.config).data_dir
+    settings = load_settings(args.config)
+    data_dir = args.data_dir or settings.data_dir
     output = args.output or Path(f"openpendant-backup-{time.strftime('%Y%m%d-%H%M%S')}.tar.gz")
     try:
-        backup(data_dir, output, args.config)
+        if args.scheduled:
+            folder = settings.backups.folder
+            if folder is None:
+                raise BackupError("give backups: {folder: DIR} in the config for --scheduled")
+            output = scheduled_backup(data_dir, folder, settings.backups.keep_days, args.config)
+        else:
+            backup(data_dir, output, args.config)
     except (BackupError, OSError) as exc:
         print(f"openpendant backup: {exc}", file=sys.stderr)
         return 2
@@ -200,6 +207,11 @@ def parser() -> argparse.ArgumentParser:
     saved.add_argument("--output", type=Path, default=None, help="the archive to write")
     saved.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
     saved.add_argument("--config", type=Path, default=None, help="site config YAML (kept too)")
+    saved.add_argument(
+        "--scheduled",
+        action="store_true",
+        help="into the config's backups.folder, removing those older than backups.keep_days",
+    )
     saved.set_defaults(handler=_backup)
     back = sub.add_parser("restore", help="put a backup in place (the runtime stopped)")
     back.add_argument("file", type=Path, help="an archive made by openpendant backup")

@@ -79,6 +79,15 @@ class ProgramSettings(BaseModel):
     runs_without_robots: int = Field(default=3, ge=0, le=64)
 
 
+class BackupSettings(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    # Where `openpendant backup --scheduled` (the backup timer) writes, and how many days
+    # its archives are kept there.
+    folder: Path | None = None
+    keep_days: int = Field(default=14, ge=1, le=3650)
+
+
 class DeviceSpec(BaseModel):
     """A device the launcher starts and supervises: an installed driver (`openpendant driver
     NAME`) with its options."""
@@ -133,6 +142,7 @@ class RuntimeSettings(BaseSettings):
     programs: ProgramSettings = Field(default_factory=ProgramSettings)
     motion: MotionSettings = Field(default_factory=MotionSettings)
     auth: AuthSettings = Field(default_factory=AuthSettings)
+    backups: BackupSettings = Field(default_factory=BackupSettings)
     state_rate_hz: float = Field(default=100.0, gt=0, le=500)
     variable_history: int = Field(default=20, ge=1, le=1000)
     lease_seconds: float = Field(default=15.0, gt=0, le=3600)

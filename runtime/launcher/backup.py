@@ -154,6 +154,21 @@ def backup(data_dir: Path, output: Path, config: Path | None = None) -> Path:
     return output
 
 
+SCHEDULED = "openpendant-*.tar.gz"
+
+
+def scheduled_backup(data_dir: Path, folder: Path, keep_days: int, config: Path | None) -> Path:
+    """A dated archive in `folder`, and those there older than `keep_days` removed (only
+    archives this names; nothing else in the folder is touched)."""
+    folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    made = backup(data_dir, folder / f"openpendant-{time.strftime('%Y%m%d-%H%M%S')}.tar.gz", config)
+    oldest = time.time() - keep_days * 86400
+    for archive in folder.glob(SCHEDULED):
+        if archive != made and archive.is_file() and archive.stat().st_mtime < oldest:
+            archive.unlink()
+    return made
+
+
 def read_archive(archive_path: Path) -> dict[str, bytes]:
     """The archive's files, each checked against its manifest."""
     try:

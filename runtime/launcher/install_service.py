@@ -18,6 +18,7 @@ from pathlib import Path
 from openpendant.plugins.registry import registry
 
 RUNTIME_UNIT = "openpendant.service"
+BACKUP_UNITS = ("openpendant-backup.service", "openpendant-backup.timer")
 DRIVER_UNIT = "openpendant-driver@.service"
 COMMAND = "@OPENPENDANT@"
 SAFE_NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,63}\Z")
@@ -28,6 +29,9 @@ host: 0.0.0.0            # serve the UI to the tablets on the LAN
 port: 8080
 sim: false               # no simulated devices on a real cell
 devices: []              # drivers the runtime starts itself; or one unit each (--driver)
+backups:                 # openpendant-backup.timer: once a day, kept this many days
+  folder: /var/lib/openpendant-backups
+  keep_days: 14
 """
 
 
@@ -113,7 +117,10 @@ def install_service(root: Path, drivers: list[str], runtime: bool, enable: bool)
         (units_dir / RUNTIME_UNIT).write_text(unit_text(RUNTIME_UNIT, command))
         written.append(f"wrote    {units_dir / RUNTIME_UNIT}")
         write_new(config_dir / "openpendant.yaml", CELL_CONFIG, written)
-        units.append(RUNTIME_UNIT)
+        for name in BACKUP_UNITS:
+            (units_dir / name).write_text(unit_text(name, command))
+            written.append(f"wrote    {units_dir / name}")
+        units += [RUNTIME_UNIT, BACKUP_UNITS[1]]
     if devices:
         (units_dir / DRIVER_UNIT).write_text(unit_text(DRIVER_UNIT, command))
         written.append(f"wrote    {units_dir / DRIVER_UNIT}")

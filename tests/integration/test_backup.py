@@ -7,10 +7,12 @@ restore command; a backup whose bytes were changed is refused."""
 from __future__ import annotations
 
 import io
+import os
 import sqlite3
 import subprocess
 import sys
 import tarfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -158,3 +160,38 @@ def test_a_data_directory_reached_through_a_link_is_restored_where_it_is(tmp_pat
     assert link.is_symlink() and link.resolve() == private.resolve()
     assert (private / "variables.sqlite").is_file()
     assert list((tmp_path / "private").glob("openpendant.before-restore-*"))
+
+
+def test_a_scheduled_backup_is_dated_and_old_ones_go(tmp_path: Path) -> None:
+    """What the backup timer runs: an archive into backups.folder, and the archives older
+    than backups.keep_days removed; nothing else in the folder is touched."""
+    data = tmp_path / "data"
+    data.mkdir()
+    with sqlite3.connect(data / "variables.sqlite") as db:
+        db.execute("CREATE TABLE t (v)")
+    folder = tmp_path / "backups"
+    folder.mkdir()
+    old, recent, other = (
+        folder / "openpendant-20260101-000000.tar.gz",
+        folder / "openpendant-20261126-000000.tar.gz",
+        folder / "notes.txt",
+    )
+    for path in (old, recent, other):
+        path.write_bytes(b"x")
+    three_days_ago = time.time() - 3 * 86400
+    for path in (old, other):
+        os.utime(path, (three_days_ago, three_days_ago))
+    config = tmp_path / "openpendant.yaml"
+    config.write_text(f"backups: {{folder: {folder}, keep_days: 1}}\n")
+    done = openpendant(
+        tmp_path, "backup", "--scheduled", "--config", str(config), "--data-dir", str(data)
+    )
+    assert done.returncode == 0, done.stderr
+    left = sorted(p.name for p in folder.iterdir())
+    made = [n for n in left if n not in (recent.name, other.name)]
+    assert len(made) == 1 and made[0].startswith("openpendant-") and old.name not in left
+    assert recent.name in left and other.name in left
+    with tarfile.open(folder / made[0]) as archive:
+        assert "manifest.json" in archive.getnames()
+    unset = openpendant(tmp_path, "backup", "--scheduled", "--data-dir", str(data))
+    assert unset.returncode == 2 and "backups: {folder: DIR}" in unset.stderr

@@ -61,6 +61,13 @@ def test_install_verify_enable_and_run_a_cell_and_a_driver_board(tmp_path: Path)
         assert f"ExecStart={COMMAND} " in text and "@OPENPENDANT@" not in text
     verify(runtime_unit, "openpendant.service", tmp_path / "verify")
     verify(driver_unit, "openpendant-driver@arm1.service", tmp_path / "verify")
+    for name in ("openpendant-backup.service", "openpendant-backup.timer"):
+        assert "@OPENPENDANT@" not in (units / name).read_text()
+        verify(units / name, name, tmp_path / "verify")
+    timers = units / "timers.target.wants"
+    assert (timers / "openpendant-backup.timer").readlink() == Path(
+        "/etc/systemd/system/openpendant-backup.timer"
+    )
     wants = units / "multi-user.target.wants"
     assert (wants / "openpendant.service").readlink() == Path(
         "/etc/systemd/system/openpendant.service"
@@ -70,6 +77,7 @@ def test_install_verify_enable_and_run_a_cell_and_a_driver_board(tmp_path: Path)
     )
     config = yaml.safe_load((root / "etc" / "openpendant" / "openpendant.yaml").read_text())
     assert config["sim"] is False and config["host"] == "0.0.0.0"
+    assert config["backups"] == {"folder": "/var/lib/openpendant-backups", "keep_days": 14}
 
     # The device file, edited as its comments say (on loopback: this test's network rule).
     device_file = root / "etc" / "openpendant" / "devices" / "arm1.yaml"
