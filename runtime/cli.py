@@ -152,6 +152,12 @@ def _drivers(rest: list[str]) -> int:
     return _driver(rest[0], rest[1:])
 
 
+def _data_options(command: argparse.ArgumentParser, config_help: str = "site config YAML") -> None:
+    """Which runtime's data a command works on: its config, or its data directory."""
+    command.add_argument("--config", type=Path, default=None, help=config_help)
+    command.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="openpendant", description="OpenPendant teach pendant")
     p.add_argument("--version", action="version", version=f"openpendant {__version__}")
@@ -205,8 +211,7 @@ def parser() -> argparse.ArgumentParser:
         "backup", help="one archive of the databases, device secrets and config (online)"
     )
     saved.add_argument("--output", type=Path, default=None, help="the archive to write")
-    saved.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
-    saved.add_argument("--config", type=Path, default=None, help="site config YAML (kept too)")
+    _data_options(saved, config_help="site config YAML (kept too)")
     saved.add_argument(
         "--scheduled",
         action="store_true",
@@ -215,15 +220,13 @@ def parser() -> argparse.ArgumentParser:
     saved.set_defaults(handler=_backup)
     back = sub.add_parser("restore", help="put a backup in place (the runtime stopped)")
     back.add_argument("file", type=Path, help="an archive made by openpendant backup")
-    back.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
-    back.add_argument("--config", type=Path, default=None, help="site config YAML")
+    _data_options(back)
     back.set_defaults(handler=_restore)
 
     check = sub.add_parser(
         "doctor", help="check this computer for a cell: data, ports, multicast, clock, devices"
     )
-    check.add_argument("--config", type=Path, default=None, help="site config YAML")
-    check.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
+    _data_options(check)
     check.add_argument("--port", type=int, default=None, help="UI port (default 8080)")
     check.add_argument("--host", default=None, help="UI address")
     check.set_defaults(handler=_doctor)
@@ -248,8 +251,7 @@ def parser() -> argparse.ArgumentParser:
         "--role", required=True, choices=["viewer", "operator", "programmer", "admin"]
     )
     create.add_argument("--name", required=True, help="what the token is for")
-    create.add_argument("--data-dir", type=Path, default=None, help="the runtime's data")
-    create.add_argument("--config", type=Path, default=None, help="site config YAML")
+    _data_options(create)
     create.set_defaults(handler=_token)
 
     openapi = sub.add_parser(
