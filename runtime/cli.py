@@ -22,6 +22,10 @@ def _run(args: argparse.Namespace) -> int:
         data_dir=args.data_dir,
         sim=False if args.no_sim else None,
     )
+    if args.tls:
+        settings = settings.model_copy(
+            update={"tls": settings.tls.model_copy(update={"enabled": True})}
+        )
     setup_logging("launcher", settings.log_level, human=True)
     return run(settings, entry=main)
 
@@ -48,6 +52,7 @@ def _service(args: argparse.Namespace) -> int:
         port=args.port,
         settings=settings,
         public_fd=args.public_fd,
+        redirect_fd=args.redirect_fd,
     )
     return 0
 
@@ -169,6 +174,9 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--config", type=Path, default=None, help="site config YAML")
     run.add_argument("--data-dir", type=Path, default=None, help="database and logs")
     run.add_argument("--no-sim", action="store_true", help="start no simulated robot")
+    run.add_argument(
+        "--tls", action="store_true", default=None, help="serve the UI over HTTPS (config: tls)"
+    )
     run.set_defaults(handler=_run)
 
     sub.add_parser(
@@ -236,6 +244,9 @@ def parser() -> argparse.ArgumentParser:
     service.add_argument("--fd", type=int, default=None, help="inherited listening socket")
     service.add_argument(
         "--public-fd", type=int, default=None, help="inherited public socket (jog: its socket)"
+    )
+    service.add_argument(
+        "--redirect-fd", type=int, default=None, help="inherited plain-HTTP socket (webui, TLS)"
     )
     service.add_argument("--host", default="127.0.0.1")
     service.add_argument("--port", type=int, default=None)

@@ -18,6 +18,7 @@ from openpendant.runtime.kit import tickets
 from openpendant.runtime.kit.constant_time import same_secret
 from openpendant.runtime.kit.errors import InvalidValue, OpenPendantError
 from openpendant.runtime.kit.settings import is_loopback
+from openpendant.runtime.kit.tls import CA_DOWNLOAD, TlsFiles
 from openpendant.webui import policy
 from openpendant.webui.access import SESSION_COOKIE, client_address
 
@@ -78,10 +79,19 @@ class NewToken(Strict):
 # What the routes answer (the UI's client is generated from these, webui/openapi.py).
 
 
+class TlsStatus(BaseModel):
+    """What a tablet checks before it trusts the UI's HTTPS (nothing of it is secret)."""
+
+    fingerprint: str  # SHA-256 of the runtime's certificate authority, or the site's certificate
+    authority: bool  # the runtime's own authority, which a tablet installs from `download`
+    download: str | None
+
+
 class AuthStatus(BaseModel):
     set_up: bool  # an administrator exists
     setup_needs_code: bool  # from here, set-up asks for the code printed at start
     signed_in: bool
+    tls: TlsStatus | None = None  # the UI is served over HTTPS
 
 
 class SignedIn(BaseModel):
@@ -160,8 +170,19 @@ def identity(request: Request) -> Identity:
     return who
 
 
-def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> APIRouter:
+def auth_router(
+    store: AuthStore, audit: AuditLog, setup_code: str | None, tls: TlsFiles | None = None
+) -> APIRouter:
     router = APIRouter(prefix="/api/auth")
+    tls_status = (
+        None
+        if tls is None
+        else TlsStatus(
+            fingerprint=tls.fingerprint(),
+            authority=tls.ca is not None,
+            download=CA_DOWNLOAD if tls.ca is not None else None,
+        )
+    )
 
     def record(
         request: Request,
@@ -216,6 +237,7 @@ def auth_router(store: AuthStore, audit: AuditLog, setup_code: str | None) -> AP
             set_up=store.user_count() > 0,
             setup_needs_code=not is_loopback(client_address(request.scope)),
             signed_in=who is not None,
+            tls=tls_status,
         )
 
     @router.post("/setup")

@@ -20,7 +20,9 @@ from openpendant.runtime.auth.audit import AUDIT_FILE, AuditLog
 from openpendant.runtime.auth.setup import SETUP_CODE_ENV, auth_store
 from openpendant.runtime.kit.app import create_app
 from openpendant.runtime.kit.errors import NotFound
+from openpendant.runtime.kit.https_redirect import ca_response
 from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.kit.tls import CA_DOWNLOAD, tls_files
 from openpendant.runtime.kit.web_guard import WebGuard
 from openpendant.runtime.paths import package_roots
 from openpendant.runtime.services import services as declared_services
@@ -113,7 +115,15 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     # Outermost first: the guard of what a browser may send, then who it is.
     app.add_middleware(AccessGuard, store=store, audit=audit)
     app.add_middleware(WebGuard, policy=web_policy(settings))
-    app.include_router(auth_router(store, audit, os.environ.get(SETUP_CODE_ENV) or None))
+    tls = tls_files(settings)
+    app.include_router(auth_router(store, audit, os.environ.get(SETUP_CODE_ENV) or None, tls))
+    if tls is not None and tls.ca is not None:
+        authority = tls.ca
+
+        @app.get(CA_DOWNLOAD, include_in_schema=False)
+        async def certificate_authority() -> Response:
+            """The runtime's certificate authority, for a tablet to trust (public)."""
+            return ca_response(authority)
 
     @app.get("/api/health")
     async def health() -> Health:

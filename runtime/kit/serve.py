@@ -1,9 +1,15 @@
 """Running an ASGI app with uvicorn on a socket we own (so the port is known up front, and a
-launcher can keep it open across restarts of the process behind it)."""
+launcher can keep it open across restarts of the process behind it), over TLS where asked,
+and beside it other listeners of the same process (a plain port beside an HTTPS one)."""
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import socket
+import ssl
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
 
 import uvicorn
 from starlette.types import ASGIApp
@@ -19,12 +25,23 @@ def listening_socket(host: str, port: int) -> socket.socket:
     return sock
 
 
-def run_app(app: ASGIApp, *sockets: socket.socket) -> None:
-    config = uvicorn.Config(
-        app,
+@dataclass
+class Listener:
+    """An app served on sockets, over TLS with `tls` (a server context's maker)."""
+
+    app: ASGIApp
+    sockets: list[socket.socket]
+    tls: Callable[[], ssl.SSLContext] | None = None
+    lifespan: bool = field(default=False, init=False)
+
+
+def _config(listener: Listener) -> uvicorn.Config:
+    tls = listener.tls
+    return uvicorn.Config(
+        listener.app,
         log_config=None,
         access_log=False,
-        lifespan="on",
+        lifespan="on" if listener.lifespan else "off",
         timeout_graceful_shutdown=3,
         # Longer than any client of ours keeps an idle connection (httpx: 5 s). With both at
         # 5 s a client could send on a connection the server was closing that instant, and
@@ -33,5 +50,51 @@ def run_app(app: ASGIApp, *sockets: socket.socket) -> None:
         timeout_keep_alive=30,
         ws_ping_interval=5.0,
         ws_ping_timeout=5.0,
+        ssl_context_factory=None if tls is None else lambda _config, _default: tls(),
     )
-    uvicorn.Server(config).run(sockets=list(sockets))
+
+
+class _Follower(uvicorn.Server):
+    """A second server of the process: it starts once the first has (whose lifespan, the
+    app's start-up, it shares) and stops with it; the first handles the signals."""
+
+    def __init__(self, config: uvicorn.Config, leader: uvicorn.Server) -> None:
+        super().__init__(config)
+        self.leader = leader
+
+    @contextlib.contextmanager
+    def capture_signals(self) -> Iterator[None]:
+        yield
+
+    async def serve(self, sockets: list[socket.socket] | None = None) -> None:
+        while not self.leader.started:
+            if self.leader.should_exit:
+                return
+            await asyncio.sleep(0.01)
+        await super().serve(sockets)
+
+    async def on_tick(self, counter: int) -> bool:
+        return self.leader.should_exit or await super().on_tick(counter)
+
+
+def run_listeners(first: Listener, *others: Listener) -> None:
+    """Serve until SIGTERM or SIGINT; `first` runs the app's lifespan."""
+    first.lifespan = True
+    leader = uvicorn.Server(_config(first))
+    if not others:
+        leader.run(sockets=first.sockets)
+        return
+    followers = [(_Follower(_config(o), leader), o.sockets) for o in others]
+
+    async def serve_all() -> None:
+        await asyncio.gather(
+            leader.serve(first.sockets), *(f.serve(sockets) for f, sockets in followers)
+        )
+
+    # The event loop uvicorn would choose for one server (uvloop where installed).
+    with asyncio.Runner(loop_factory=leader.config.get_loop_factory()) as runner:
+        runner.run(serve_all())
+
+
+def run_app(app: ASGIApp, *sockets: socket.socket) -> None:
+    run_listeners(Listener(app, list(sockets)))

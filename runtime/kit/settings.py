@@ -88,6 +88,30 @@ class BackupSettings(BaseModel):
     keep_days: int = Field(default=14, ge=1, le=3650)
 
 
+class TlsSettings(BaseModel):
+    """HTTPS for the UI's port and the jog socket (`run --tls`)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    enabled: bool = False
+    # The site's own certificate (PEM, with its chain) and key; without them the runtime
+    # makes its own certificate authority in the data directory, and a certificate from it
+    # for this computer's names and addresses.
+    cert_file: Path | None = None
+    key_file: Path | None = None
+    # Names besides this computer's hostname, hostname.local, localhost and its addresses
+    # that the runtime's own certificate is made for.
+    names: list[str] = Field(default_factory=list)
+    # A plain-HTTP port that sends every request on to the HTTPS UI (80 beside 443).
+    redirect_port: int | None = Field(default=None, ge=0, le=65535)
+
+    @model_validator(mode="after")
+    def _both_files(self) -> TlsSettings:
+        if (self.cert_file is None) != (self.key_file is None):
+            raise ValueError("tls: give both cert_file and key_file, or neither")
+        return self
+
+
 class DeviceSpec(BaseModel):
     """A device the launcher starts and supervises: an installed driver (`openpendant driver
     NAME`) with its options."""
@@ -143,6 +167,7 @@ class RuntimeSettings(BaseSettings):
     motion: MotionSettings = Field(default_factory=MotionSettings)
     auth: AuthSettings = Field(default_factory=AuthSettings)
     backups: BackupSettings = Field(default_factory=BackupSettings)
+    tls: TlsSettings = Field(default_factory=TlsSettings)
     state_rate_hz: float = Field(default=100.0, gt=0, le=500)
     variable_history: int = Field(default=20, ge=1, le=1000)
     lease_seconds: float = Field(default=15.0, gt=0, le=3600)

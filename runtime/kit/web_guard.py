@@ -94,6 +94,8 @@ class WebPolicy:
     jog_port: int | None = None
     # Path prefixes that take a file's raw bytes (PUT), and the largest each takes.
     uploads: dict[str, int] = field(default_factory=dict)
+    # "https" when the UI is served over TLS: a page of the plain-HTTP origin is not the UI.
+    scheme: str = "http"
     names: frozenset[str] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -130,7 +132,7 @@ class WebPolicy:
             port = None
         host = (parsed.hostname or "").lower()
         ours = self.host_allowed(host) and same_host(host, host_header)
-        if parsed.scheme in ("http", "https") and ours and port == self.ui_port:
+        if parsed.scheme == self.scheme and ours and port == self.ui_port:
             return None
         return Refusal(
             403, "origin_not_allowed", f"requests from pages of {value[:80]!r} are not accepted"
@@ -190,7 +192,8 @@ class WebPolicy:
             host = f"[{host}]"
         # Any port of this host: a restarted runtime may give the jog socket another port,
         # and a page loaded before keeps the policy it came with.
-        return CSP + f"; connect-src 'self' ws://{host}:* wss://{host}:*"
+        sockets = f"wss://{host}:*" if self.scheme == "https" else f"ws://{host}:* wss://{host}:*"
+        return CSP + f"; connect-src 'self' {sockets}"
 
 
 def _headers(scope: Scope) -> dict[str, str]:

@@ -26,11 +26,14 @@ from pathlib import Path
 
 from openpendant.runtime import __version__
 from openpendant.runtime.kit.schema import KNOWN, SchemaTooNew, refuse_newer
+from openpendant.runtime.kit.tls import TLS_DIR
 
 DATABASES = tuple(KNOWN)  # every database a runtime keeps
 KEPT = ("runtime-id",)  # files kept as they are (the installation's id: its devices' uuids)
 SECRETS = "device-secrets"
-FOLDERS = (SECRETS, "models")  # kept whole: pairing secrets, installed detector networks
+# Kept whole: pairing secrets, installed detector networks, the HTTPS certificate authority
+# (tablets trust it: a restored cell keeps that trust).
+FOLDERS = (SECRETS, "models", TLS_DIR)
 LOCK = "runtime.lock"
 MANIFEST = "manifest.json"
 FORMAT = 1

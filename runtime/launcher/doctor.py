@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import datetime
 import ipaddress
 import json
 import socket
@@ -19,8 +20,10 @@ from typing import Literal
 from urllib.parse import urlsplit
 
 import ifaddr
+from cryptography import x509
 
-from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.kit.settings import RuntimeSettings, is_loopback
+from openpendant.runtime.kit.tls import tls_files
 from openpendant.runtime.launcher.backup import BackupError, check_databases, runtime_running
 
 Verdict = Literal["ok", "warn", "fix"]
@@ -72,6 +75,8 @@ def ports(settings: RuntimeSettings) -> Iterator[Finding]:
     wanted = [("UI", settings.port, "--port (or port: in the config)")]
     if settings.jog_port:
         wanted.append(("jog socket", settings.jog_port, "jog_port: in the config"))
+    if settings.tls.enabled and settings.tls.redirect_port:
+        wanted.append(("plain HTTP", settings.tls.redirect_port, "tls.redirect_port"))
     for what, port, how in wanted:
         family = socket.AF_INET6 if ":" in settings.host else socket.AF_INET
         with socket.socket(family, socket.SOCK_STREAM) as probe:
@@ -186,10 +191,41 @@ def sandbox() -> Iterator[Finding]:
         yield Finding("ok", "libseccomp is there: programs run with a system-call filter")
 
 
+def https(settings: RuntimeSettings) -> Iterator[Finding]:
+    files = tls_files(settings)
+    if files is None:
+        if not is_loopback(settings.host):
+            yield Finding(
+                "warn",
+                "the UI is served to the network in clear: passwords and sessions can be read",
+                "set tls: {enabled: true} in the config (or run --tls)",
+            )
+        return
+    if files.ca is not None and not files.ca.is_file():
+        yield Finding("ok", "HTTPS: the runtime makes its certificate authority at its next start")
+        return
+    try:
+        certificate = x509.load_pem_x509_certificates(files.cert.read_bytes())[0]
+    except (OSError, ValueError) as exc:
+        yield Finding("fix", f"HTTPS: cannot read the certificate {files.cert}: {exc}")
+        return
+    left = (certificate.not_valid_after_utc - datetime.datetime.now(datetime.UTC)).days
+    renew = (
+        "restart the runtime (it renews its own)" if files.ca else "renew the site's certificate"
+    )
+    if left < 0:
+        yield Finding("fix", f"HTTPS: the certificate {files.cert} has expired", renew)
+    elif left < 30:
+        yield Finding("warn", f"HTTPS: the certificate {files.cert} ends in {left} days", renew)
+    else:
+        yield Finding("ok", f"HTTPS: a tablet trusts the fingerprint {files.fingerprint()}")
+
+
 def findings(settings: RuntimeSettings) -> list[Finding]:
     return [
         *data_directory(settings),
         *ports(settings),
+        *https(settings),
         *multicast(settings),
         *time_sync(),
         *devices(settings),

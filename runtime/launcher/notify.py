@@ -11,6 +11,7 @@ import contextlib
 import logging
 import os
 import socket
+import ssl
 import threading
 from collections.abc import Callable, MutableMapping
 
@@ -68,8 +69,10 @@ class Watchdog:
         notifier: Notifier,
         urls: dict[str, str],
         healthy: Callable[[dict[str, str], httpx.Client], bool] = all_healthy,
+        verify: ssl.SSLContext | bool = True,
     ) -> None:
         self.notifier = notifier
+        self.verify = verify
         self.urls = urls
         self.healthy = healthy
         self.stopped = threading.Event()
@@ -83,7 +86,7 @@ class Watchdog:
 
     def _run(self) -> None:
         assert self.notifier.watchdog is not None
-        with httpx.Client(timeout=HEALTH_TIMEOUT, trust_env=False) as client:
+        with httpx.Client(timeout=HEALTH_TIMEOUT, trust_env=False, verify=self.verify) as client:
             while not self.stopped.wait(self.notifier.watchdog):
                 if self.healthy(self.urls, client):
                     self.notifier.send("WATCHDOG=1")

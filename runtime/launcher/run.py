@@ -11,6 +11,7 @@ import os
 import secrets
 import signal
 import socket
+import ssl
 import sys
 import time
 import uuid
@@ -28,6 +29,8 @@ from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
 from openpendant.runtime.kit.private_files import keep_private, shown_secret
 from openpendant.runtime.kit.serve import listening_socket
 from openpendant.runtime.kit.settings import DeviceSpec, RuntimeSettings, settings_for_child
+from openpendant.runtime.kit.tls import CA_DOWNLOAD, TlsError, TlsFiles, probe_context
+from openpendant.runtime.kit.tls import prepare as prepare_tls
 from openpendant.runtime.launcher.backup import BackupError, check_databases, data_lock
 from openpendant.runtime.launcher.notify import Notifier, Watchdog
 from openpendant.runtime.launcher.supervisor import Child, Main, Supervisor, process_env
@@ -180,10 +183,26 @@ def _device_children(
     return children
 
 
-def wait_healthy(urls: dict[str, str], supervisor: Supervisor, timeout: float) -> None:
+def tls_lines(tls: TlsFiles, redirect: socket.socket | None) -> str:
+    """What the start-up message says of HTTPS: what a tablet checks before trusting it."""
+    what = "certificate authority" if tls.ca is not None else "certificate"
+    lines = f"  HTTPS: the {what}'s SHA-256 fingerprint is {tls.fingerprint()}\n"
+    if tls.ca is not None:
+        lines += f"    (a tablet installs it from {CA_DOWNLOAD} and checks that fingerprint)\n"
+    if redirect is not None:
+        lines += f"  Plain HTTP on port {redirect.getsockname()[1]} is sent on to HTTPS.\n"
+    return lines
+
+
+def wait_healthy(
+    urls: dict[str, str],
+    supervisor: Supervisor,
+    timeout: float,
+    verify: ssl.SSLContext | bool = True,
+) -> None:
     deadline = time.monotonic() + timeout
     pending = dict(urls)
-    with httpx.Client(timeout=1.0) as client:
+    with httpx.Client(timeout=1.0, verify=verify) as client:
         while pending:
             if supervisor.stopping:
                 raise StartupFailed("stopped during start-up")
@@ -219,6 +238,11 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
         print(f"openpendant: {exc}", file=sys.stderr)
         return 1
     try:
+        tls = prepare_tls(settings)
+    except TlsError as exc:
+        print(f"openpendant: {exc}", file=sys.stderr)
+        return 1
+    try:
         public = listening_socket(settings.host, settings.port)
     except OSError as exc:
         print(
@@ -240,6 +264,17 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
             file=sys.stderr,
         )
         return 1
+    redirect = None
+    if tls is not None and settings.tls.redirect_port is not None:
+        try:
+            redirect = listening_socket(settings.host, settings.tls.redirect_port)
+        except OSError as exc:
+            print(
+                f"openpendant: cannot listen on {settings.host}:{settings.tls.redirect_port} "
+                f"for plain HTTP: {exc.strerror}. Choose another tls.redirect_port.",
+                file=sys.stderr,
+            )
+            return 1
     # Kept by the launcher like the others: the port survives a restart of the jog service.
     # The UI's port is the origin its pages come from (the services check it; see web_guard).
     settings = settings.model_copy(
@@ -271,21 +306,27 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
         supervisor.add(
             _service_child(spec.name, sockets[spec.name], env, settings, public_socket, main)
         )
-    supervisor.add(_service_child(WEBUI.name, public, env, settings, main=main))
+    webui = _service_child(WEBUI.name, public, env, settings, main=main)
+    if redirect is not None:
+        webui.argv += ["--redirect-fd", str(redirect.fileno())]
+        webui.pass_fds += (redirect.fileno(),)
+    supervisor.add(webui)
     for child in _device_children(settings, env, main):
         supervisor.add(child)
 
     ui_host = "127.0.0.1" if settings.host in ("0.0.0.0", "") else settings.host
-    ui_url = f"http://{ui_host}:{public_port}/"
+    scheme = "https" if tls is not None else "http"
+    ui_url = f"{scheme}://{ui_host}:{public_port}/"
+    verify = probe_context() if tls is not None else True
     try:
-        wait_healthy({**urls, WEBUI.name: ui_url.rstrip("/")}, supervisor, STARTUP_TIMEOUT)
+        wait_healthy({**urls, WEBUI.name: ui_url.rstrip("/")}, supervisor, STARTUP_TIMEOUT, verify)
     except StartupFailed as exc:
         print(f"openpendant: start-up failed: {exc}. Logs: {settings.logs}", file=sys.stderr)
         supervisor.stop_all()
         return 1
 
     notifier.send("READY=1", f"STATUS=OpenPendant UI at {ui_url}", f"MAINPID={os.getpid()}")
-    watchdog = Watchdog(notifier, {**urls, WEBUI.name: ui_url.rstrip("/")})
+    watchdog = Watchdog(notifier, {**urls, WEBUI.name: ui_url.rstrip("/")}, verify=verify)
     watchdog.start()
     names = [c.name for c in supervisor.children if c.name not in all_services()]
     devices = ", ".join(names) or "none"
@@ -294,7 +335,8 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
         f"OpenPendant {__version__} is running (started in "
         f"{time.monotonic() - started:.1f} s).\n"
         f"  OpenPendant UI: {ui_url}\n"
-        f"  Logs: {settings.logs}\n"
+        + (tls_lines(tls, redirect) if tls is not None else "")
+        + f"  Logs: {settings.logs}\n"
         f"  Data: {settings.data_dir}\n"
         f"  Devices: {devices}\n"
         + (

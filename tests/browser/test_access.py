@@ -1,20 +1,94 @@
-"""Signing in on a tablet by touch: the first start's set-up of the administrator, an
-operator refused the administrator's page, hostile text shown as text, signing out, and a
-tablet whose session ended elsewhere saying why on its sign-in screen."""
+"""Signing in on a tablet by touch, over HTTPS: the first start's set-up of the
+administrator (with the runtime's certificate authority to trust, its fingerprint and QR
+code), an operator refused the administrator's page, hostile text shown as text, signing
+out, a tablet whose session ended elsewhere saying why on its sign-in screen, plain HTTP sent
+on to HTTPS, and a jog over the jog port's TLS.
+
+This module's runtime speaks HTTPS only (`run --tls`, its own certificate authority, plain
+HTTP on a port of its own redirected); Chromium trusts the authority by its public key's
+SHA-256 (--ignore-certificate-errors-spki-list), as a tablet that installed it would. Every
+other module's runtime speaks plain HTTP."""
 
 from __future__ import annotations
 
+import ssl
+from collections.abc import Iterator
 from pathlib import Path
 
-from playwright.sync_api import Browser, Page, expect
+import cv2
+import httpx
+import numpy as np
+import pytest
+import yaml
+from playwright.sync_api import Browser, Page, Playwright, expect
 
 from openpendant.runtime.auth.roles import Role
 from openpendant.runtime.auth.setup import auth_path
 from openpendant.runtime.auth.store import AuthStore
-from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, wait_for
-from tests.browser.conftest import TABLET, PageErrors, open_context
+from openpendant.runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
+from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, free_port, wait_for
+from openpendant.runtime.kit.tls import (
+    CA_CERT,
+    CA_DOWNLOAD,
+    SERVER_CERT,
+    SERVER_KEY,
+    TLS_DIR,
+    TlsFiles,
+)
+from tests.browser.conftest import (
+    TABLET,
+    Finger,
+    PageErrors,
+    add_robot,
+    browser_env,
+    open_context,
+    robot_at_rest,
+    robot_joints,
+)
+from tests.browser.test_shop_floor import take_control_and_enable
 
 HOSTILE = '<img src=x onerror="window.__pwned=1">'
+
+
+def authority(runtime: Runtime) -> TlsFiles:
+    folder = runtime.data_dir / TLS_DIR
+    return TlsFiles(folder / SERVER_CERT, folder / SERVER_KEY, folder / CA_CERT)
+
+
+@pytest.fixture(scope="module")
+def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
+    home = tmp_path_factory.mktemp("access-tls")
+    config = home / "config.yaml"
+    config.write_text(f"tls:\n  redirect_port: {free_port()}\n")
+    proc = Runtime(home, extra=["--tls", "--config", str(config)], env=browser_env(home))
+    proc.wait_ready()
+    yield proc
+    proc.stop()
+    assert proc.service_errors() == []
+
+
+@pytest.fixture(scope="module")
+def browser(playwright: Playwright, runtime: Runtime) -> Iterator[Browser]:
+    """Chromium trusting this runtime's certificate authority, and nothing else new."""
+    pin = f"--ignore-certificate-errors-spki-list={authority(runtime).spki_pin()}"
+    launched = playwright.chromium.launch(
+        executable_path=CHROMIUM, headless=True, args=[*CHROMIUM_ARGS, pin]
+    )
+    yield launched
+    launched.close()
+
+
+def redirect_port(runtime: Runtime) -> int:
+    line = runtime.wait_line(lambda s: "Plain HTTP on port" in s, 5)
+    return int(line.split("Plain HTTP on port", 1)[1].split()[0])
+
+
+def decoded_qr(png: bytes) -> str:
+    """What an independent reader (OpenCV's) reads in a screenshot of a QR code."""
+    image = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_GRAYSCALE)
+    assert image is not None
+    text, _, _ = cv2.QRCodeDetector().detectAndDecode(image)
+    return str(text)
 
 
 def sign_in_by_touch(page: Page, user: str, password: str) -> None:
@@ -41,8 +115,18 @@ def test_the_first_start_sets_up_the_administrator_by_touch(
     try:
         page = context.new_page()
         errors = PageErrors(page)
+        assert runtime.url.startswith("https://")
         page.goto(runtime.url)
         expect(page.get_by_test_id("sign-in")).to_contain_text("Set up OpenPendant")
+        # What a tablet checks before it trusts this runtime: its authority's fingerprint,
+        # and the authority itself behind a link and a QR code of the link.
+        files = authority(runtime)
+        expect(page.get_by_test_id("tls-fingerprint")).to_have_text(files.fingerprint())
+        download = f"{runtime.url}{CA_DOWNLOAD}"
+        assert decoded_qr(page.get_by_test_id("tls-qr").screenshot()) == download
+        expect(page.get_by_test_id("tls-download")).to_have_attribute("href", download)
+        fetched = page.evaluate("(url) => fetch(url).then((r) => r.text())", download)
+        assert files.ca is not None and fetched == files.ca.read_text()
         # From loopback no set-up code is asked for; the passwords must agree.
         expect(page.get_by_test_id("sign-in-code")).to_have_count(0)
         page.get_by_test_id("sign-in-user").fill("ada")
@@ -212,3 +296,51 @@ def test_a_tablet_signed_out_elsewhere_says_why_on_its_sign_in_screen(
         assert errors.only_refusals(), "\n".join(errors.errors)
     finally:
         context.close()
+
+
+def test_plain_http_is_sent_on_to_https_and_a_jog_runs_over_the_jog_sockets_tls(
+    runtime: Runtime, browser: Browser
+) -> None:
+    # The certificate is checked: without its authority nothing answers.
+    with pytest.raises(httpx.ConnectError, match="CERTIFICATE_VERIFY_FAILED"):
+        httpx.get(f"{runtime.url}/api/health", timeout=5)
+    assert isinstance(runtime.verify, ssl.SSLContext)
+    add_robot(runtime)
+    name, password = runtime.user("operator")
+    settings = yaml.safe_load((runtime.home / "config.yaml").read_text())
+    plain = f"http://127.0.0.1:{settings['tls']['redirect_port']}"
+    context = open_context(browser, TABLET)
+    try:
+        page = context.new_page()
+        errors = PageErrors(page)
+        sockets: list[str] = []
+        page.on("websocket", lambda socket: sockets.append(socket.url))
+        page.goto(f"{plain}/#/jog")
+        assert page.url == f"{runtime.url}/#/jog"
+        sign_in_by_touch(page, name, password)
+        expect(page.get_by_test_id("nav-jog")).to_be_visible()
+        session = next(c for c in context.cookies() if c["name"] == "op_session")
+        assert session["secure"] and session["httpOnly"] and session["sameSite"] == "Strict"
+        take_control_and_enable(page)
+        before = robot_joints(runtime)
+        finger = Finger(page)
+        finger.down(page.locator("[data-testid=jog-row][data-axis='0'] [data-testid=jog-plus]"))
+        try:
+            wait_for(lambda: robot_joints(runtime)[0] - before[0] > 0.01, 10, what="J1 moving")
+        finally:
+            finger.up()
+        wait_for(lambda: robot_at_rest(runtime), 5, what="stopped on release")
+        port = runtime.api("GET", "/jog/settings").json()["socket_port"]
+        assert f"wss://127.0.0.1:{port}/jog/ws" in [u.split("?")[0] for u in sockets]
+        assert not [u for u in sockets if u.startswith("ws:")], sockets
+        page.get_by_test_id("control").tap()
+        page.get_by_test_id("nav-system").tap()
+        shown = page.get_by_test_id("system-tls").get_by_test_id("tls-fingerprint")
+        expect(shown).to_have_text(authority(runtime).fingerprint())
+        # Before signing in, the page's first requests are refused (401): nothing else.
+        assert errors.only_refusals(), "\n".join(errors.errors)
+    finally:
+        context.close()
+    # The jog port speaks TLS only, as the UI's port does.
+    with pytest.raises(httpx.HTTPError):
+        httpx.get(f"http://127.0.0.1:{port}/jog/ws", timeout=5)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import io
 import os
+import shutil
 import sqlite3
 import subprocess
 import sys
@@ -21,6 +22,7 @@ from openpendant.runtime.auth.setup import auth_path
 from openpendant.runtime.auth.store import AuthStore
 from openpendant.runtime.bench.harness.jog import Cell
 from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
+from openpendant.runtime.kit.tls import CA_CERT, TLS_DIR
 from tests.support.programs import teach
 
 TARGET = [1.0, -1.2, 1.4, -1.5, -1.57, 0.5]
@@ -46,8 +48,10 @@ def users(data_dir: Path) -> list[str]:
 
 def test_backup_then_restore_brings_everything_back_and_the_robot_moves(tmp_path: Path) -> None:
     home = tmp_path / "cell"
-    runtime = Runtime(home)
+    # Over HTTPS: its certificate authority, which the tablets trust, comes back too.
+    runtime = Runtime(home, extra=["--tls"])
     runtime.wait_ready()
+    authority = (runtime.data_dir / TLS_DIR / CA_CERT).read_bytes()
     archive = tmp_path / "cell-backup.tar.gz"
     try:
         Cell(runtime)  # the robot added and paired
@@ -74,14 +78,18 @@ def test_backup_then_restore_brings_everything_back_and_the_robot_moves(tmp_path
         (runtime.data_dir / name).unlink()
     for secret in (runtime.data_dir / "device-secrets").iterdir():
         secret.unlink()
+    shutil.rmtree(runtime.data_dir / TLS_DIR)
     restored = openpendant(home, "restore", str(archive), "--data-dir", str(runtime.data_dir))
     assert restored.returncode == 0, restored.stderr
     assert list(tmp_path.joinpath("cell").glob("openpendant.before-restore-*"))
     assert "operator-user" in users(runtime.data_dir)
     assert (runtime.data_dir / "models" / "parts.onnx").read_bytes() == b"a network"
 
-    again = Runtime(home)
+    assert (runtime.data_dir / TLS_DIR / CA_CERT).read_bytes() == authority
+    again = Runtime(home, extra=["--tls"])
     again.wait_ready()
+    assert again.url.startswith("https://")
+    assert (again.data_dir / TLS_DIR / CA_CERT).read_bytes() == authority
     try:
         assert again.api("GET", "/variables/target").json()["value"]["joints"] == TARGET
         assert [d["local_name"] for d in again.api("GET", "/devices").json()] == ["robot"]

@@ -8,6 +8,7 @@ import os
 import queue
 import signal
 import socket
+import ssl
 import subprocess
 import sys
 import threading
@@ -27,6 +28,7 @@ from openpendant.runtime.kit.device_auth import HEADER as DEVICE_AUTH
 from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
 from openpendant.runtime.kit.internal import HEADER as INTERNAL_HEADER
 from openpendant.runtime.kit.settings import DeviceSpec, default_devices
+from openpendant.runtime.kit.tls import CA_CERT, TLS_DIR
 from openpendant.runtime.launcher.run import device_uuid
 
 T = TypeVar("T")
@@ -210,6 +212,8 @@ class Runtime(Proc):
         ]
         super().__init__(argv, env or child_env(home), home / "logs" / f"runtime-{self.port}.log")
         self.url = ""
+        # What its HTTPS is checked against (its own certificate authority), once it is up.
+        self.verify: ssl.SSLContext | bool = True
         self.started_in = 0.0
         self._tokens: dict[str, str] = {}
 
@@ -218,6 +222,9 @@ class Runtime(Proc):
         line = self.wait_line(lambda s: "OpenPendant UI:" in s, timeout)
         self.started_in = time.monotonic() - t0
         self.url = line.split("OpenPendant UI:", 1)[1].strip().rstrip("/")
+        if self.url.startswith("https:"):
+            ca = self.data_dir / TLS_DIR / CA_CERT
+            self.verify = ssl.create_default_context(cafile=str(ca))
         return self.url
 
     def token(self, role: str = "admin") -> str:
@@ -244,7 +251,10 @@ class Runtime(Proc):
         """A signed-in session of a `role` user: the cookie a browser would hold."""
         name, password = self.user(role)
         response = httpx.post(
-            f"{self.url}/api/auth/login", json={"user": name, "password": password}, timeout=10
+            f"{self.url}/api/auth/login",
+            json={"user": name, "password": password},
+            timeout=10,
+            verify=self.verify,
         )
         response.raise_for_status()
         return str(response.cookies["op_session"])
@@ -293,6 +303,7 @@ class Runtime(Proc):
     ) -> httpx.Response:
         """A request to the gateway, signed in with a token of `role` (None: anonymous)."""
         kwargs.setdefault("timeout", 10.0)
+        kwargs.setdefault("verify", self.verify)
         if role is not None:
             kwargs["headers"] = {**self.auth(role), **(kwargs.get("headers") or {})}
         return httpx.request(method, f"{self.url}/api{path}", **kwargs)

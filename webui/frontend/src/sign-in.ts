@@ -4,6 +4,7 @@ import { t } from "./i18n";
 import { worded } from "./i18n/words";
 import { type AuthStatus, type Me, session } from "./session";
 import { shared } from "./styles";
+import "./components/tls-trust";
 
 type Mode = "password" | "pin";
 
@@ -173,6 +174,9 @@ export class OpSignIn extends LitElement {
       <button class="primary" type="submit" data-testid="sign-in-submit" ?disabled=${this.busy}>
         ${setup ? t("auth.create_admin") : t("auth.sign_in")}
       </button>
+      ${setup && this.status.tls
+        ? html`<h2>${t("tls.title")}</h2><op-tls-trust .tls=${this.status.tls}></op-tls-trust>`
+        : ""}
     </form>`;
   }
 

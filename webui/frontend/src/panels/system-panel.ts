@@ -6,6 +6,7 @@ import { type Theme, currentTheme, setTheme } from "../theme";
 import { makes, request } from "../rights";
 import { session } from "../session";
 import { shared } from "../styles";
+import "../components/tls-trust";
 import { type PluginInfo, plugins } from "../plugins";
 import { type AngleUnit, type LengthUnit, setUnits, units } from "../units";
 
@@ -41,6 +42,7 @@ export class OpSystemPanel extends LitElement {
     nameNote: { state: true },
     logs: { state: true },
     logLevel: { state: true },
+    tls: { state: true },
   };
   declare logs: LogEntry[] | null;
   declare logLevel: "warning" | "info";
@@ -48,6 +50,7 @@ export class OpSystemPanel extends LitElement {
   declare error: string;
   declare theme: Theme;
   declare nameNote: string;
+  declare tls: Schemas["TlsStatus"] | null;
   private timer = 0;
 
   static styles = [
@@ -126,6 +129,7 @@ export class OpSystemPanel extends LitElement {
     this.nameNote = "";
     this.logs = null;
     this.logLevel = "warning";
+    this.tls = null;
   }
 
   private chooseTheme(theme: Theme): void {
@@ -193,6 +197,7 @@ export class OpSystemPanel extends LitElement {
   connectedCallback(): void {
     super.connectedCallback();
     void this.refresh();
+    void client.GET("/api/auth/status").then(({ data }) => (this.tls = data?.tls ?? null));
     this.timer = window.setInterval(() => void this.refresh(), 2000);
   }
 
@@ -316,6 +321,12 @@ export class OpSystemPanel extends LitElement {
     return html`
       ${this.account()}
       ${this.pendant()}
+      ${this.tls
+        ? html`<section class="card" data-testid="system-tls">
+            <h2>${t("tls.title")}</h2>
+            <op-tls-trust .tls=${this.tls}></op-tls-trust>
+          </section>`
+        : ""}
       <h2>${t("system.services")}</h2>
       ${this.error ? html`<p class="error" role="alert">${this.error}</p>` : ""}
       <div class="card">

@@ -1,0 +1,371 @@
+"""HTTPS for the UI's port and the jog socket: the runtime's own certificate authority and a
+server certificate from it for this computer's names and addresses (made in the data
+directory at the first start with TLS, the server certificate made again when a name or
+address is new or it nears its end), or the site's own certificate and key.
+
+A tablet trusts the authority once (its fingerprint is printed at start and shown on the
+set-up screen); the server certificate can then change without asking it again. The
+authority may sign only for private and loopback addresses, `.local` names, localhost and
+the names it was made for: installed on a tablet, a leaked key of it could not stand in for
+any other site the tablet visits."""
+
+from __future__ import annotations
+
+import base64
+import datetime
+import hashlib
+import ipaddress
+import logging
+import os
+import socket
+import ssl
+from dataclasses import dataclass
+from pathlib import Path
+
+import ifaddr
+from cryptography import x509
+from cryptography.exceptions import InvalidSignature
+from cryptography.hazmat.primitives import hashes, serialization
+from cryptography.hazmat.primitives.asymmetric import ec
+from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
+
+from openpendant.runtime.kit.settings import RuntimeSettings
+
+log = logging.getLogger(__name__)
+
+TLS_DIR = "tls"
+CA_CERT = "ca.pem"
+CA_KEY = "ca-key.pem"
+SERVER_CERT = "server.pem"  # the server's certificate, then the authority's
+SERVER_KEY = "server-key.pem"
+# Where a tablet downloads the authority to trust it (on the HTTPS port and the redirect port).
+CA_DOWNLOAD = "/openpendant-ca.crt"
+
+CA_DAYS = 3650
+# At most 825 days: Apple's devices refuse a longer-lived server certificate from any root.
+SERVER_DAYS = 800
+RENEW_BEFORE_DAYS = 60
+
+IPAddress = ipaddress.IPv4Address | ipaddress.IPv6Address
+PRIVATE_NETWORKS = [
+    ipaddress.ip_network(n)
+    for n in (
+        "10.0.0.0/8",
+        "172.16.0.0/12",
+        "192.168.0.0/16",
+        "127.0.0.0/8",
+        "169.254.0.0/16",
+        "100.64.0.0/10",
+        "::1/128",
+        "fc00::/7",
+        "fe80::/10",
+    )
+]
+
+
+class TlsError(RuntimeError):
+    """A certificate or key that cannot be used, with what to do."""
+
+
+@dataclass(frozen=True)
+class TlsFiles:
+    cert: Path  # the server's certificate and its chain (PEM)
+    key: Path
+    ca: Path | None  # the runtime's own authority (None: the site's certificate)
+
+    def server_context(self) -> ssl.SSLContext:
+        context = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
+        context.minimum_version = ssl.TLSVersion.TLSv1_2
+        context.load_cert_chain(self.cert, self.key)
+        return context
+
+    def trusted(self) -> x509.Certificate:
+        """What a tablet trusts: the runtime's authority, or the site's certificate."""
+        return x509.load_pem_x509_certificate((self.ca or self.cert).read_bytes())
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the trusted certificate, as browsers and phones show it."""
+        digest = self.trusted().fingerprint(hashes.SHA256())
+        return ":".join(f"{b:02X}" for b in digest)
+
+    def spki_pin(self) -> str:
+        """base64 SHA-256 of the trusted certificate's public key (Chromium's
+        --ignore-certificate-errors-spki-list, HPKP-style pins)."""
+        public = (
+            self.trusted()
+            .public_key()
+            .public_bytes(
+                serialization.Encoding.DER, serialization.PublicFormat.SubjectPublicKeyInfo
+            )
+        )
+        return base64.b64encode(hashlib.sha256(public).digest()).decode()
+
+
+def probe_context() -> ssl.SSLContext:
+    """For the launcher's health probes of its own UI port over loopback: they carry nothing
+    secret and only ask whether it answers, so the certificate (a site's may not name
+    127.0.0.1) is not what they check."""
+    context = ssl.create_default_context()
+    context.check_hostname = False
+    context.verify_mode = ssl.CERT_NONE
+    return context
+
+
+def tls_files(settings: RuntimeSettings) -> TlsFiles | None:
+    """Where this runtime's certificate and key are (None: TLS is off). Made by `prepare`."""
+    tls = settings.tls
+    if not tls.enabled:
+        return None
+    if tls.cert_file is not None and tls.key_file is not None:
+        return TlsFiles(tls.cert_file, tls.key_file, None)
+    folder = settings.data_dir / TLS_DIR
+    return TlsFiles(folder / SERVER_CERT, folder / SERVER_KEY, folder / CA_CERT)
+
+
+def prepare(settings: RuntimeSettings) -> TlsFiles | None:
+    """The certificate and key the servers will use, made or renewed where they are ours;
+    a site certificate that cannot be loaded is refused here, before any service starts."""
+    files = tls_files(settings)
+    if files is None:
+        return None
+    if files.ca is not None:
+        names, addresses = host_names(settings)
+        _own_certificates(files, names, addresses)
+    try:
+        files.server_context()
+    except (OSError, ssl.SSLError) as exc:
+        raise TlsError(
+            f"cannot use the certificate {files.cert} with the key {files.key}: {exc}"
+        ) from exc
+    return files
+
+
+def host_names(settings: RuntimeSettings) -> tuple[list[str], list[IPAddress]]:
+    """The names and addresses a browser may use for this computer's UI."""
+    hostname = socket.gethostname().lower()
+    names = ["localhost", hostname]
+    if "." not in hostname:
+        names.append(f"{hostname}.local")
+    fqdn = socket.getfqdn().lower()
+    if "." in fqdn and fqdn != "localhost":
+        names.append(fqdn)
+    names += [n.lower() for n in (*settings.allowed_hosts, *settings.tls.names)]
+    addresses: list[IPAddress] = [ipaddress.ip_address("127.0.0.1"), ipaddress.ip_address("::1")]
+    try:
+        bound = ipaddress.ip_address(settings.host)
+    except ValueError:
+        bound = None
+    if bound is None or bound.is_unspecified:
+        addresses += _interface_addresses()
+    else:
+        addresses.append(bound)
+    return list(dict.fromkeys(names)), list(dict.fromkeys(addresses))
+
+
+def _interface_addresses() -> list[IPAddress]:
+    found: list[IPAddress] = []
+    for adapter in ifaddr.get_adapters():
+        for ip in adapter.ips:
+            text = ip.ip if isinstance(ip.ip, str) else ip.ip[0]
+            address = ipaddress.ip_address(text)
+            # A link-local IPv6 address needs its interface named in the URL: not a browser's.
+            if not (address.version == 6 and address.is_link_local):
+                found.append(address)
+    return found
+
+
+def _permitted(name: str | IPAddress, ca: x509.Certificate) -> bool:
+    try:
+        constraints = ca.extensions.get_extension_for_class(x509.NameConstraints).value
+    except x509.ExtensionNotFound:
+        return True
+    for subtree in constraints.permitted_subtrees or []:
+        value = subtree.value
+        if isinstance(name, str) and isinstance(subtree, x509.DNSName):
+            if name == value or name.endswith(f".{value}"):
+                return True
+        elif (
+            not isinstance(name, str)
+            and isinstance(value, ipaddress.IPv4Network | ipaddress.IPv6Network)
+            and name.version == value.version
+            and name in value
+        ):
+            return True
+    return False
+
+
+def _own_certificates(files: TlsFiles, names: list[str], addresses: list[IPAddress]) -> None:
+    assert files.ca is not None
+    folder = files.ca.parent
+    folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    folder.chmod(0o700)
+    ca_key_path = folder / CA_KEY
+    if not files.ca.is_file() or not ca_key_path.is_file():
+        ca_key, ca = _make_authority(names)
+        _write_key(ca_key_path, ca_key)
+        _write(files.ca, ca.public_bytes(serialization.Encoding.PEM))
+        log.info("made a certificate authority in %s", folder)
+    else:
+        ca = x509.load_pem_x509_certificate(files.ca.read_bytes())
+        loaded = serialization.load_pem_private_key(ca_key_path.read_bytes(), password=None)
+        if not isinstance(loaded, ec.EllipticCurvePrivateKey):
+            raise TlsError(f"{ca_key_path} is not the authority's key; remove {folder}")
+        ca_key = loaded
+    covered = [n for n in (*names, *addresses) if _permitted(n, ca)]
+    left_out = [str(n) for n in (*names, *addresses) if n not in covered]
+    if left_out:
+        log.warning(
+            "the certificate authority may not sign for %s: a browser using those names "
+            "will warn (remove %s to make a new authority, which every tablet must trust "
+            "again)",
+            ", ".join(left_out),
+            folder,
+        )
+    if _current(files, ca, covered):
+        return
+    key = ec.generate_private_key(ec.SECP256R1())
+    leaf = _make_server(key, ca_key, ca, covered)
+    _write_key(files.key, key)
+    _write(
+        files.cert,
+        leaf.public_bytes(serialization.Encoding.PEM) + ca.public_bytes(serialization.Encoding.PEM),
+    )
+    log.info("made a server certificate for %s", ", ".join(str(n) for n in covered))
+
+
+def _current(files: TlsFiles, ca: x509.Certificate, wanted: list[str | IPAddress]) -> bool:
+    """Whether the server certificate on disk is the authority's, covers `wanted` and has
+    more than RENEW_BEFORE_DAYS left."""
+    if not files.cert.is_file() or not files.key.is_file():
+        return False
+    try:
+        leaf = x509.load_pem_x509_certificates(files.cert.read_bytes())[0]
+        leaf.verify_directly_issued_by(ca)
+        san = leaf.extensions.get_extension_for_class(x509.SubjectAlternativeName).value
+    except (ValueError, TypeError, x509.ExtensionNotFound, InvalidSignature):
+        return False
+    have: set[str | IPAddress] = set(san.get_values_for_type(x509.DNSName))
+    have |= {
+        a
+        for a in san.get_values_for_type(x509.IPAddress)
+        if isinstance(a, ipaddress.IPv4Address | ipaddress.IPv6Address)
+    }
+    left = leaf.not_valid_after_utc - _now()
+    return set(wanted) <= have and left > datetime.timedelta(days=RENEW_BEFORE_DAYS)
+
+
+def _now() -> datetime.datetime:
+    return datetime.datetime.now(datetime.UTC)
+
+
+def _make_authority(names: list[str]) -> tuple[ec.EllipticCurvePrivateKey, x509.Certificate]:
+    key = ec.generate_private_key(ec.SECP256R1())
+    subject = x509.Name(
+        [
+            x509.NameAttribute(NameOID.ORGANIZATION_NAME, "OpenPendant"),
+            x509.NameAttribute(NameOID.COMMON_NAME, f"OpenPendant CA {socket.gethostname()}"[:64]),
+        ]
+    )
+    dns = sorted({"localhost", "local", *names})
+    permitted: list[x509.GeneralName] = [x509.DNSName(n) for n in dns]
+    permitted += [x509.IPAddress(n) for n in PRIVATE_NETWORKS]
+    start = _now() - datetime.timedelta(days=1)
+    certificate = (
+        x509.CertificateBuilder()
+        .subject_name(subject)
+        .issuer_name(subject)
+        .public_key(key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(start)
+        .not_valid_after(start + datetime.timedelta(days=CA_DAYS))
+        .add_extension(x509.BasicConstraints(ca=True, path_length=0), critical=True)
+        .add_extension(
+            x509.KeyUsage(
+                digital_signature=False,
+                content_commitment=False,
+                key_encipherment=False,
+                data_encipherment=False,
+                key_agreement=False,
+                key_cert_sign=True,
+                crl_sign=True,
+                encipher_only=False,
+                decipher_only=False,
+            ),
+            critical=True,
+        )
+        .add_extension(
+            x509.NameConstraints(permitted_subtrees=permitted, excluded_subtrees=None),
+            critical=True,
+        )
+        .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
+        .sign(key, hashes.SHA256())
+    )
+    return key, certificate
+
+
+def _make_server(
+    key: ec.EllipticCurvePrivateKey,
+    ca_key: ec.EllipticCurvePrivateKey,
+    ca: x509.Certificate,
+    names: list[str | IPAddress],
+) -> x509.Certificate:
+    alternative: list[x509.GeneralName] = [
+        x509.DNSName(n) if isinstance(n, str) else x509.IPAddress(n) for n in names
+    ]
+    start = _now() - datetime.timedelta(days=1)
+    return (
+        x509.CertificateBuilder()
+        .subject_name(
+            x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, socket.gethostname()[:64])])
+        )
+        .issuer_name(ca.subject)
+        .public_key(key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(start)
+        .not_valid_after(start + datetime.timedelta(days=SERVER_DAYS))
+        .add_extension(x509.SubjectAlternativeName(alternative), critical=False)
+        .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True)
+        .add_extension(
+            x509.KeyUsage(
+                digital_signature=True,
+                content_commitment=False,
+                key_encipherment=False,
+                data_encipherment=False,
+                key_agreement=False,
+                key_cert_sign=False,
+                crl_sign=False,
+                encipher_only=False,
+                decipher_only=False,
+            ),
+            critical=True,
+        )
+        .add_extension(x509.ExtendedKeyUsage([ExtendedKeyUsageOID.SERVER_AUTH]), critical=False)
+        .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
+        .add_extension(
+            x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()),
+            critical=False,
+        )
+        .sign(ca_key, hashes.SHA256())
+    )
+
+
+def _write_key(path: Path, key: ec.EllipticCurvePrivateKey) -> None:
+    _write(
+        path,
+        key.private_bytes(
+            serialization.Encoding.PEM,
+            serialization.PrivateFormat.PKCS8,
+            serialization.NoEncryption(),
+        ),
+    )
+
+
+def _write(path: Path, data: bytes) -> None:
+    """Written whole or not at all (a power cut leaves the old file), readable by its owner."""
+    partial = path.with_name(path.name + ".partial")
+    descriptor = os.open(partial, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(descriptor, "wb") as out:
+        out.write(data)
+        out.flush()
+        os.fsync(out.fileno())
+    os.replace(partial, path)

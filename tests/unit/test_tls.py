@@ -1,0 +1,265 @@
+"""HTTPS on its own: the runtime's certificate authority and server certificate
+(runtime/kit/tls.py), checked by OpenSSL as a client would; the plain port's redirect
+(runtime/kit/https_redirect.py); two servers of one process, one over TLS (kit/serve.py)."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import signal
+import socket
+import ssl
+import threading
+from collections.abc import AsyncIterator, Iterator
+from pathlib import Path
+
+import httpx
+import pytest
+from cryptography import x509
+from cryptography.hazmat.primitives import serialization
+from cryptography.hazmat.primitives.asymmetric import ec
+from fastapi import FastAPI
+from fastapi.testclient import TestClient
+from pydantic import ValidationError
+
+from openpendant.runtime.bench.harness.processes import wait_for
+from openpendant.runtime.kit import tls
+from openpendant.runtime.kit.https_redirect import HttpsRedirect
+from openpendant.runtime.kit.serve import Listener, listening_socket, run_listeners
+from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.kit.web_guard import WebPolicy
+from openpendant.runtime.launcher.doctor import https
+
+
+def settings(data_dir: Path, **tls_options: object) -> RuntimeSettings:
+    return RuntimeSettings(data_dir=data_dir, tls={"enabled": True, **tls_options})
+
+
+@contextlib.contextmanager
+def tls_server(files: tls.TlsFiles) -> Iterator[int]:
+    """A bare TLS server with the runtime's context that completes one handshake at a time."""
+    context = files.server_context()
+    server = socket.create_server(("127.0.0.1", 0))
+    server.settimeout(5)
+
+    def serve() -> None:
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            with (
+                contextlib.suppress(OSError, ssl.SSLError),
+                context.wrap_socket(conn, server_side=True) as wrapped,
+            ):
+                wrapped.recv(1)
+
+    threading.Thread(target=serve, daemon=True).start()
+    try:
+        yield server.getsockname()[1]
+    finally:
+        server.close()
+
+
+def handshake(port: int, ca: Path, name: str) -> str:
+    """A client that trusts only `ca`, connecting to 127.0.0.1 as `name`: its TLS version."""
+    client = ssl.create_default_context(cafile=str(ca))
+    with (
+        socket.create_connection(("127.0.0.1", port), timeout=5) as raw,
+        client.wrap_socket(raw, server_hostname=name) as wrapped,
+    ):
+        wrapped.send(b"x")
+        return str(wrapped.version())
+
+
+def test_the_first_start_makes_an_authority_and_a_certificate_a_client_trusting_it_accepts(
+    tmp_path: Path,
+) -> None:
+    files = tls.prepare(settings(tmp_path, names=["pendant.cell4.example"]))
+    assert files is not None and files.ca is not None
+    folder = tmp_path / tls.TLS_DIR
+    assert folder.stat().st_mode & 0o777 == 0o700
+    for made in folder.iterdir():
+        assert made.stat().st_mode & 0o777 == 0o600, made
+    with tls_server(files) as port:
+        for name in ("127.0.0.1", "localhost", "pendant.cell4.example", socket.gethostname()):
+            assert handshake(port, files.ca, name) in ("TLSv1.2", "TLSv1.3")
+        with pytest.raises(ssl.SSLCertVerificationError):
+            handshake(port, files.ca, "elsewhere.example")
+    # TLS 1.1 and older are refused.
+    assert files.server_context().minimum_version == ssl.TLSVersion.TLSv1_2
+    fingerprint = files.fingerprint()
+    assert len(fingerprint.split(":")) == 32
+    assert len(files.spki_pin()) == 44  # base64 of 32 bytes
+
+
+def test_the_authority_is_kept_and_the_certificate_made_again_for_a_new_name(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    files = tls.prepare(settings(tmp_path))
+    assert files is not None and files.ca is not None
+    authority, server = files.ca.read_bytes(), files.cert.read_bytes()
+    tls.prepare(settings(tmp_path))
+    assert (files.ca.read_bytes(), files.cert.read_bytes()) == (authority, server)
+    tls.prepare(settings(tmp_path, names=["cell-7.local"]))
+    assert files.ca.read_bytes() == authority  # a tablet that trusts it keeps trusting
+    assert files.cert.read_bytes() != server
+    with tls_server(files) as port:
+        handshake(port, files.ca, "cell-7.local")
+    # A name the authority may not sign for is left out, and the log says how to get it.
+    with caplog.at_level(logging.WARNING):
+        tls.prepare(settings(tmp_path, names=["cell-7.local", "pendant.example.org"]))
+    assert "pendant.example.org" in caplog.text and "new authority" in caplog.text
+    assert files.ca.read_bytes() == authority
+
+
+def test_a_certificate_near_its_end_is_made_again(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    files = tls.prepare(settings(tmp_path))
+    assert files is not None
+    before = files.cert.read_bytes()
+    monkeypatch.setattr(tls, "RENEW_BEFORE_DAYS", tls.SERVER_DAYS + 1)
+    tls.prepare(settings(tmp_path))
+    assert files.cert.read_bytes() != before
+
+
+def test_the_authority_cannot_vouch_for_another_site(tmp_path: Path) -> None:
+    """Installed on a tablet, its key (were it stolen) could not stand in for a bank."""
+    files = tls.prepare(settings(tmp_path))
+    assert files is not None and files.ca is not None
+    loaded = serialization.load_pem_private_key(
+        (files.ca.parent / tls.CA_KEY).read_bytes(), password=None
+    )
+    assert isinstance(loaded, ec.EllipticCurvePrivateKey)
+    authority = x509.load_pem_x509_certificate(files.ca.read_bytes())
+    key = ec.generate_private_key(ec.SECP256R1())
+    forged = tls._make_server(key, loaded, authority, ["bank.example"])
+    folder = tmp_path / "forged"
+    folder.mkdir()
+    cert, key_file = folder / "cert.pem", folder / "key.pem"
+    cert.write_bytes(forged.public_bytes(serialization.Encoding.PEM) + files.ca.read_bytes())
+    tls._write_key(key_file, key)
+    with (
+        tls_server(tls.TlsFiles(cert, key_file, None)) as port,
+        pytest.raises(ssl.SSLCertVerificationError, match=r"(?i)name constraint|permitted"),
+    ):
+        handshake(port, files.ca, "bank.example")
+
+
+def test_the_sites_own_certificate_is_used_as_given_and_a_wrong_key_refused(
+    tmp_path: Path,
+) -> None:
+    own = tls.prepare(settings(tmp_path / "made"))
+    assert own is not None
+    site = settings(tmp_path / "site", cert_file=own.cert, key_file=own.key)
+    files = tls.prepare(site)
+    assert files is not None and files.ca is None and files.cert == own.cert
+    assert not (tmp_path / "site" / tls.TLS_DIR).exists()
+    wrong = tmp_path / "wrong-key.pem"
+    tls._write_key(wrong, ec.generate_private_key(ec.SECP256R1()))
+    with pytest.raises(tls.TlsError, match=r"wrong-key\.pem"):
+        tls.prepare(settings(tmp_path / "site", cert_file=own.cert, key_file=wrong))
+    with pytest.raises(ValidationError, match="both cert_file and key_file"):
+        settings(tmp_path, cert_file=own.cert)
+
+
+def test_plain_http_is_sent_on_to_https_but_for_the_authority(tmp_path: Path) -> None:
+    ca = tmp_path / "ca.pem"
+    ca.write_text("-----BEGIN CERTIFICATE-----\n")
+    client = TestClient(
+        HttpsRedirect(WebPolicy(ui_port=8443, scheme="https"), 8443, ca),
+        base_url="http://127.0.0.1:8080",
+        follow_redirects=False,
+    )
+    moved = client.post("/api/auth/login?next=%2Fjog", json={})
+    assert moved.status_code == 308  # the method and body are kept
+    assert moved.headers["location"] == "https://127.0.0.1:8443/api/auth/login?next=%2Fjog"
+    v6 = client.get("/", headers={"host": "[::1]:8080"})
+    assert v6.headers["location"] == "https://[::1]:8443/"
+    fetched = client.get(tls.CA_DOWNLOAD)
+    assert fetched.status_code == 200 and fetched.content == ca.read_bytes()
+    assert fetched.headers["content-type"] == "application/x-x509-ca-cert"
+    rebound = client.get("/", headers={"host": "attacker.example"})
+    assert rebound.status_code == 400 and "location" not in rebound.headers
+    standard = TestClient(
+        HttpsRedirect(WebPolicy(ui_port=443, scheme="https"), 443, None),
+        base_url="http://127.0.0.1",
+        follow_redirects=False,
+    )
+    assert standard.get("/x").headers["location"] == "https://127.0.0.1/x"
+    assert standard.get(tls.CA_DOWNLOAD).status_code == 308  # no authority of its own
+
+
+def test_an_https_ui_accepts_only_its_https_origin() -> None:
+    policy = WebPolicy(ui_port=8443, scheme="https", jog_port=8444)
+    host = "127.0.0.1:8443"
+    assert policy.check_origin("https://127.0.0.1:8443", host) is None
+    assert policy.check_origin("http://127.0.0.1:8443", host) is not None
+    assert "ws://" not in policy.content_security_policy(host)
+    assert "wss://127.0.0.1:*" in policy.content_security_policy(host)
+
+
+def test_a_second_listener_over_tls_serves_once_the_first_has_started_and_stops_with_it(
+    tmp_path: Path,
+) -> None:
+    """The jog service's shape: its internal port plain and its public one over TLS, one app
+    whose start-up (lifespan) runs once; SIGTERM ends both."""
+    files = tls.prepare(settings(tmp_path))
+    assert files is not None and files.ca is not None
+    plain, secure = listening_socket("127.0.0.1", 0), listening_socket("127.0.0.1", 0)
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        app.state.ready = "yes"
+        yield
+
+    app = FastAPI(lifespan=lifespan)
+
+    @app.get("/ready")
+    async def ready() -> dict[str, str]:
+        return {"ready": app.state.ready}
+
+    pid = os.fork()
+    if pid == 0:
+        code = 1
+        try:
+            run_listeners(Listener(app, [plain]), Listener(app, [secure], files.server_context))
+            code = 0
+        finally:
+            os._exit(code)
+    try:
+        context = ssl.create_default_context(cafile=str(files.ca))
+        url = f"https://127.0.0.1:{secure.getsockname()[1]}/ready"
+        with httpx.Client(verify=context, timeout=5) as client:
+            answer = wait_for(lambda: client.get(url), 5, what="the TLS listener")
+        assert answer.json() == {"ready": "yes"}
+        with httpx.Client(timeout=5) as client:
+            answer = wait_for(
+                lambda: client.get(f"http://127.0.0.1:{plain.getsockname()[1]}/ready"), 5
+            )
+        assert answer.json() == {"ready": "yes"}
+    finally:
+        os.kill(pid, signal.SIGTERM)
+        _, status = os.waitpid(pid, 0)
+    # Both servers closed: uvicorn ends the process with the signal it handled.
+    assert os.waitstatus_to_exitcode(status) in (0, -signal.SIGTERM)
+
+
+def test_the_doctor_says_what_https_needs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    lan = RuntimeSettings(data_dir=tmp_path, host="0.0.0.0")
+    [clear] = https(lan)
+    assert clear.verdict == "warn" and "tls" in clear.todo
+    assert list(https(RuntimeSettings(data_dir=tmp_path))) == []  # loopback only: fine
+    [first] = https(settings(tmp_path))
+    assert first.verdict == "ok" and "next start" in first.what
+    files = tls.prepare(settings(tmp_path))
+    assert files is not None
+    [ready] = https(settings(tmp_path))
+    assert ready.verdict == "ok" and files.fingerprint() in ready.what
+    monkeypatch.setattr(tls, "SERVER_DAYS", 20)
+    monkeypatch.setattr(tls, "RENEW_BEFORE_DAYS", 10**4)  # made again, with 20 days
+    tls.prepare(settings(tmp_path))
+    [ending] = https(settings(tmp_path))
+    assert ending.verdict == "warn" and "restart" in ending.todo
