@@ -93,6 +93,7 @@ RULES: tuple[Rule, ...] = (
     rule(("PUT",), "/programs/{}/breakpoints", OPERATE),
     rule(("POST",), "/programs/_generate", PROGRAM),
     rule(("PUT", "DELETE"), "/programs/{}", PROGRAM),
+    rule(("PUT",), "/programs/{}/file", PROGRAM),
     rule(("POST",), "/programs/{}/(rename|duplicate)", PROGRAM),
     # Variables: waypoints, frames, the scene, calibrations.
     rule(("POST",), "/variables/_import", ADMIN),

@@ -15,10 +15,12 @@ from openpendant.runtime.program.models import (
     TAG,
     ProblemInfo,
     Program,
+    ProgramImported,
     ProgramSummary,
     Saved,
     check_program_name,
 )
+from openpendant.runtime.program.program_file import file_bytes, read_file, save_body
 from openpendant.runtime.variable_storage.client import StorageClient
 
 
@@ -38,6 +40,20 @@ class ProgramLibrary:
             version=variable.version,
             blocks=prepared.blocks,
             problems=prepared.problems,
+        )
+
+    async def export_file(self, name: str) -> bytes:
+        return file_bytes(await self.get(name))
+
+    async def import_file(self, name: str, body: bytes) -> ProgramImported:
+        """Saves a program file as `name` (a new version if it exists: the old one stays in
+        its history)."""
+        check_program_name(name)
+        document = read_file(body)
+        saved = await self.save(name, save_body(document))
+        same = saved.python.split("\n") == document.python
+        return ProgramImported(
+            **saved.model_dump(), generated_as_in_file=same if document.source == "blocks" else None
         )
 
     async def runnable(self, name: str) -> tuple[str, list[ProblemInfo]]:

@@ -60,6 +60,13 @@ class Saved(BaseModel):
     problems: list[ProblemInfo] = Field(default_factory=list)  # saved, but it will not run
 
 
+class ProgramImported(Saved):
+    """A program file saved: for blocks, whether the Python generated here is the file's
+    (another release may generate it otherwise; what runs is what was generated here)."""
+
+    generated_as_in_file: bool | None = None
+
+
 class RenameRequest(Strict):
     to: str = Field(min_length=1, max_length=64)
 

@@ -27,23 +27,30 @@ from openpendant.runtime.program.models import (
     BreakpointsRequest,
     Generated,
     Program,
+    ProgramImported,
     ProgramSummary,
     RenameRequest,
     RunRequest,
     RunStatus,
     Saved,
 )
+from openpendant.runtime.program.program_file import (
+    FILE_BODY,
+    MAX_FILE_BYTES,
+    SUFFIX,
+    ProgramFile,
+)
 from openpendant.runtime.program.records import RunRecords
 from openpendant.runtime.program.runs import Runs
 from openpendant.runtime.variable_storage.client import StorageClient
 
 
-async def read_body(request: Request) -> bytes:
+async def read_body(request: Request, limit: int = MAX_WORKSPACE_BYTES + 1024) -> bytes:
     body = b""
     async for chunk in request.stream():
         body += chunk
-        if len(body) > MAX_WORKSPACE_BYTES + 1024:
-            raise InvalidValue(f"the body is larger than {MAX_WORKSPACE_BYTES} bytes")
+        if len(body) > limit:
+            raise InvalidValue(f"the body is larger than {limit} bytes")
     return body
 
 
@@ -99,6 +106,24 @@ def program_router(library: ProgramLibrary, runs: Runs, fanout: Fanout) -> APIRo
     async def save(name: str, request: Request) -> Saved:
         """Body {"workspace": <Blockly JSON>} or {"python": "<code>"}; returns the Python."""
         return await library.save(name, await read_body(request))
+
+    @router.get(
+        "/{name}/file",
+        responses={200: {"model": ProgramFile, "description": "the program's file"}},
+        response_class=Response,
+    )
+    async def export_file(name: str) -> Response:
+        """The program as a file (its blocks, and the Python generated from them)."""
+        return Response(
+            await library.export_file(name),
+            media_type="application/json",
+            headers={"Content-Disposition": f'attachment; filename="{name}{SUFFIX}"'},
+        )
+
+    @router.put("/{name}/file", openapi_extra=FILE_BODY)
+    async def import_file(name: str, request: Request) -> ProgramImported:
+        """A program file (GET …/file) saved as `name`, checked as a save is."""
+        return await library.import_file(name, await read_body(request, MAX_FILE_BYTES))
 
     @router.delete("/{name}", status_code=204)
     async def delete(name: str) -> Response:

@@ -221,8 +221,8 @@ def test_drag_a_block_from_the_toolbox_save_and_run_on_a_phone(
     assert errors.errors == []
 
 
-def test_duplicate_rename_and_delete_a_program(
-    runtime: Runtime, cell: dict[str, Any], tablet: BrowserContext
+def test_duplicate_rename_delete_export_and_import_a_program(
+    runtime: Runtime, cell: dict[str, Any], tablet: BrowserContext, tmp_path: Path
 ) -> None:
     page = tablet.new_page()
     errors = PageErrors(page)
@@ -260,6 +260,30 @@ def test_duplicate_rename_and_delete_a_program(
     expect(select).not_to_have_value("cycle_c")
     assert runtime.api("GET", "/programs/cycle_c").status_code == 404
     assert runtime.api("GET", "/programs/cycle").status_code == 200
+
+    # Out as a file (for version control) and back in under another name.
+    select.select_option("cycle")
+    expect(select).to_have_value("cycle")
+    with page.expect_download() as downloading:
+        page.get_by_test_id("export").tap()
+    download = downloading.value
+    assert download.suggested_filename == "cycle.openpendant.json"
+    saved = tmp_path / download.suggested_filename
+    download.save_as(saved)
+    with page.expect_file_chooser() as choosing:
+        page.get_by_test_id("import").tap()
+    choosing.value.set_files(saved)
+    expect(page.get_by_test_id("name-input")).to_have_value("cycle")  # the file's name
+    page.once("dialog", lambda question: question.dismiss())  # "Replace cycle?": no
+    page.get_by_test_id("name-confirm").tap()
+    expect(page.get_by_test_id("name-input")).to_be_visible()
+    page.get_by_test_id("name-input").fill("cycle_d")
+    page.get_by_test_id("name-confirm").tap()
+    expect(select).to_have_value("cycle_d")
+    expect(block_of(page, cell["id"])).to_be_visible()
+    original, imported = (runtime.api("GET", f"/programs/{n}").json() for n in ("cycle", "cycle_d"))
+    assert imported["python"] == original["python"]
+    assert imported["workspace"] == original["workspace"]
     # The one refused rename, which the browser logs as a failed request.
     assert len(errors.errors) == 1 and "409" in errors.errors[0], errors.errors
 

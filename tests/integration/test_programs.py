@@ -515,6 +515,66 @@ def test_programs_are_listed_renamed_duplicated_and_deleted(ready: Cell) -> None
     assert history[0]["deleted"] is True  # deleted, but its history keeps it
 
 
+def test_a_program_goes_out_as_a_file_and_comes_back_to_run_as_it_was(ready: Cell) -> None:
+    """Export and import for version control: the file holds the blocks and the Python
+    generated from them; an imported file is checked as a save is, and what runs is the
+    Python generated here, never the file's."""
+    api = ready.runtime.api
+    python = save(ready, "to_file", workspace(block("text_print", TEXT=text("from a file"))))
+    exported = api("GET", "/programs/to_file/file")
+    assert exported.status_code == 200, exported.text
+    disposition = exported.headers["content-disposition"]
+    assert disposition == 'attachment; filename="to_file.openpendant.json"'
+    document = exported.json()
+    assert document["format"] == "openpendant-program" and document["source"] == "blocks"
+    assert "\n".join(document["python"]) == python
+    assert document["workspace"] == api("GET", "/programs/to_file").json()["workspace"]
+    assert exported.text.count("\n") > len(document["python"])  # a line a line: diffs well
+
+    as_json = {"content-type": "application/json"}
+    imported = api("PUT", "/programs/from_file/file", content=exported.content, headers=as_json)
+    assert imported.status_code == 200, imported.text
+    assert imported.json()["generated_as_in_file"] is True
+    assert api("GET", "/programs/from_file").json()["python"] == python
+    ran = api("POST", "/programs/from_file/run", json={})
+    assert ran.status_code == 202, ran.text
+    finished = watch(ready, "from_file", ("finished", "error", "stopped"), 30)
+    assert [o["text"] for o in finished["output"]] == ["from a file"], finished
+
+    # A file whose Python was edited by hand: the blocks are what is kept and run.
+    edited = {**document, "python": ["import os", "os.system('reboot')"]}
+    again = api("PUT", "/programs/from_file/file", json=edited)
+    assert again.status_code == 200 and again.json()["generated_as_in_file"] is False
+    assert again.json()["version"] == imported.json()["version"] + 1
+    assert api("GET", "/programs/from_file").json()["python"] == python
+    history = api("GET", "/variables/program.from_file/history").json()
+    assert len(history) >= 2  # the replaced version is kept
+
+    save_python(ready, "by_hand", "print('typed')\n")
+    typed = api("GET", "/programs/by_hand/file").json()
+    assert typed["source"] == "python" and typed["workspace"] is None
+    copied = api("PUT", "/programs/by_hand_too/file", json=typed)
+    assert copied.status_code == 200 and copied.json()["generated_as_in_file"] is None
+    assert api("GET", "/programs/by_hand_too").json()["python"] == "print('typed')\n"
+
+    # Bad files: a clear error, and nothing saved.
+    unknown = workspace(block("no_such_block"))
+    bad = {
+        "not json": b"{",
+        "no format": json.dumps({"source": "python", "python": ["x = 1"]}).encode(),
+        "a wrong field": json.dumps({**typed, "python": "x = 1"}).encode(),
+        "no blocks": json.dumps({**document, "workspace": None}).encode(),
+        "an unknown block": json.dumps({**document, "workspace": unknown}).encode(),
+        "refused python": json.dumps({**typed, "python": ["import os"]}).encode(),
+    }
+    for why, body in bad.items():
+        refused = api("PUT", "/programs/never/file", content=body, headers=as_json)
+        assert refused.status_code == 422, (why, refused.text)
+        assert refused.json()["error"]["message"], why
+        assert api("GET", "/programs/never").status_code == 404, why
+    assert api("GET", "/programs/no_such/file").status_code == 404
+
+
 def test_a_program_with_empty_inputs_or_loose_blocks_is_saved_but_does_not_run(
     ready: Cell,
 ) -> None:

@@ -52,6 +52,20 @@ export const shared = css`
     border-color: var(--bad);
     color: var(--bad-fg);
   }
+  /* A download link that looks and takes a tap as a button does. */
+  a.button {
+    display: inline-flex;
+    align-items: center;
+    min-height: var(--touch);
+    padding: 0 22px;
+    border-radius: 10px;
+    border: 2px solid var(--line);
+    background: var(--raised);
+    color: var(--text);
+    text-decoration: none;
+    font-weight: 600;
+    touch-action: manipulation;
+  }
   input {
     min-height: var(--touch);
     padding: 0 14px;

@@ -4,11 +4,13 @@ import { makes, request } from "../rights";
 import { shared } from "../styles";
 import type { ProgramSummary } from "../program/types";
 
-export type ProgramAction = "new" | "save" | "rename" | "duplicate" | "delete" | "undo" | "redo";
+export type ProgramAction =
+  | "new" | "save" | "rename" | "duplicate" | "delete" | "undo" | "redo";
 
 // The Program panel's top bar: which program (a dropdown of the saved ones), unsaved or not,
-// new, save, rename, duplicate, delete, undo and redo. Emits program-open {name} and
-// program-action {action}; the panel acts.
+// new, save, rename, duplicate, delete, export (a download of the saved program's file),
+// import (a file chosen on the tablet), undo and redo. Emits program-open {name},
+// program-action {action} and program-import {file}; the panel acts.
 export class OpProgramBar extends LitElement {
   static properties = {
     programs: { attribute: false },
@@ -53,16 +55,36 @@ export class OpProgramBar extends LitElement {
       .spacer {
         flex: 1;
       }
+      a.button {
+        padding: 0 16px;
+      }
+      a.button[aria-disabled="true"] {
+        pointer-events: none;
+      }
       .dirty {
         color: var(--warn);
         font-size: 15px;
       }
+      /* Undo and redo by their arrows alone (named for screen readers), so that the bar's
+         ten controls fit one row on a 1280 px tablet. */
+      @media (max-width: 1500px) {
+        .label {
+          display: none;
+        }
+        :host {
+          gap: 6px;
+        }
+        button,
+        a.button {
+          padding: 0 12px;
+        }
+        select {
+          min-width: 120px;
+        }
+      }
       @media (max-width: 700px) {
         button {
           padding: 0 12px;
-        }
-        .label {
-          display: none;
         }
         select {
           min-width: 0;
@@ -127,6 +149,18 @@ export class OpProgramBar extends LitElement {
       <button data-testid="delete" class="danger" ?disabled=${!this.name || this.live}
         ${makes(request("DELETE", program))}
         @click=${() => this.emit("delete")}>${t("program.delete")}</button>
+      <a class="button" data-testid="export" href=${`${program}/file`} download
+        aria-disabled=${this.name ? "false" : "true"}>${t("program.export")}</a>
+      <button data-testid="import" ${makes(request("PUT", `${program}/file`))}
+        @click=${() => this.renderRoot.querySelector<HTMLInputElement>("[data-testid=import-file]")
+          ?.click()}>${t("program.import")}</button>
+      <input type="file" hidden data-testid="import-file" accept=".json,application/json"
+        @change=${(e: Event) => {
+          const input = e.target as HTMLInputElement;
+          const file = input.files?.[0];
+          input.value = ""; // the same file chosen again is a change again
+          if (file) this.dispatchEvent(new CustomEvent("program-import", { detail: { file } }));
+        }} />
       <span class="spacer"></span>
       <button data-testid="undo" aria-label=${t("program.undo")} ?disabled=${!this.undo}
         @click=${() => this.emit("undo")}>↶<span class="label"> ${t("program.undo")}</span>

@@ -5,10 +5,10 @@ import { shared } from "../styles";
 import "./modal";
 import "./name-dialog";
 
-export type ProgramDialogKind = "new" | "rename" | "duplicate" | "delete";
+export type ProgramDialogKind = "new" | "rename" | "duplicate" | "delete" | "import";
 
-// The Program panel's dialogs: the name of a new program, a rename, a duplicate, and the
-// question before a delete; the server's refusal shows in place. Emits program-name {name},
+// The Program panel's dialogs: the name of a new program, a rename, a duplicate, an
+// imported file's, and the question before a delete; the server's refusal shows in place. Emits program-name {name},
 // program-delete and close; the panel acts.
 export class OpProgramDialog extends LitElement {
   static properties = {
@@ -55,6 +55,7 @@ export class OpProgramDialog extends LitElement {
     if (this.kind === "rename") return [request("POST", `${program}/rename`)];
     if (this.kind === "duplicate") return [request("POST", `${program}/duplicate`)];
     if (this.kind === "delete") return [request("DELETE", program)];
+    if (this.kind === "import") return [request("PUT", `${program}/file`)];
     return [request("PUT", program)];
   }
 
@@ -77,11 +78,13 @@ export class OpProgramDialog extends LitElement {
       new: t("program.save_new_heading"),
       rename: t("program.rename_heading", { name: this.name }),
       duplicate: t("program.duplicate_heading", { name: this.name }),
+      import: t("program.import_heading"),
     }[this.kind];
     return html`<op-name-dialog
       heading=${heading}
       value=${this.kind === "duplicate" ? `${this.name}_copy` : this.name}
-      confirmLabel=${this.kind === "duplicate" ? t("program.duplicate") : t("program.save")}
+      confirmLabel=${this.kind === "duplicate" ? t("program.duplicate")
+        : this.kind === "import" ? t("program.import") : t("program.save")}
       error=${this.error}
       ?busy=${this.busy}
       .requests=${this.requests()}

@@ -241,6 +241,7 @@ export class OpProgramPanel extends LitElement {
         @program-open=${(e: CustomEvent<{ name: string }>) => void this.files.open(e.detail.name)}
         @program-action=${(e: CustomEvent<{ action: ProgramAction }>) =>
           void this.files.act(e.detail.action)}
+        @program-import=${(e: CustomEvent<{ file: File }>) => void this.files.chooseFile(e.detail.file)}
       ></op-program-bar>
       <div class="work">
         <div class="blockly">
@@ -280,7 +281,8 @@ export class OpProgramPanel extends LitElement {
         </div>
       </div>
       ${this.dialog
-        ? html`<op-program-dialog kind=${this.dialog} name=${doc.name} error=${this.dialogError}
+        ? html`<op-program-dialog kind=${this.dialog}
+            name=${this.dialog === "import" ? this.files.importName : doc.name} error=${this.dialogError}
             ?busy=${this.busy}
             @program-name=${(e: CustomEvent<{ name: string }>) => this.files.nameChosen(e.detail.name)}
             @program-delete=${() => this.files.remove()}

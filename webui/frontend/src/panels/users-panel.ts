@@ -82,17 +82,6 @@ export class OpUsersPanel extends LitElement {
         font-family: monospace;
         overflow-wrap: anywhere;
       }
-      a.button {
-        display: inline-flex;
-        align-items: center;
-        min-height: var(--touch);
-        padding: 0 22px;
-        border-radius: 10px;
-        border: 2px solid var(--line);
-        color: var(--text);
-        text-decoration: none;
-        font-weight: 600;
-      }
     `,
   ];
 

@@ -5,7 +5,7 @@
 // as it was when the panel is shown again.
 
 import type { ReactiveController, ReactiveControllerHost } from "lit";
-import { client, errorText, ok } from "../api";
+import { type Schemas, client, errorText, ok } from "../api";
 import { session } from "../session";
 import type { ProgramEditor } from "./editor";
 import type { Problem, ProgramSummary } from "./types";
@@ -127,6 +127,14 @@ export class ProgramDocument implements ReactiveController {
     await ok(client.POST("/api/programs/{name}/duplicate",
       { params: { path: { name: this.name } }, body: { to } }));
     await this.listPrograms();
+  }
+
+  /** A program file (as exported) saved under `name`: the runtime checks it as a save. */
+  async importFile(name: string, file: Schemas["ProgramFile"]): Promise<Schemas["ProgramImported"]> {
+    const imported = await ok(client.PUT("/api/programs/{name}/file",
+      { params: { path: { name } }, body: file }));
+    await this.listPrograms();
+    return imported;
   }
 
   async remove(): Promise<void> {

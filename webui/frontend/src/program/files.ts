@@ -1,9 +1,10 @@
 // What the Program panel's bar and dialogs do with programs: open one (asking before
 // unsaved blocks are dropped), start a new one, save (a new program asks for its name
-// first), rename, duplicate, delete. What they show goes on the panel: busy, the notice, the
+// first), rename, duplicate, delete, import a program file (its name asked, the file's to
+// start with; replacing a program asks first, and its old version stays in its history). What they show goes on the panel: busy, the notice, the
 // dialog and its error, and the Python tab when a save fails.
 
-import { ApiError, errorText } from "../api";
+import { ApiError, type Schemas, errorText } from "../api";
 import { t } from "../i18n";
 import type { ProgramAction } from "../components/program-bar";
 import type { ProgramDialogKind } from "../components/program-dialog";
@@ -22,7 +23,14 @@ export interface FilesView {
   tab: Tab;
 }
 
+/** The largest program file the runtime takes (runtime/program/program_file.py). */
+const MAX_FILE_BYTES = 8 * 1024 * 1024;
+
+type ProgramFile = Schemas["ProgramFile"];
+
 export class ProgramFiles {
+  private imported: ProgramFile | null = null;
+
   constructor(
     private readonly view: FilesView,
     private readonly doc: ProgramDocument,
@@ -92,7 +100,42 @@ export class ProgramFiles {
     }
   }
 
-  /** The name given in the dialog open: of a new program, a rename or a duplicate. */
+  /** The name the import dialog starts with: the program's where it was exported. */
+  get importName(): string {
+    return this.imported?.name ?? "";
+  }
+
+  /** A file chosen on the tablet: read, then its name asked in the import dialog. */
+  async chooseFile(file: File): Promise<void> {
+    try {
+      if (file.size > MAX_FILE_BYTES) throw new Error(t("program.file_too_large"));
+      const parsed: unknown = JSON.parse(await file.text());
+      if (typeof parsed !== "object" || parsed === null || !("format" in parsed)) {
+        throw new Error(t("program.not_a_file"));
+      }
+      // The runtime checks the rest when it is saved.
+      this.imported = parsed as ProgramFile;
+      this.view.dialogError = "";
+      this.view.dialog = "import";
+    } catch (err) {
+      this.view.notice = t("program.not_imported", { error: errorText(err) });
+    }
+  }
+
+  private async importAs(name: string, exists: boolean): Promise<void> {
+    if (!this.imported) return;
+    if (exists && !window.confirm(t("program.replace_confirm", { name }))) return;
+    if (name === this.doc.name && !(await this.confirmDiscard())) return;
+    const imported = await this.doc.importFile(name, this.imported);
+    this.imported = null;
+    this.view.dialog = null;
+    if (name === this.doc.name) this.doc.dirty = false; // asked above: the file's is shown
+    await this.open(name);
+    this.view.notice = imported.generated_as_in_file === false
+      ? t("program.imported_regenerated", { name }) : "";
+  }
+
+  /** The name given in the dialog open: of a new program, a rename, a duplicate, an import. */
   async nameChosen(name: string): Promise<void> {
     const view = this.view;
     if (!PROGRAM_NAME.test(name)) {
@@ -112,6 +155,9 @@ export class ProgramFiles {
         if (this.doc.dirty && !(await this.saveAs(this.doc.name))) throw new Error(view.notice);
         await this.doc.duplicate(name);
         await this.open(name);
+      } else if (dialog === "import") {
+        await this.importAs(name, exists);
+        return;
       }
       view.dialog = null;
     } catch (err) {
