@@ -17,6 +17,8 @@ from collections.abc import Callable, MutableMapping
 
 import httpx
 
+from openpendant.runtime.launcher.supervisor import FORK_LOCK
+
 log = logging.getLogger(__name__)
 
 SOCKET_ENV = "NOTIFY_SOCKET"
@@ -86,10 +88,17 @@ class Watchdog:
 
     def _run(self) -> None:
         assert self.notifier.watchdog is not None
-        with httpx.Client(timeout=HEALTH_TIMEOUT, trust_env=False, verify=self.verify) as client:
+        with FORK_LOCK:
+            client = httpx.Client(timeout=HEALTH_TIMEOUT, trust_env=False, verify=self.verify)
+        try:
             while not self.stopped.wait(self.notifier.watchdog):
-                if self.healthy(self.urls, client):
+                with FORK_LOCK:  # no child is forked while this thread holds locks
+                    healthy = self.healthy(self.urls, client)
+                if healthy:
                     self.notifier.send("WATCHDOG=1")
+        finally:
+            with FORK_LOCK:
+                client.close()
 
     def stop(self) -> None:
         self.stopped.set()

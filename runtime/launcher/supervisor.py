@@ -15,6 +15,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable
@@ -48,6 +49,11 @@ def _name_process(name: str) -> None:
 
 Main = Callable[[list[str]], int]
 TERMINATING = {signal.SIGINT, signal.SIGTERM}
+# Held by another thread of the launcher while it holds locks a forked child would inherit
+# held, with no thread left to release them (the watchdog's health probes: its HTTP
+# client's, OpenSSL's, which the UI's child uses for HTTPS): a child is forked only between
+# such rounds, never in the middle of one.
+FORK_LOCK = threading.Lock()
 
 
 class Forked:
@@ -95,7 +101,8 @@ def fork_child(
         stream.flush()  # nothing buffered here is written twice
     # No signal may reach the child's copy of the launcher's handlers.
     previous = signal.pthread_sigmask(signal.SIG_BLOCK, TERMINATING)
-    pid = os.fork()
+    with FORK_LOCK:  # released in the child too: it is a copy
+        pid = os.fork()
     if pid:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
         return Forked(pid)

@@ -4,9 +4,14 @@ from __future__ import annotations
 
 import os
 import socket
+import threading
 import uuid
+from pathlib import Path
 
-from openpendant.runtime.launcher.notify import PINGS_PER_PERIOD, Notifier
+import httpx
+
+from openpendant.runtime.launcher.notify import PINGS_PER_PERIOD, Notifier, Watchdog
+from openpendant.runtime.launcher.supervisor import Forked, fork_child
 
 
 def test_the_variables_are_taken_out_and_the_watchdog_is_ours_only_if_it_names_us() -> None:
@@ -28,3 +33,38 @@ def test_an_abstract_socket_is_written_with_a_leading_at() -> None:
         notifier = Notifier({"NOTIFY_SOCKET": f"@{name}", "WATCHDOG_PID": str(os.getpid())})
         assert notifier.send("READY=1", "STATUS=up")
         assert systemd.recv(100) == b"READY=1\nSTATUS=up"
+
+
+def test_no_child_is_forked_while_the_watchdog_probes(tmp_path: Path) -> None:
+    """A child forked while the watchdog's thread held its HTTP client's or OpenSSL's locks
+    would inherit them held, with no thread to release them."""
+    probing, release = threading.Event(), threading.Event()
+
+    def healthy(urls: dict[str, str], client: httpx.Client) -> bool:
+        probing.set()
+        release.wait(10)
+        return True
+
+    name = f"openpendant-test-{uuid.uuid4().hex}"
+    with socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM) as systemd:
+        systemd.bind("\0" + name)
+        environ = {"NOTIFY_SOCKET": f"@{name}", "WATCHDOG_USEC": "30000"}
+        watchdog = Watchdog(Notifier(environ), {}, healthy=healthy)
+        watchdog.start()
+        try:
+            assert probing.wait(10)
+            forked: list[Forked] = []
+            forking = threading.Thread(
+                target=lambda: forked.append(
+                    fork_child("child", lambda argv: 0, [], {}, tmp_path / "child.log", ())
+                )
+            )
+            forking.start()
+            forking.join(0.5)
+            assert forking.is_alive() and not forked, "forked in the middle of a probe"
+            release.set()
+            forking.join(10)
+            assert forked and forked[0].wait(10) == 0
+        finally:
+            release.set()
+            watchdog.stop()
