@@ -85,6 +85,7 @@ class TlsStatus(BaseModel):
     fingerprint: str  # SHA-256 of the runtime's certificate authority, or the site's certificate
     authority: bool  # the runtime's own authority, which a tablet installs from `download`
     download: str | None
+    lan_download: str | None = None  # the same from the LAN (for a QR code shown on loopback)
 
 
 class AuthStatus(BaseModel):
@@ -171,7 +172,11 @@ def identity(request: Request) -> Identity:
 
 
 def auth_router(
-    store: AuthStore, audit: AuditLog, setup_code: str | None, tls: TlsFiles | None = None
+    store: AuthStore,
+    audit: AuditLog,
+    setup_code: str | None,
+    tls: TlsFiles | None = None,
+    lan_download: str | None = None,
 ) -> APIRouter:
     router = APIRouter(prefix="/api/auth")
     tls_status = (
@@ -181,6 +186,7 @@ def auth_router(
             fingerprint=tls.fingerprint(),
             authority=tls.ca is not None,
             download=CA_DOWNLOAD if tls.ca is not None else None,
+            lan_download=lan_download if tls.ca is not None else None,
         )
     )
 

@@ -22,7 +22,7 @@ from openpendant.runtime.kit.app import create_app
 from openpendant.runtime.kit.errors import NotFound
 from openpendant.runtime.kit.https_redirect import ca_response
 from openpendant.runtime.kit.settings import RuntimeSettings
-from openpendant.runtime.kit.tls import CA_DOWNLOAD, tls_files
+from openpendant.runtime.kit.tls import CA_DOWNLOAD, lan_download, tls_files
 from openpendant.runtime.kit.web_guard import WebGuard
 from openpendant.runtime.paths import package_roots
 from openpendant.runtime.services import services as declared_services
@@ -116,7 +116,9 @@ def build_app(settings: RuntimeSettings, urls: dict[str, str]) -> FastAPI:
     app.add_middleware(AccessGuard, store=store, audit=audit)
     app.add_middleware(WebGuard, policy=web_policy(settings))
     tls = tls_files(settings)
-    app.include_router(auth_router(store, audit, os.environ.get(SETUP_CODE_ENV) or None, tls))
+    setup_code = os.environ.get(SETUP_CODE_ENV) or None
+    lan = lan_download(settings) if tls is not None else None
+    app.include_router(auth_router(store, audit, setup_code, tls, lan))
     if tls is not None and tls.ca is not None:
         authority = tls.ca
 

@@ -355,6 +355,13 @@ class AuthStore:
         with self._tx() as db:
             self._end(db, [sid], why)
 
+    def end_every_session(self, why: str) -> int:
+        """Every user signed out (how many sessions ended)."""
+        with self._tx() as db:
+            ended = [r[0] for r in db.execute("SELECT id FROM sessions")]
+            self._end(db, ended, why)
+        return len(ended)
+
     def _end_sessions(self, db: sqlite3.Connection, name: str, why: str) -> None:
         ended = [r[0] for r in db.execute("SELECT id FROM sessions WHERE user = ?", (name,))]
         self._end(db, ended, why)

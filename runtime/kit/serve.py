@@ -54,24 +54,52 @@ def _config(listener: Listener) -> uvicorn.Config:
     )
 
 
-class _Follower(uvicorn.Server):
-    """A second server of the process: it starts once the first has (whose lifespan, the
-    app's start-up, it shares) and stops with it; the first handles the signals."""
+class _Leader(uvicorn.Server):
+    """The first server of a process with several: it runs the app's lifespan and handles
+    the signals; on the way out it waits for the others to close their connections (a held
+    jog's socket halts its robot as it closes) before the app shuts down."""
 
-    def __init__(self, config: uvicorn.Config, leader: uvicorn.Server) -> None:
+    def __init__(self, config: uvicorn.Config) -> None:
         super().__init__(config)
+        self.followers: list[_Follower] = []
+
+    async def shutdown(self, sockets: list[socket.socket] | None = None) -> None:
+        await asyncio.gather(*(f.finished.wait() for f in self.followers))
+        await super().shutdown(sockets)
+
+
+class _Follower(uvicorn.Server):
+    """Another server of the process: it starts once the leader has (whose lifespan, the
+    app's start-up, it shares), stops when the leader is told to, and is forced out with it."""
+
+    def __init__(self, config: uvicorn.Config, leader: _Leader) -> None:
         self.leader = leader
+        self._forced = False
+        super().__init__(config)
+        self.finished = asyncio.Event()
+        leader.followers.append(self)
+
+    @property
+    def force_exit(self) -> bool:
+        return self._forced or self.leader.force_exit
+
+    @force_exit.setter
+    def force_exit(self, value: bool) -> None:
+        self._forced = value
 
     @contextlib.contextmanager
     def capture_signals(self) -> Iterator[None]:
         yield
 
     async def serve(self, sockets: list[socket.socket] | None = None) -> None:
-        while not self.leader.started:
-            if self.leader.should_exit:
-                return
-            await asyncio.sleep(0.01)
-        await super().serve(sockets)
+        try:
+            while not self.leader.started:
+                if self.leader.should_exit:
+                    return
+                await asyncio.sleep(0.01)
+            await super().serve(sockets)
+        finally:
+            self.finished.set()
 
     async def on_tick(self, counter: int) -> bool:
         return self.leader.should_exit or await super().on_tick(counter)
@@ -80,19 +108,20 @@ class _Follower(uvicorn.Server):
 def run_listeners(first: Listener, *others: Listener) -> None:
     """Serve until SIGTERM or SIGINT; `first` runs the app's lifespan."""
     first.lifespan = True
-    leader = uvicorn.Server(_config(first))
     if not others:
-        leader.run(sockets=first.sockets)
+        uvicorn.Server(_config(first)).run(sockets=first.sockets)
         return
-    followers = [(_Follower(_config(o), leader), o.sockets) for o in others]
 
     async def serve_all() -> None:
+        # Made in the loop that serves them (their events belong to it).
+        leader = _Leader(_config(first))
+        followers = [(_Follower(_config(o), leader), o.sockets) for o in others]
         await asyncio.gather(
             leader.serve(first.sockets), *(f.serve(sockets) for f, sockets in followers)
         )
 
     # The event loop uvicorn would choose for one server (uvloop where installed).
-    with asyncio.Runner(loop_factory=leader.config.get_loop_factory()) as runner:
+    with asyncio.Runner(loop_factory=_config(first).get_loop_factory()) as runner:
         runner.run(serve_all())
 
 

@@ -5,9 +5,11 @@ address is new or it nears its end), or the site's own certificate and key.
 
 A tablet trusts the authority once (its fingerprint is printed at start and shown on the
 set-up screen); the server certificate can then change without asking it again. The
-authority may sign only for private and loopback addresses, `.local` names, localhost and
-the names it was made for: installed on a tablet, a leaked key of it could not stand in for
-any other site the tablet visits."""
+authority may sign only server certificates, and only for the names this computer had when
+it was made (localhost, hostname, hostname.local, its configured names and their
+subdomains), the loopback addresses and the networks of its interfaces then: installed on
+a tablet, a leaked key of it could stand in for nothing but this computer's names and its
+networks' addresses."""
 
 from __future__ import annotations
 
@@ -47,20 +49,8 @@ SERVER_DAYS = 800
 RENEW_BEFORE_DAYS = 60
 
 IPAddress = ipaddress.IPv4Address | ipaddress.IPv6Address
-PRIVATE_NETWORKS = [
-    ipaddress.ip_network(n)
-    for n in (
-        "10.0.0.0/8",
-        "172.16.0.0/12",
-        "192.168.0.0/16",
-        "127.0.0.0/8",
-        "169.254.0.0/16",
-        "100.64.0.0/10",
-        "::1/128",
-        "fc00::/7",
-        "fe80::/10",
-    )
-]
+LOOPBACK_NETWORKS = [ipaddress.ip_network("127.0.0.0/8"), ipaddress.ip_network("::1/128")]
+IPNetwork = ipaddress.IPv4Network | ipaddress.IPv6Network
 
 
 class TlsError(RuntimeError):
@@ -140,6 +130,20 @@ def prepare(settings: RuntimeSettings) -> TlsFiles | None:
     return files
 
 
+def lan_download(settings: RuntimeSettings) -> str | None:
+    """Where a tablet on the LAN fetches the authority (a QR code's address when the UI is
+    opened on this computer itself): by plain HTTP where the redirect port is fixed (the
+    fingerprint tells a tablet it is the right one), else on the HTTPS port."""
+    _, addresses = host_names(settings)
+    lan = sorted((a for a in addresses if not a.is_loopback), key=lambda a: a.version)
+    if not lan:
+        return None
+    host = f"[{lan[0]}]" if lan[0].version == 6 else str(lan[0])
+    if settings.tls.redirect_port:
+        return f"http://{host}:{settings.tls.redirect_port}{CA_DOWNLOAD}"
+    return f"https://{host}:{settings.port}{CA_DOWNLOAD}"
+
+
 def host_names(settings: RuntimeSettings) -> tuple[list[str], list[IPAddress]]:
     """The names and addresses a browser may use for this computer's UI."""
     hostname = socket.gethostname().lower()
@@ -150,6 +154,7 @@ def host_names(settings: RuntimeSettings) -> tuple[list[str], list[IPAddress]]:
     if "." in fqdn and fqdn != "localhost":
         names.append(fqdn)
     names += [n.lower() for n in (*settings.allowed_hosts, *settings.tls.names)]
+    names = [dns for dns in (_dns_name(n) for n in names) if dns is not None]
     addresses: list[IPAddress] = [ipaddress.ip_address("127.0.0.1"), ipaddress.ip_address("::1")]
     try:
         bound = ipaddress.ip_address(settings.host)
@@ -162,16 +167,31 @@ def host_names(settings: RuntimeSettings) -> tuple[list[str], list[IPAddress]]:
     return list(dict.fromkeys(names)), list(dict.fromkeys(addresses))
 
 
-def _interface_addresses() -> list[IPAddress]:
-    found: list[IPAddress] = []
+def _dns_name(name: str) -> str | None:
+    """A name as a certificate writes it (IDNA for one with letters beyond ASCII), or None
+    (with a warning) for one that is not a host name."""
+    try:
+        return name.encode("idna").decode("ascii")
+    except UnicodeError:
+        log.warning("%r is not a host name: no certificate is made for it", name)
+        return None
+
+
+def _interfaces() -> list[ipaddress.IPv4Interface | ipaddress.IPv6Interface]:
+    """This computer's interfaces' addresses, each with its network (a link-local IPv6
+    address needs its interface named in a URL: not a browser's)."""
+    found = []
     for adapter in ifaddr.get_adapters():
         for ip in adapter.ips:
             text = ip.ip if isinstance(ip.ip, str) else ip.ip[0]
-            address = ipaddress.ip_address(text)
-            # A link-local IPv6 address needs its interface named in the URL: not a browser's.
-            if not (address.version == 6 and address.is_link_local):
-                found.append(address)
+            interface = ipaddress.ip_interface(f"{text}/{ip.network_prefix}")
+            if not (interface.version == 6 and interface.is_link_local):
+                found.append(interface)
     return found
+
+
+def _interface_addresses() -> list[IPAddress]:
+    return [interface.ip for interface in _interfaces()]
 
 
 def _permitted(name: str | IPAddress, ca: x509.Certificate) -> bool:
@@ -200,24 +220,22 @@ def _own_certificates(files: TlsFiles, names: list[str], addresses: list[IPAddre
     folder.mkdir(mode=0o700, parents=True, exist_ok=True)
     folder.chmod(0o700)
     ca_key_path = folder / CA_KEY
-    if not files.ca.is_file() or not ca_key_path.is_file():
-        ca_key, ca = _make_authority(names)
+    authority = _authority(files.ca, ca_key_path)
+    if authority is None:
+        networks = [*LOOPBACK_NETWORKS, *(i.network for i in _interfaces())]
+        ca_key, ca = _make_authority(names, networks)
         _write_key(ca_key_path, ca_key)
         _write(files.ca, ca.public_bytes(serialization.Encoding.PEM))
         log.info("made a certificate authority in %s", folder)
     else:
-        ca = x509.load_pem_x509_certificate(files.ca.read_bytes())
-        loaded = serialization.load_pem_private_key(ca_key_path.read_bytes(), password=None)
-        if not isinstance(loaded, ec.EllipticCurvePrivateKey):
-            raise TlsError(f"{ca_key_path} is not the authority's key; remove {folder}")
-        ca_key = loaded
+        ca_key, ca = authority
     covered = [n for n in (*names, *addresses) if _permitted(n, ca)]
     left_out = [str(n) for n in (*names, *addresses) if n not in covered]
     if left_out:
         log.warning(
-            "the certificate authority may not sign for %s: a browser using those names "
-            "will warn (remove %s to make a new authority, which every tablet must trust "
-            "again)",
+            "the certificate authority was made before %s was this computer's: a browser "
+            "using it will warn (remove %s to make a new authority, which every tablet must "
+            "trust again)",
             ", ".join(left_out),
             folder,
         )
@@ -233,6 +251,38 @@ def _own_certificates(files: TlsFiles, names: list[str], addresses: list[IPAddre
     log.info("made a server certificate for %s", ", ".join(str(n) for n in covered))
 
 
+def _authority(cert: Path, key: Path) -> tuple[ec.EllipticCurvePrivateKey, x509.Certificate] | None:
+    """The authority on disk, or None when there is none or it is unusable (a half-written
+    pair after a power cut, a damaged file): then a new one is made, which tablets must
+    trust again."""
+    if not cert.exists() and not key.exists():
+        return None
+    try:
+        certificate = x509.load_pem_x509_certificate(cert.read_bytes())
+        loaded = serialization.load_pem_private_key(key.read_bytes(), password=None)
+    except (OSError, ValueError, TypeError) as exc:
+        log.warning(
+            "the certificate authority in %s is unusable (%s): making a new one, which "
+            "every tablet must trust again",
+            cert.parent,
+            exc,
+        )
+        return None
+    if not isinstance(loaded, ec.EllipticCurvePrivateKey) or not _pair(certificate, loaded):
+        log.warning(
+            "the certificate authority's key in %s is not its certificate's: making a new "
+            "one, which every tablet must trust again",
+            cert.parent,
+        )
+        return None
+    return loaded, certificate
+
+
+def _pair(certificate: x509.Certificate, key: ec.EllipticCurvePrivateKey) -> bool:
+    der = (serialization.Encoding.DER, serialization.PublicFormat.SubjectPublicKeyInfo)
+    return certificate.public_key().public_bytes(*der) == key.public_key().public_bytes(*der)
+
+
 def _current(files: TlsFiles, ca: x509.Certificate, wanted: list[str | IPAddress]) -> bool:
     """Whether the server certificate on disk is the authority's, covers `wanted` and has
     more than RENEW_BEFORE_DAYS left."""
@@ -242,8 +292,11 @@ def _current(files: TlsFiles, ca: x509.Certificate, wanted: list[str | IPAddress
         leaf = x509.load_pem_x509_certificates(files.cert.read_bytes())[0]
         leaf.verify_directly_issued_by(ca)
         san = leaf.extensions.get_extension_for_class(x509.SubjectAlternativeName).value
+        key = serialization.load_pem_private_key(files.key.read_bytes(), password=None)
     except (ValueError, TypeError, x509.ExtensionNotFound, InvalidSignature):
         return False
+    if not isinstance(key, ec.EllipticCurvePrivateKey) or not _pair(leaf, key):
+        return False  # a half-written pair (a power cut between the two files)
     have: set[str | IPAddress] = set(san.get_values_for_type(x509.DNSName))
     have |= {
         a
@@ -258,7 +311,9 @@ def _now() -> datetime.datetime:
     return datetime.datetime.now(datetime.UTC)
 
 
-def _make_authority(names: list[str]) -> tuple[ec.EllipticCurvePrivateKey, x509.Certificate]:
+def _make_authority(
+    names: list[str], networks: list[IPNetwork]
+) -> tuple[ec.EllipticCurvePrivateKey, x509.Certificate]:
     key = ec.generate_private_key(ec.SECP256R1())
     subject = x509.Name(
         [
@@ -266,9 +321,8 @@ def _make_authority(names: list[str]) -> tuple[ec.EllipticCurvePrivateKey, x509.
             x509.NameAttribute(NameOID.COMMON_NAME, f"OpenPendant CA {socket.gethostname()}"[:64]),
         ]
     )
-    dns = sorted({"localhost", "local", *names})
-    permitted: list[x509.GeneralName] = [x509.DNSName(n) for n in dns]
-    permitted += [x509.IPAddress(n) for n in PRIVATE_NETWORKS]
+    permitted: list[x509.GeneralName] = [x509.DNSName(n) for n in sorted({"localhost", *names})]
+    permitted += [x509.IPAddress(n) for n in dict.fromkeys(networks)]
     start = _now() - datetime.timedelta(days=1)
     certificate = (
         x509.CertificateBuilder()
@@ -297,6 +351,8 @@ def _make_authority(names: list[str]) -> tuple[ec.EllipticCurvePrivateKey, x509.
             x509.NameConstraints(permitted_subtrees=permitted, excluded_subtrees=None),
             critical=True,
         )
+        # Server certificates only: nothing it signs is good for mail or code.
+        .add_extension(x509.ExtendedKeyUsage([ExtendedKeyUsageOID.SERVER_AUTH]), critical=False)
         .add_extension(x509.SubjectKeyIdentifier.from_public_key(key.public_key()), critical=False)
         .sign(key, hashes.SHA256())
     )

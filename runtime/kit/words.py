@@ -31,6 +31,7 @@ CODES: dict[str, tuple[str, ...]] = {
     "session.role_changed": (),
     "session.password_changed": (),
     "session.user_removed": (),
+    "session.secure_connection": (),
     # Links and control of a device
     "link.stale": ("device",),
     "link.changed": ("device",),

@@ -23,13 +23,20 @@ import httpx
 from openpendant.plugins.api import resolve
 from openpendant.plugins.registry import registry
 from openpendant.runtime import __version__
-from openpendant.runtime.auth.setup import SETUP_CODE_ENV, needs_setup
+from openpendant.runtime.auth.setup import SETUP_CODE_ENV, auth_path, needs_setup
+from openpendant.runtime.auth.store import AuthStore
 from openpendant.runtime.kit.internal import ENV as INTERNAL_ENV
 from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
 from openpendant.runtime.kit.private_files import keep_private, shown_secret
 from openpendant.runtime.kit.serve import listening_socket
 from openpendant.runtime.kit.settings import DeviceSpec, RuntimeSettings, settings_for_child
-from openpendant.runtime.kit.tls import CA_DOWNLOAD, TlsError, TlsFiles, probe_context
+from openpendant.runtime.kit.tls import (
+    CA_DOWNLOAD,
+    TLS_DIR,
+    TlsError,
+    TlsFiles,
+    probe_context,
+)
 from openpendant.runtime.kit.tls import prepare as prepare_tls
 from openpendant.runtime.launcher.backup import BackupError, check_databases, data_lock
 from openpendant.runtime.launcher.notify import Notifier, Watchdog
@@ -183,6 +190,30 @@ def _device_children(
     return children
 
 
+SECURE_SESSIONS = "sessions-over-https"  # in the tls folder: every session began over HTTPS
+
+
+def sessions_follow_transport(data_dir: Path, tls: TlsFiles | None) -> None:
+    """Sessions signed in over plain HTTP end when HTTPS is turned on: their cookies are not
+    `Secure`, and a browser would still send them in clear to the plain port."""
+    marker = data_dir / TLS_DIR / SECURE_SESSIONS
+    if tls is None:
+        marker.unlink(missing_ok=True)
+        return
+    if marker.exists():
+        return
+    if auth_path(data_dir).exists():
+        store = AuthStore(auth_path(data_dir))
+        try:
+            ended = store.end_every_session("secure_connection")
+        finally:
+            store.close()
+        if ended:
+            log.info("HTTPS is on: %d session(s) signed in over plain HTTP ended", ended)
+    marker.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
+    marker.touch(mode=0o600)
+
+
 def tls_lines(tls: TlsFiles, redirect: socket.socket | None) -> str:
     """What the start-up message says of HTTPS: what a tablet checks before trusting it."""
     what = "certificate authority" if tls.ca is not None else "certificate"
@@ -242,6 +273,7 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
     except TlsError as exc:
         print(f"openpendant: {exc}", file=sys.stderr)
         return 1
+    sessions_follow_transport(settings.data_dir, tls)
     try:
         public = listening_socket(settings.host, settings.port)
     except OSError as exc:

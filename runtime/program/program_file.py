@@ -1,6 +1,8 @@
 """A program as a file, for version control and for moving it between cells: one JSON
 document with its Blockly workspace (or its hand-written Python) and the Python this runtime
-generated from it, one line an item so that a diff shows what changed line by line.
+generated from it, one line an item so that a diff shows what changed line by line. The
+workspace is written on one line: Blockly nests a stack of blocks one level a block, and
+indented it would grow with the square of the stack's length.
 
 An imported file is checked as a save is: its blocks are generated and compiled again, and
 that Python is what runs; the file's own Python is compared with it, never run."""
@@ -8,6 +10,7 @@ that Python is what runs; the file's own Python is compared with it, never run."
 from __future__ import annotations
 
 import json
+import uuid
 from typing import Any, Literal
 
 from pydantic import Field, ValidationError
@@ -20,7 +23,7 @@ from openpendant.runtime.kit.errors import InvalidValue
 from openpendant.runtime.program.models import Program
 
 FORMAT = "openpendant-program"
-# Its workspace at most a save's size, with the lines of its Python and the indentation.
+# Its workspace at most a save's size, with the lines of its Python (at most 2 MB).
 MAX_FILE_BYTES = 2 * MAX_WORKSPACE_BYTES
 SUFFIX = ".openpendant.json"
 
@@ -44,11 +47,18 @@ def file_bytes(program: Program) -> bytes:
         name=program.name,
         exported_by=__version__,
         source=program.source,
-        workspace=program.workspace if program.source == "blocks" else None,
+        workspace=None,
         python=program.python.split("\n"),
-    )
-    allow_deep_json()  # a long stack of blocks nests deeply
-    return (json.dumps(document.model_dump(), indent=2, ensure_ascii=False) + "\n").encode()
+    ).model_dump()
+    placeholder = uuid.uuid4().hex
+    if program.source == "blocks":
+        document["workspace"] = placeholder
+    text = json.dumps(document, indent=2, ensure_ascii=False) + "\n"
+    if program.source == "blocks":
+        allow_deep_json()  # a long stack of blocks nests deeply
+        compact = json.dumps(program.workspace, separators=(",", ":"), ensure_ascii=False)
+        text = text.replace(json.dumps(placeholder), compact, 1)
+    return text.encode()
 
 
 def read_file(body: bytes) -> ProgramFile:

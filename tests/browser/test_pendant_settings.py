@@ -129,7 +129,7 @@ PANELS: dict[str, tuple[str, ...]] = {
 }
 # The same in German, or data: robot and program names, units.
 SAME_IN_BOTH = {"robot", "cycle", "STOP", "System", "Pause", "Details", "mm", "°", "kg", "3D"}
-SAME_IN_BOTH |= {"Python", "Name", "Status", "Version", "in", "rad", "Plugins"}
+SAME_IN_BOTH |= {"Python", "Name", "Status", "Version", "in", "rad", "Plugins", "Export", "Import"}
 SAME_IN_BOTH |= {f"TCP {axis} mm" for axis in "XYZ"}
 
 

@@ -530,6 +530,11 @@ def test_a_program_goes_out_as_a_file_and_comes_back_to_run_as_it_was(ready: Cel
     assert "\n".join(document["python"]) == python
     assert document["workspace"] == api("GET", "/programs/to_file").json()["workspace"]
     assert exported.text.count("\n") > len(document["python"])  # a line a line: diffs well
+    # A long stack of blocks (nested a level a block) grows its file in proportion.
+    long = workspace(stack(*(block("text_print", TEXT=text(f"line {i}")) for i in range(400))))
+    save(ready, "long_stack", long)
+    long_file = api("GET", "/programs/long_stack/file")
+    assert len(long_file.content) < 3 * len(json.dumps(long)), len(long_file.content)
 
     as_json = {"content-type": "application/json"}
     imported = api("PUT", "/programs/from_file/file", content=exported.content, headers=as_json)

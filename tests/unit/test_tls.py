@@ -4,7 +4,9 @@
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
+import ipaddress
 import logging
 import os
 import signal
@@ -19,10 +21,14 @@ import pytest
 from cryptography import x509
 from cryptography.hazmat.primitives import serialization
 from cryptography.hazmat.primitives.asymmetric import ec
-from fastapi import FastAPI
+from fastapi import FastAPI, WebSocket, WebSocketDisconnect
 from fastapi.testclient import TestClient
 from pydantic import ValidationError
+from websockets.sync.client import connect
 
+from openpendant.runtime.auth.roles import Role
+from openpendant.runtime.auth.setup import auth_path
+from openpendant.runtime.auth.store import AuthStore
 from openpendant.runtime.bench.harness.processes import wait_for
 from openpendant.runtime.kit import tls
 from openpendant.runtime.kit.https_redirect import HttpsRedirect
@@ -30,6 +36,7 @@ from openpendant.runtime.kit.serve import Listener, listening_socket, run_listen
 from openpendant.runtime.kit.settings import RuntimeSettings
 from openpendant.runtime.kit.web_guard import WebPolicy
 from openpendant.runtime.launcher.doctor import https
+from openpendant.runtime.launcher.run import sessions_follow_transport
 
 
 def settings(data_dir: Path, **tls_options: object) -> RuntimeSettings:
@@ -97,21 +104,48 @@ def test_the_first_start_makes_an_authority_and_a_certificate_a_client_trusting_
 def test_the_authority_is_kept_and_the_certificate_made_again_for_a_new_name(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
-    files = tls.prepare(settings(tmp_path))
+    first = settings(tmp_path, names=["pendant.cell4.example"])
+    files = tls.prepare(first)
     assert files is not None and files.ca is not None
     authority, server = files.ca.read_bytes(), files.cert.read_bytes()
-    tls.prepare(settings(tmp_path))
+    tls.prepare(first)
     assert (files.ca.read_bytes(), files.cert.read_bytes()) == (authority, server)
-    tls.prepare(settings(tmp_path, names=["cell-7.local"]))
+    # A name below one it was made for, and the LAN's addresses (the UI on every interface).
+    wider = settings(tmp_path, names=["pendant.cell4.example", "arm.pendant.cell4.example"])
+    tls.prepare(wider.model_copy(update={"host": "0.0.0.0"}))
     assert files.ca.read_bytes() == authority  # a tablet that trusts it keeps trusting
     assert files.cert.read_bytes() != server
+    lan = [str(i.ip) for i in tls._interfaces() if not i.ip.is_loopback]
     with tls_server(files) as port:
-        handshake(port, files.ca, "cell-7.local")
-    # A name the authority may not sign for is left out, and the log says how to get it.
+        for name in ("arm.pendant.cell4.example", *lan):
+            handshake(port, files.ca, name)
+    # A name the authority was not made for is left out, and the log says how to get it.
     with caplog.at_level(logging.WARNING):
-        tls.prepare(settings(tmp_path, names=["cell-7.local", "pendant.example.org"]))
-    assert "pendant.example.org" in caplog.text and "new authority" in caplog.text
+        tls.prepare(settings(tmp_path, names=["pendant.cell4.example", "cell-7.local"]))
+    assert "cell-7.local" in caplog.text and "new authority" in caplog.text
     assert files.ca.read_bytes() == authority
+
+
+def test_a_half_written_pair_is_made_again(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """A power cut between a key and its certificate: the next start mends it, never stops."""
+    files = tls.prepare(settings(tmp_path))
+    assert files is not None and files.ca is not None
+    authority = files.ca.read_bytes()
+    tls._write_key(files.key, ec.generate_private_key(ec.SECP256R1()))
+    mended = tls.prepare(settings(tmp_path))
+    assert mended is not None and files.ca.read_bytes() == authority
+    mended.server_context()  # the key is the certificate's again
+    tls._write_key(files.ca.parent / tls.CA_KEY, ec.generate_private_key(ec.SECP256R1()))
+    with caplog.at_level(logging.WARNING):
+        anew = tls.prepare(settings(tmp_path))
+    assert "trust again" in caplog.text
+    assert anew is not None and files.ca.read_bytes() != authority
+    with tls_server(anew) as port:
+        handshake(port, files.ca, "localhost")
+    (files.ca.parent / tls.CA_KEY).write_text("damaged")
+    assert tls.prepare(settings(tmp_path)) is not None
 
 
 def test_a_certificate_near_its_end_is_made_again(
@@ -146,6 +180,15 @@ def test_the_authority_cannot_vouch_for_another_site(tmp_path: Path) -> None:
         pytest.raises(ssl.SSLCertVerificationError, match=r"(?i)name constraint|permitted"),
     ):
         handshake(port, files.ca, "bank.example")
+    # Nor for another cell's name on the same network, nor an address of another network.
+    for other in ("other-cell.local", ipaddress.ip_address("10.99.0.1")):
+        forged = tls._make_server(key, loaded, authority, [other])
+        cert.write_bytes(forged.public_bytes(serialization.Encoding.PEM) + files.ca.read_bytes())
+        with (
+            tls_server(tls.TlsFiles(cert, key_file, None)) as port,
+            pytest.raises(ssl.SSLCertVerificationError),
+        ):
+            handshake(port, files.ca, str(other))
 
 
 def test_the_sites_own_certificate_is_used_as_given_and_a_wrong_key_refused(
@@ -201,25 +244,44 @@ def test_an_https_ui_accepts_only_its_https_origin() -> None:
     assert "wss://127.0.0.1:*" in policy.content_security_policy(host)
 
 
-def test_a_second_listener_over_tls_serves_once_the_first_has_started_and_stops_with_it(
+def test_a_second_listener_over_tls_serves_once_the_first_has_started_and_closes_first(
     tmp_path: Path,
 ) -> None:
     """The jog service's shape: its internal port plain and its public one over TLS, one app
-    whose start-up (lifespan) runs once; SIGTERM ends both."""
+    whose start-up (lifespan) runs once. On SIGTERM the public socket's connections close
+    (a held jog's socket halts its robot then) before the app shuts down."""
     files = tls.prepare(settings(tmp_path))
     assert files is not None and files.ca is not None
     plain, secure = listening_socket("127.0.0.1", 0), listening_socket("127.0.0.1", 0)
+    journal = tmp_path / "journal"
+
+    def note(line: str) -> None:
+        with journal.open("a") as out:
+            out.write(line + "\n")
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         app.state.ready = "yes"
         yield
+        note("app shut down")
 
     app = FastAPI(lifespan=lifespan)
 
     @app.get("/ready")
     async def ready() -> dict[str, str]:
         return {"ready": app.state.ready}
+
+    @app.websocket("/held")
+    async def held(socket: WebSocket) -> None:
+        await socket.accept()
+        try:
+            while True:
+                await socket.receive_text()
+        except WebSocketDisconnect:
+            pass
+        finally:
+            await asyncio.sleep(0.5)  # a halt on the way out takes its time
+            note("socket closed")
 
     pid = os.fork()
     if pid == 0:
@@ -236,15 +298,21 @@ def test_a_second_listener_over_tls_serves_once_the_first_has_started_and_stops_
             answer = wait_for(lambda: client.get(url), 5, what="the TLS listener")
         assert answer.json() == {"ready": "yes"}
         with httpx.Client(timeout=5) as client:
-            answer = wait_for(
-                lambda: client.get(f"http://127.0.0.1:{plain.getsockname()[1]}/ready"), 5
-            )
+            inside = f"http://127.0.0.1:{plain.getsockname()[1]}/ready"
+            answer = wait_for(lambda: client.get(inside), 5)
         assert answer.json() == {"ready": "yes"}
+        held_url = f"wss://127.0.0.1:{secure.getsockname()[1]}/held"
+        with connect(held_url, ssl=context, open_timeout=5) as holding:
+            holding.send("holding")
+            os.kill(pid, signal.SIGTERM)
+            _, status = os.waitpid(pid, 0)
     finally:
-        os.kill(pid, signal.SIGTERM)
-        _, status = os.waitpid(pid, 0)
-    # Both servers closed: uvicorn ends the process with the signal it handled.
+        with contextlib.suppress(ProcessLookupError, ChildProcessError):
+            os.kill(pid, signal.SIGKILL)
+            os.waitpid(pid, 0)
+    # uvicorn ends the process with the signal it handled, once both servers are done.
     assert os.waitstatus_to_exitcode(status) in (0, -signal.SIGTERM)
+    assert journal.read_text().splitlines() == ["socket closed", "app shut down"]
 
 
 def test_the_doctor_says_what_https_needs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -263,3 +331,33 @@ def test_the_doctor_says_what_https_needs(tmp_path: Path, monkeypatch: pytest.Mo
     tls.prepare(settings(tmp_path))
     [ending] = https(settings(tmp_path))
     assert ending.verdict == "warn" and "restart" in ending.todo
+
+
+def test_sessions_signed_in_over_plain_http_end_when_https_is_turned_on(tmp_path: Path) -> None:
+    store = AuthStore(auth_path(tmp_path))
+    try:
+        store.create_user("ada", "correct horse battery", Role.admin, first=True)
+        in_clear, _ = store.open_session("ada")
+    finally:
+        store.close()
+    files = tls.prepare(settings(tmp_path))
+    sessions_follow_transport(tmp_path, None)  # still plain: nothing ends
+    store = AuthStore(auth_path(tmp_path))
+    try:
+        assert store.session(in_clear) is not None
+    finally:
+        store.close()
+    sessions_follow_transport(tmp_path, files)
+    store = AuthStore(auth_path(tmp_path))
+    try:
+        assert store.session(in_clear) is None
+        assert store.ended(in_clear) == "secure_connection"
+        secure, _ = store.open_session("ada")
+    finally:
+        store.close()
+    sessions_follow_transport(tmp_path, files)  # the next start over HTTPS keeps them
+    store = AuthStore(auth_path(tmp_path))
+    try:
+        assert store.session(secure) is not None
+    finally:
+        store.close()

@@ -8,7 +8,8 @@ export type ProgramAction =
   | "new" | "save" | "rename" | "duplicate" | "delete" | "undo" | "redo";
 
 // The Program panel's top bar: which program (a dropdown of the saved ones), unsaved or not,
-// new, save, rename, duplicate, delete, export (a download of the saved program's file),
+// new, save, rename, duplicate, delete, export (a download of the saved program's file: once
+// its changes are saved),
 // import (a file chosen on the tablet), undo and redo. Emits program-open {name},
 // program-action {action} and program-import {file}; the panel acts.
 export class OpProgramBar extends LitElement {
@@ -58,9 +59,7 @@ export class OpProgramBar extends LitElement {
       a.button {
         padding: 0 16px;
       }
-      a.button[aria-disabled="true"] {
-        pointer-events: none;
-      }
+
       .dirty {
         color: var(--warn);
         font-size: 15px;
@@ -149,8 +148,10 @@ export class OpProgramBar extends LitElement {
       <button data-testid="delete" class="danger" ?disabled=${!this.name || this.live}
         ${makes(request("DELETE", program))}
         @click=${() => this.emit("delete")}>${t("program.delete")}</button>
-      <a class="button" data-testid="export" href=${`${program}/file`} download
-        aria-disabled=${this.name ? "false" : "true"}>${t("program.export")}</a>
+      ${this.name && !this.dirty
+        ? html`<a class="button" data-testid="export" href=${`${program}/file`} download
+            >${t("program.export")}</a>`
+        : html`<button data-testid="export" disabled>${t("program.export")}</button>`}
       <button data-testid="import" ${makes(request("PUT", `${program}/file`))}
         @click=${() => this.renderRoot.querySelector<HTMLInputElement>("[data-testid=import-file]")
           ?.click()}>${t("program.import")}</button>

@@ -6,6 +6,8 @@ import { shared } from "../styles";
 
 type TlsStatus = Schemas["TlsStatus"];
 
+const LOOPBACK = /^(localhost|127\.\d+\.\d+\.\d+|\[::1\])$/;
+
 /** The dark modules of a QR code of `text`, drawn as one SVG path (no markup from a string). */
 export function qrPath(text: string): { size: number; path: string } {
   const code = qrcode(0, "M");
@@ -52,22 +54,26 @@ export class OpTlsTrust extends LitElement {
     const tls = this.tls;
     if (!tls) return "";
     const url = tls.download ? new URL(tls.download, location.href).href : null;
+    // A tablet cannot reach this computer's loopback: its QR code names the LAN address.
+    const here = LOOPBACK.test(location.hostname);
+    const scanned = here && tls.lan_download ? tls.lan_download : url;
     return html`<div data-testid="tls-trust">
       <p class="hint">${t(tls.authority ? "tls.authority_hint" : "tls.certificate_hint")}</p>
       <p class="fingerprint" data-testid="tls-fingerprint" translate="no">${tls.fingerprint}</p>
-      ${url ? this.download(url) : ""}
+      ${url && scanned ? this.download(url, scanned) : ""}
     </div>`;
   }
 
-  private download(url: string) {
-    const { size, path } = qrPath(url);
+  private download(url: string, scanned: string) {
+    const { size, path } = qrPath(scanned);
     const edge = size + 8; // the quiet zone a reader needs: 4 modules on each side
     return html`<p><a data-testid="tls-download" href=${url} download>${t("tls.download")}</a></p>
       <svg data-testid="tls-qr" viewBox="-4 -4 ${edge} ${edge}" role="img"
         aria-label=${t("tls.qr")} shape-rendering="crispEdges">
         ${svg`<rect x="-4" y="-4" width=${edge} height=${edge} fill="#fff"></rect>
           <path d=${path} fill="#000"></path>`}
-      </svg>`;
+      </svg>
+      <p class="fingerprint" data-testid="tls-qr-url" translate="no">${scanned}</p>`;
   }
 }
 

@@ -243,6 +243,7 @@ export const de: Catalogue = {
   "server.session.role_changed": "ein Administrator hat Ihre Rolle geändert",
   "server.session.password_changed": "Ihr Passwort wurde geändert",
   "server.session.user_removed": "Ihr Benutzer wurde entfernt",
+  "server.session.secure_connection": "die Laufzeit spricht jetzt HTTPS: melden Sie sich über die sichere Verbindung neu an",
   "server.link.stale": "die Verbindung zu {device} ist veraltet",
   "server.link.changed": "die Verbindung zu {device} war unterbrochen und ist neu aufgebaut; was darüber lief, ist beendet",
   "server.link.manager_down": "die Verbindung zur Geräteverwaltung ist unterbrochen",

@@ -241,6 +241,7 @@ export const en = {
   "server.session.role_changed": "an administrator changed your role",
   "server.session.password_changed": "your password was changed",
   "server.session.user_removed": "your user was removed",
+  "server.session.secure_connection": "the runtime now speaks HTTPS: sign in again over the secure connection",
   "server.link.stale": "the link to {device} is stale",
   "server.link.changed": "the link to {device} was lost and made again; what ran on it has ended",
   "server.link.manager_down": "the link to the device manager is down",

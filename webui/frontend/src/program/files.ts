@@ -122,17 +122,21 @@ export class ProgramFiles {
     }
   }
 
-  private async importAs(name: string, exists: boolean): Promise<void> {
+  private async importAs(name: string): Promise<void> {
     if (!this.imported) return;
+    await this.doc.listPrograms(); // made meanwhile on another pendant: asked about too
+    const exists = this.doc.programs.some((p) => p.name === name);
     if (exists && !window.confirm(t("program.replace_confirm", { name }))) return;
-    if (name === this.doc.name && !(await this.confirmDiscard())) return;
+    // What is on show is dropped for the file's: asked before anything is saved.
+    if (!(await this.confirmDiscard())) return;
     const imported = await this.doc.importFile(name, this.imported);
     this.imported = null;
     this.view.dialog = null;
-    if (name === this.doc.name) this.doc.dirty = false; // asked above: the file's is shown
+    this.doc.dirty = false;
     await this.open(name);
-    this.view.notice = imported.generated_as_in_file === false
-      ? t("program.imported_regenerated", { name }) : "";
+    if (imported.generated_as_in_file === false && !this.view.notice) {
+      this.view.notice = t("program.imported_regenerated", { name });
+    }
   }
 
   /** The name given in the dialog open: of a new program, a rename, a duplicate, an import. */
@@ -156,7 +160,7 @@ export class ProgramFiles {
         await this.doc.duplicate(name);
         await this.open(name);
       } else if (dialog === "import") {
-        await this.importAs(name, exists);
+        await this.importAs(name);
         return;
       }
       view.dialog = null;
