@@ -35,14 +35,20 @@ class Listener:
     lifespan: bool = field(default=False, init=False)
 
 
-def _config(listener: Listener) -> uvicorn.Config:
+GRACEFUL_SHUTDOWN = 3  # s a server's open connections have to finish when it stops
+# With several servers the leader's connections wait for the followers' to close: 2 s each,
+# so that together they end within the 5 s the launcher allows a stopping process.
+GRACEFUL_SHUTDOWN_EACH = 2
+
+
+def _config(listener: Listener, graceful: int = GRACEFUL_SHUTDOWN) -> uvicorn.Config:
     tls = listener.tls
     return uvicorn.Config(
         listener.app,
         log_config=None,
         access_log=False,
         lifespan="on" if listener.lifespan else "off",
-        timeout_graceful_shutdown=3,
+        timeout_graceful_shutdown=graceful,
         # Longer than any client of ours keeps an idle connection (httpx: 5 s). With both at
         # 5 s a client could send on a connection the server was closing that instant, and
         # the request failed ("server disconnected": a 503 at the gateway, seen now and then
@@ -77,6 +83,7 @@ class _Follower(uvicorn.Server):
         self._forced = False
         super().__init__(config)
         self.finished = asyncio.Event()
+        self.failed: Exception | None = None
         leader.followers.append(self)
 
     @property
@@ -98,6 +105,11 @@ class _Follower(uvicorn.Server):
                     return
                 await asyncio.sleep(0.01)
             await super().serve(sockets)
+        except Exception as exc:
+            # Not the leader's (nor the app's shutdown) to be cancelled by: it stops, and
+            # the process ends with this error once it has.
+            self.failed = exc
+            self.leader.should_exit = True
         finally:
             self.finished.set()
 
@@ -112,13 +124,18 @@ def run_listeners(first: Listener, *others: Listener) -> None:
         uvicorn.Server(_config(first)).run(sockets=first.sockets)
         return
 
+    graceful = GRACEFUL_SHUTDOWN_EACH
+
     async def serve_all() -> None:
         # Made in the loop that serves them (their events belong to it).
-        leader = _Leader(_config(first))
-        followers = [(_Follower(_config(o), leader), o.sockets) for o in others]
+        leader = _Leader(_config(first, graceful))
+        followers = [(_Follower(_config(o, graceful), leader), o.sockets) for o in others]
         await asyncio.gather(
             leader.serve(first.sockets), *(f.serve(sockets) for f, sockets in followers)
         )
+        for follower, _ in followers:
+            if follower.failed is not None:
+                raise follower.failed
 
     # The event loop uvicorn would choose for one server (uvloop where installed).
     with asyncio.Runner(loop_factory=_config(first).get_loop_factory()) as runner:

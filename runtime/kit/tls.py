@@ -24,14 +24,15 @@ import ssl
 from dataclasses import dataclass
 from pathlib import Path
 
+import idna
 import ifaddr
 from cryptography import x509
-from cryptography.exceptions import InvalidSignature
+from cryptography.exceptions import InvalidSignature, UnsupportedAlgorithm
 from cryptography.hazmat.primitives import hashes, serialization
 from cryptography.hazmat.primitives.asymmetric import ec
 from cryptography.x509.oid import ExtendedKeyUsageOID, NameOID
 
-from openpendant.runtime.kit.settings import RuntimeSettings
+from openpendant.runtime.kit.settings import RuntimeSettings, is_loopback
 
 log = logging.getLogger(__name__)
 
@@ -120,7 +121,12 @@ def prepare(settings: RuntimeSettings) -> TlsFiles | None:
         return None
     if files.ca is not None:
         names, addresses = host_names(settings)
-        _own_certificates(files, names, addresses)
+        try:
+            _own_certificates(files, names, addresses)
+        except (OSError, ValueError, TypeError, UnsupportedAlgorithm) as exc:
+            raise TlsError(
+                f"cannot make the HTTPS certificates in {files.ca.parent}: {exc}"
+            ) from exc
     try:
         files.server_context()
     except (OSError, ssl.SSLError) as exc:
@@ -132,16 +138,45 @@ def prepare(settings: RuntimeSettings) -> TlsFiles | None:
 
 def lan_download(settings: RuntimeSettings) -> str | None:
     """Where a tablet on the LAN fetches the authority (a QR code's address when the UI is
-    opened on this computer itself): by plain HTTP where the redirect port is fixed (the
-    fingerprint tells a tablet it is the right one), else on the HTTPS port."""
-    _, addresses = host_names(settings)
-    lan = sorted((a for a in addresses if not a.is_loopback), key=lambda a: a.version)
-    if not lan:
-        return None
-    host = f"[{lan[0]}]" if lan[0].version == 6 else str(lan[0])
+    opened on this computer itself): an address of the interface of the default route first
+    (not a bridge or the robot's own network), by plain HTTP where the redirect port is fixed
+    (the fingerprint tells a tablet it is the right one), else on the HTTPS port."""
+    if not _unspecified(settings.host):
+        return None if is_loopback(settings.host) else _download_url(settings, settings.host)
+    routed = _default_route_interface()
+    candidates = [
+        (name != routed, interface.version, str(interface.ip))
+        for name, interface in _named_interfaces()
+        if not (interface.ip.is_loopback or interface.ip.is_link_local)
+    ]
+    return _download_url(settings, min(candidates)[2]) if candidates else None
+
+
+def _download_url(settings: RuntimeSettings, address: str) -> str:
+    host = f"[{address}]" if ":" in address else address
     if settings.tls.redirect_port:
         return f"http://{host}:{settings.tls.redirect_port}{CA_DOWNLOAD}"
     return f"https://{host}:{settings.port}{CA_DOWNLOAD}"
+
+
+def _unspecified(host: str) -> bool:
+    try:
+        return ipaddress.ip_address(host).is_unspecified
+    except ValueError:
+        return host == ""
+
+
+def _default_route_interface() -> str | None:
+    """The interface of the IPv4 default route (/proc/net/route), if there is one."""
+    try:
+        rows = Path("/proc/net/route").read_text().splitlines()[1:]
+    except OSError:
+        return None
+    for row in rows:
+        fields = row.split()
+        if len(fields) > 1 and fields[1] == "00000000":
+            return fields[0]
+    return None
 
 
 def host_names(settings: RuntimeSettings) -> tuple[list[str], list[IPAddress]]:
@@ -150,11 +185,8 @@ def host_names(settings: RuntimeSettings) -> tuple[list[str], list[IPAddress]]:
     names = ["localhost", hostname]
     if "." not in hostname:
         names.append(f"{hostname}.local")
-    fqdn = socket.getfqdn().lower()
-    if "." in fqdn and fqdn != "localhost":
-        names.append(fqdn)
     names += [n.lower() for n in (*settings.allowed_hosts, *settings.tls.names)]
-    names = [dns for dns in (_dns_name(n) for n in names) if dns is not None]
+    names = [dns for dns in (_dns_name(n) for n in names) if dns]
     addresses: list[IPAddress] = [ipaddress.ip_address("127.0.0.1"), ipaddress.ip_address("::1")]
     try:
         bound = ipaddress.ip_address(settings.host)
@@ -168,33 +200,69 @@ def host_names(settings: RuntimeSettings) -> tuple[list[str], list[IPAddress]]:
 
 
 def _dns_name(name: str) -> str | None:
-    """A name as a certificate writes it (IDNA for one with letters beyond ASCII), or None
-    (with a warning) for one that is not a host name."""
+    """A name as a certificate writes it (IDNA 2008 with UTS 46, as browsers write one with
+    letters beyond ASCII), or None (with a warning) for one that is not a host name: an
+    empty name would permit every name, and an address is not a name."""
     try:
-        return name.encode("idna").decode("ascii")
-    except UnicodeError:
+        ipaddress.ip_address(name)
+    except ValueError:
+        pass
+    else:
+        log.warning("%r is an address, not a name: it is covered as an address", name)
+        return None
+    try:
+        return idna.encode(name, uts46=True).decode("ascii") if name else None
+    except idna.IDNAError:
         log.warning("%r is not a host name: no certificate is made for it", name)
         return None
 
 
-def _interfaces() -> list[ipaddress.IPv4Interface | ipaddress.IPv6Interface]:
+Interface = ipaddress.IPv4Interface | ipaddress.IPv6Interface
+# A network wider than this is not an interface's own (a /0 from an odd driver): the
+# authority is not made to vouch for it.
+WIDEST_PREFIX = {4: 8, 6: 48}
+
+
+def _named_interfaces() -> list[tuple[str, Interface]]:
     """This computer's interfaces' addresses, each with its network (a link-local IPv6
     address needs its interface named in a URL: not a browser's)."""
-    found = []
-    for adapter in ifaddr.get_adapters():
+    found: list[tuple[str, Interface]] = []
+    try:
+        adapters = ifaddr.get_adapters()
+    except (OSError, ValueError, AssertionError) as exc:
+        log.warning("cannot list this computer's addresses: %s", exc)
+        return found
+    for adapter in adapters:
         for ip in adapter.ips:
             text = ip.ip if isinstance(ip.ip, str) else ip.ip[0]
-            interface = ipaddress.ip_interface(f"{text}/{ip.network_prefix}")
+            try:
+                interface = ipaddress.ip_interface(f"{text}/{ip.network_prefix}")
+            except ValueError:
+                continue
             if not (interface.version == 6 and interface.is_link_local):
-                found.append(interface)
+                found.append((str(adapter.name), interface))
     return found
+
+
+def _interfaces() -> list[Interface]:
+    return [interface for _, interface in _named_interfaces()]
+
+
+def _own_networks() -> list[IPNetwork]:
+    """What the authority may vouch for besides loopback: its interfaces' networks, none
+    wider than WIDEST_PREFIX."""
+    return [
+        i.network if i.network.prefixlen >= WIDEST_PREFIX[i.version] else ipaddress.ip_network(i.ip)
+        for i in _interfaces()
+        if not i.ip.is_loopback
+    ]
 
 
 def _interface_addresses() -> list[IPAddress]:
     return [interface.ip for interface in _interfaces()]
 
 
-def _permitted(name: str | IPAddress, ca: x509.Certificate) -> bool:
+def permitted(name: str | IPAddress, ca: x509.Certificate) -> bool:
     try:
         constraints = ca.extensions.get_extension_for_class(x509.NameConstraints).value
     except x509.ExtensionNotFound:
@@ -222,14 +290,14 @@ def _own_certificates(files: TlsFiles, names: list[str], addresses: list[IPAddre
     ca_key_path = folder / CA_KEY
     authority = _authority(files.ca, ca_key_path)
     if authority is None:
-        networks = [*LOOPBACK_NETWORKS, *(i.network for i in _interfaces())]
+        networks = [*LOOPBACK_NETWORKS, *_own_networks()]
         ca_key, ca = _make_authority(names, networks)
         _write_key(ca_key_path, ca_key)
         _write(files.ca, ca.public_bytes(serialization.Encoding.PEM))
         log.info("made a certificate authority in %s", folder)
     else:
         ca_key, ca = authority
-    covered = [n for n in (*names, *addresses) if _permitted(n, ca)]
+    covered = [n for n in (*names, *addresses) if permitted(n, ca)]
     left_out = [str(n) for n in (*names, *addresses) if n not in covered]
     if left_out:
         log.warning(
@@ -252,30 +320,27 @@ def _own_certificates(files: TlsFiles, names: list[str], addresses: list[IPAddre
 
 
 def _authority(cert: Path, key: Path) -> tuple[ec.EllipticCurvePrivateKey, x509.Certificate] | None:
-    """The authority on disk, or None when there is none or it is unusable (a half-written
-    pair after a power cut, a damaged file): then a new one is made, which tablets must
-    trust again."""
-    if not cert.exists() and not key.exists():
+    """The authority on disk; None when there is none yet (or only its key: a start cut off
+    while making it, before any tablet could trust it). One that cannot be used is never
+    replaced here: tablets trust it, so a TlsError says what to do."""
+    if not cert.exists():
         return None
     try:
         certificate = x509.load_pem_x509_certificate(cert.read_bytes())
         loaded = serialization.load_pem_private_key(key.read_bytes(), password=None)
-    except (OSError, ValueError, TypeError) as exc:
-        log.warning(
-            "the certificate authority in %s is unusable (%s): making a new one, which "
-            "every tablet must trust again",
-            cert.parent,
-            exc,
-        )
-        return None
+    except (OSError, ValueError, TypeError, UnsupportedAlgorithm) as exc:
+        raise TlsError(_unusable(cert.parent, str(exc))) from exc
     if not isinstance(loaded, ec.EllipticCurvePrivateKey) or not _pair(certificate, loaded):
-        log.warning(
-            "the certificate authority's key in %s is not its certificate's: making a new "
-            "one, which every tablet must trust again",
-            cert.parent,
-        )
-        return None
+        raise TlsError(_unusable(cert.parent, "its key is not its certificate's"))
     return loaded, certificate
+
+
+def _unusable(folder: Path, why: str) -> str:
+    return (
+        f"the HTTPS certificate authority in {folder} cannot be used ({why}). Restore it "
+        f"from a backup (openpendant restore), or move {folder} aside to make a new one, "
+        "which every tablet must then trust again"
+    )
 
 
 def _pair(certificate: x509.Certificate, key: ec.EllipticCurvePrivateKey) -> bool:
@@ -293,7 +358,7 @@ def _current(files: TlsFiles, ca: x509.Certificate, wanted: list[str | IPAddress
         leaf.verify_directly_issued_by(ca)
         san = leaf.extensions.get_extension_for_class(x509.SubjectAlternativeName).value
         key = serialization.load_pem_private_key(files.key.read_bytes(), password=None)
-    except (ValueError, TypeError, x509.ExtensionNotFound, InvalidSignature):
+    except (OSError, ValueError, TypeError, x509.ExtensionNotFound, InvalidSignature):
         return False
     if not isinstance(key, ec.EllipticCurvePrivateKey) or not _pair(leaf, key):
         return False  # a half-written pair (a power cut between the two files)

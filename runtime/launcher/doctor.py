@@ -23,7 +23,7 @@ import ifaddr
 from cryptography import x509
 
 from openpendant.runtime.kit.settings import RuntimeSettings, is_loopback
-from openpendant.runtime.kit.tls import tls_files
+from openpendant.runtime.kit.tls import host_names, permitted, tls_files
 from openpendant.runtime.launcher.backup import BackupError, check_databases, runtime_running
 
 Verdict = Literal["ok", "warn", "fix"]
@@ -209,6 +209,8 @@ def https(settings: RuntimeSettings) -> Iterator[Finding]:
     except (OSError, ValueError) as exc:
         yield Finding("fix", f"HTTPS: cannot read the certificate {files.cert}: {exc}")
         return
+    if files.ca is not None:
+        yield from _authority_reach(settings, files.ca)
     left = (certificate.not_valid_after_utc - datetime.datetime.now(datetime.UTC)).days
     renew = (
         "restart the runtime (it renews its own)" if files.ca else "renew the site's certificate"
@@ -219,6 +221,24 @@ def https(settings: RuntimeSettings) -> Iterator[Finding]:
         yield Finding("warn", f"HTTPS: the certificate {files.cert} ends in {left} days", renew)
     else:
         yield Finding("ok", f"HTTPS: a tablet trusts the fingerprint {files.fingerprint()}")
+
+
+def _authority_reach(settings: RuntimeSettings, ca: Path) -> Iterator[Finding]:
+    """The runtime's authority vouches only for the names and networks it was made with."""
+    try:
+        authority = x509.load_pem_x509_certificate(ca.read_bytes())
+    except (OSError, ValueError) as exc:
+        yield Finding("fix", f"HTTPS: cannot read the certificate authority {ca}: {exc}")
+        return
+    names, addresses = host_names(settings)
+    outside = [str(n) for n in (*names, *addresses) if not permitted(n, authority)]
+    if outside:
+        yield Finding(
+            "warn",
+            f"HTTPS: the certificate authority was made before {', '.join(outside)} was this "
+            "computer's: a tablet using it is warned",
+            f"move {ca.parent} aside and start again (tablets must trust the new authority)",
+        )
 
 
 def findings(settings: RuntimeSettings) -> list[Finding]:

@@ -23,8 +23,7 @@ import httpx
 from openpendant.plugins.api import resolve
 from openpendant.plugins.registry import registry
 from openpendant.runtime import __version__
-from openpendant.runtime.auth.setup import SETUP_CODE_ENV, auth_path, needs_setup
-from openpendant.runtime.auth.store import AuthStore
+from openpendant.runtime.auth.setup import SETUP_CODE_ENV, auth_path, auth_store, needs_setup
 from openpendant.runtime.kit.internal import ENV as INTERNAL_ENV
 from openpendant.runtime.kit.internal import FILE as INTERNAL_FILE
 from openpendant.runtime.kit.private_files import keep_private, shown_secret
@@ -193,9 +192,10 @@ def _device_children(
 SECURE_SESSIONS = "sessions-over-https"  # in the tls folder: every session began over HTTPS
 
 
-def sessions_follow_transport(data_dir: Path, tls: TlsFiles | None) -> None:
+def sessions_follow_transport(settings: RuntimeSettings, tls: TlsFiles | None) -> None:
     """Sessions signed in over plain HTTP end when HTTPS is turned on: their cookies are not
     `Secure`, and a browser would still send them in clear to the plain port."""
+    data_dir = settings.data_dir
     marker = data_dir / TLS_DIR / SECURE_SESSIONS
     if tls is None:
         marker.unlink(missing_ok=True)
@@ -203,7 +203,7 @@ def sessions_follow_transport(data_dir: Path, tls: TlsFiles | None) -> None:
     if marker.exists():
         return
     if auth_path(data_dir).exists():
-        store = AuthStore(auth_path(data_dir))
+        store = auth_store(settings)  # the site's session limits: how long a why is kept
         try:
             ended = store.end_every_session("secure_connection")
         finally:
@@ -273,7 +273,7 @@ def run(settings: RuntimeSettings, entry: Main) -> int:
     except TlsError as exc:
         print(f"openpendant: {exc}", file=sys.stderr)
         return 1
-    sessions_follow_transport(settings.data_dir, tls)
+    sessions_follow_transport(settings, tls)
     try:
         public = listening_socket(settings.host, settings.port)
     except OSError as exc:

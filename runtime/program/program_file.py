@@ -23,7 +23,7 @@ from openpendant.runtime.kit.errors import InvalidValue
 from openpendant.runtime.program.models import Program
 
 FORMAT = "openpendant-program"
-# Its workspace at most a save's size, with the lines of its Python (at most 2 MB).
+# Its workspace at most a save's size (4 MiB), with the lines of its Python beside it.
 MAX_FILE_BYTES = 2 * MAX_WORKSPACE_BYTES
 SUFFIX = ".openpendant.json"
 

@@ -126,10 +126,11 @@ def test_the_authority_is_kept_and_the_certificate_made_again_for_a_new_name(
     assert files.ca.read_bytes() == authority
 
 
-def test_a_half_written_pair_is_made_again(
-    tmp_path: Path, caplog: pytest.LogCaptureFixture
+def test_a_half_written_pair_is_mended_and_a_trusted_authority_never_replaced(
+    tmp_path: Path,
 ) -> None:
-    """A power cut between a key and its certificate: the next start mends it, never stops."""
+    """A power cut between a key and its certificate: the next start mends what no tablet
+    trusts yet, and stops with what to do where an authority tablets trust is damaged."""
     files = tls.prepare(settings(tmp_path))
     assert files is not None and files.ca is not None
     authority = files.ca.read_bytes()
@@ -137,15 +138,43 @@ def test_a_half_written_pair_is_made_again(
     mended = tls.prepare(settings(tmp_path))
     assert mended is not None and files.ca.read_bytes() == authority
     mended.server_context()  # the key is the certificate's again
-    tls._write_key(files.ca.parent / tls.CA_KEY, ec.generate_private_key(ec.SECP256R1()))
-    with caplog.at_level(logging.WARNING):
-        anew = tls.prepare(settings(tmp_path))
-    assert "trust again" in caplog.text
+    ca_key = files.ca.parent / tls.CA_KEY
+    for damage in (
+        lambda: tls._write_key(ca_key, ec.generate_private_key(ec.SECP256R1())),
+        lambda: ca_key.write_text("damaged"),
+        ca_key.unlink,
+    ):
+        damage()
+        with pytest.raises(tls.TlsError, match=r"Restore it from a backup"):
+            tls.prepare(settings(tmp_path))
+        assert files.ca.read_bytes() == authority  # never replaced behind the tablets' back
+    # Only the key of an authority never finished (no certificate yet): made anew.
+    files.ca.unlink()
+    tls._write_key(ca_key, ec.generate_private_key(ec.SECP256R1()))
+    anew = tls.prepare(settings(tmp_path))
     assert anew is not None and files.ca.read_bytes() != authority
     with tls_server(anew) as port:
         handshake(port, files.ca, "localhost")
-    (files.ca.parent / tls.CA_KEY).write_text("damaged")
-    assert tls.prepare(settings(tmp_path)) is not None
+
+
+def test_names_are_written_as_browsers_write_them() -> None:
+    # Python's own IDNA 2003 codec agrees where the two standards do (no ß, ς, ZWJ).
+    assert tls._dns_name("Prüfstand.example") == "prüfstand.example".encode("idna").decode()
+    assert tls._dns_name("straße.example") == "xn--strae-oqa.example"  # IDNA 2008, not 2003
+    for bad in ("", "192.168.1.5", "pendant:8080", "a b"):
+        assert not tls._dns_name(bad), bad
+
+
+def test_the_lan_address_for_a_tablet_is_the_default_routes(tmp_path: Path) -> None:
+    lan = settings(tmp_path, redirect_port=8080).model_copy(update={"host": "0.0.0.0"})
+    url = tls.lan_download(lan)
+    routed = tls._default_route_interface()
+    if routed is not None:
+        ours = [str(i.ip) for n, i in tls._named_interfaces() if n == routed]
+        assert url is not None and any(f"//{a}:8080/" in url or f"[{a}]" in url for a in ours)
+    assert tls.lan_download(settings(tmp_path)) is None  # the UI on loopback only
+    one = settings(tmp_path).model_copy(update={"host": "192.0.2.7", "port": 8443})
+    assert tls.lan_download(one) == "https://192.0.2.7:8443/openpendant-ca.crt"
 
 
 def test_a_certificate_near_its_end_is_made_again(
@@ -315,6 +344,35 @@ def test_a_second_listener_over_tls_serves_once_the_first_has_started_and_closes
     assert journal.read_text().splitlines() == ["socket closed", "app shut down"]
 
 
+def test_a_second_listener_that_cannot_start_stops_the_first_in_order(tmp_path: Path) -> None:
+    """Its TLS context failing (a certificate gone): the process ends with an error (the
+    launcher restarts it), after the app's own shutdown, not cancelled half-way."""
+    journal = tmp_path / "journal"
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        yield
+        journal.write_text("app shut down")
+
+    def no_context() -> ssl.SSLContext:
+        raise ssl.SSLError("no certificate")
+
+    app = FastAPI(lifespan=lifespan)
+    plain, secure = listening_socket("127.0.0.1", 0), listening_socket("127.0.0.1", 0)
+    pid = os.fork()
+    if pid == 0:
+        code = 0
+        try:
+            run_listeners(Listener(app, [plain]), Listener(app, [secure], no_context))
+        except ssl.SSLError:
+            code = 3
+        finally:
+            os._exit(code)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 3
+    assert journal.read_text() == "app shut down"
+
+
 def test_the_doctor_says_what_https_needs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     lan = RuntimeSettings(data_dir=tmp_path, host="0.0.0.0")
     [clear] = https(lan)
@@ -331,6 +389,9 @@ def test_the_doctor_says_what_https_needs(tmp_path: Path, monkeypatch: pytest.Mo
     tls.prepare(settings(tmp_path))
     [ending] = https(settings(tmp_path))
     assert ending.verdict == "warn" and "restart" in ending.todo
+    renamed = settings(tmp_path, names=["cell-7.example"])
+    reach = [f for f in https(renamed) if "made before" in f.what]
+    assert len(reach) == 1 and reach[0].verdict == "warn" and "cell-7.example" in reach[0].what
 
 
 def test_sessions_signed_in_over_plain_http_end_when_https_is_turned_on(tmp_path: Path) -> None:
@@ -341,13 +402,13 @@ def test_sessions_signed_in_over_plain_http_end_when_https_is_turned_on(tmp_path
     finally:
         store.close()
     files = tls.prepare(settings(tmp_path))
-    sessions_follow_transport(tmp_path, None)  # still plain: nothing ends
+    sessions_follow_transport(settings(tmp_path), None)  # still plain: nothing ends
     store = AuthStore(auth_path(tmp_path))
     try:
         assert store.session(in_clear) is not None
     finally:
         store.close()
-    sessions_follow_transport(tmp_path, files)
+    sessions_follow_transport(settings(tmp_path), files)
     store = AuthStore(auth_path(tmp_path))
     try:
         assert store.session(in_clear) is None
@@ -355,7 +416,7 @@ def test_sessions_signed_in_over_plain_http_end_when_https_is_turned_on(tmp_path
         secure, _ = store.open_session("ada")
     finally:
         store.close()
-    sessions_follow_transport(tmp_path, files)  # the next start over HTTPS keeps them
+    sessions_follow_transport(settings(tmp_path), files)  # the next start over HTTPS keeps them
     store = AuthStore(auth_path(tmp_path))
     try:
         assert store.session(secure) is not None
