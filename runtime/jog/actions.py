@@ -63,8 +63,8 @@ class Action(ABC):
 def override(asked: float, state: RobotState) -> float:
     """The fraction of the jog speed a press runs at: what it asked, never more than the
     robot's speed override as it is now (a client's own figure does not raise it, and an
-    override lowered by anyone slows a held jog; a Move to or a step keeps the speed it was
-    planned at). An override the driver reports out of [0, 1] or not a number counts as 0."""
+    override lowered by anyone slows a held jog, a Move to or a step). An override the driver
+    reports out of [0, 1] or not a number counts as 0."""
     ratio = state.speed_ratio
     return min(asked, ratio) if math.isfinite(ratio) and 0.0 <= ratio <= 1.0 else 0.0
 
@@ -207,25 +207,49 @@ class TwistJog(RampedJog):
         return self.command(step.velocity, now)
 
 
+# How fast a held planned move follows an override lowered (or raised again) while it runs:
+# its clock's rate changes by at most this per second, so the change adds at most the
+# move's own speed times this to its accelerations (a step from 100 % to 10 % takes 0.9 s).
+RATE_CHANGE = 1.0
+
+
 class PlannedMoveAction(Action):
     """Follow a planned move by streaming its positions; the stream stopping halts it. With
-    a path monitor, the arm leaving the path that was checked ends it (PathDeviation)."""
+    a path monitor, the arm leaving the path that was checked ends it (PathDeviation).
+
+    It runs on a clock of its own: at the speed it was planned at (`speed`, the override
+    then), slower while the robot's override is lower than that, never faster; along the
+    same positions, so the path checked is the path run."""
 
     mode = CommandMode.position_command
 
-    def __init__(self, press: str, move: PlannedMove, monitor: PathMonitor | None = None) -> None:
+    def __init__(
+        self,
+        press: str,
+        move: PlannedMove,
+        monitor: PathMonitor | None = None,
+        speed: float = 1.0,
+    ) -> None:
         super().__init__(press)
         self.move = move
         self.monitor = monitor
-        self.started: float | None = None
+        self.speed = speed
+        self.progress = 0.0  # s of the plan's time reached
+        self.rate = 1.0  # s of the plan's time per second now
+        self.last: float | None = None
 
     def tick(self, state: RobotState, now: float) -> PositionCommand:
         if self.monitor is not None:
             self.monitor.check(np.array(state.joint_position))
-        if self.started is None:
-            self.started = now
-        t = now - self.started
+        dt = 0.0 if self.last is None else max(0.0, now - self.last)
+        self.last = now
+        wanted = min(1.0, override(1.0, state) / self.speed) if self.speed > 0 else 1.0
+        change = RATE_CHANGE * dt
+        self.rate += min(change, max(-change, wanted - self.rate))
+        self.progress += self.rate * dt
+        t = self.progress
         position, velocity = self.move.sample(t)
+        velocity = velocity * self.rate
         if t >= self.move.duration:
             position, velocity = self.move.goal, np.zeros_like(self.move.goal)
             reached = np.abs(np.array(state.joint_position_command) - self.move.goal)

@@ -398,7 +398,7 @@ class JogSession:
         monitor = PathMonitor(
             jogger.kinematics, planned, tolerances.path_tolerance, tolerances.joint_path_tolerance
         )
-        return PlannedMoveAction(press, move, monitor)
+        return PlannedMoveAction(press, move, monitor, speed)
 
     def _heartbeat(self, press: str) -> None:
         held = self.held.get(press)

@@ -5,7 +5,8 @@ newcomer's first one-second hold at 10 % moved the UR5's TCP 31 mm, a UR10's mor
 
 Each press is run cycle by cycle against a robot that follows its commands exactly, on every
 robot model: at a 10 % override a one-second hold moves the TCP at most 25 mm (10 % of the
-cap), and an override lowered while a press is held slows it within the ramp."""
+cap), and an override lowered while a press is held slows it within the ramp, a Move to
+too."""
 
 from __future__ import annotations
 
@@ -19,8 +20,14 @@ from openpendant.runtime.interfaces.robot import (
     RobotFlags,
     RobotState,
 )
-from openpendant.runtime.jog.actions import JointVelocityJog, TwistJog
+from openpendant.runtime.jog.actions import (
+    RATE_CHANGE,
+    JointVelocityJog,
+    PlannedMoveAction,
+    TwistJog,
+)
 from openpendant.runtime.jog.session import JOINT_SPEED, LINEAR_SPEED
+from openpendant.runtime.robotics.joint_move import plan_joint_move
 from openpendant.runtime.robotics.kinematics import Kinematics
 from openpendant.runtime.robotics.robot_info import available_models, load_robot_info
 from openpendant.runtime.robotics.velocity import MANUAL_TCP_SPEED, VelocityController
@@ -119,3 +126,42 @@ def test_an_override_out_of_range_moves_nothing(reported: float) -> None:
     action = JointVelocityJog("p", controller, velocity, MANUAL_TCP_SPEED, speed=1.0)
     _, speeds = hold(kinematics, action, home, [reported] * 50)
     assert max(speeds) == 0.0
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_an_override_lowered_during_a_held_move_to_slows_it_on_its_path(model: str) -> None:
+    """A Move to (or a step) planned at 100 % slows to the override lowered while it runs,
+    along the positions that were planned and checked, and never runs faster than planned
+    when the override is raised above it again."""
+    info = load_robot_info(model)
+    kinematics = Kinematics(info)
+    home = np.array(info.home, dtype=float)
+    goal = home + 0.6
+    move = plan_joint_move(kinematics, info, home, goal, 1.0, MANUAL_TCP_SPEED)
+    action = PlannedMoveAction("p", move, speed=1.0)
+    positions, speeds, t = [], [], 0.0
+    q = home.copy()
+    for k in range(100_000):
+        ratio = 1.0 if t < 0.2 * move.duration else 0.1
+        command = action.tick(state(kinematics, q, ratio), t)
+        q = np.array(command.position)
+        positions.append(q)
+        speeds.append(float(np.max(np.abs(np.array(command.velocity or [])))))
+        t = (k + 1) * PERIOD
+        if action.progress >= move.duration:
+            break
+    fast = float(np.max(np.abs(move.sample(0.5 * move.duration)[1])))
+    slowed = round(0.2 * move.duration / PERIOD) + round(1.0 / RATE_CHANGE / PERIOD) + 1
+    assert max(speeds[slowed:]) <= 0.1 * fast + 1e-6
+    assert t > 3 * move.duration  # the rest at a tenth of its speed
+    # Every position commanded is one the plan passes through (the path checked).
+    on_plan = np.array([move.sample(float(s))[0] for s in np.linspace(0, move.duration, 20_000)])
+    for position in positions[:: max(1, len(positions) // 200)]:
+        assert np.min(np.max(np.abs(on_plan - position), axis=1)) < 1e-3
+    assert np.allclose(positions[-1], goal)
+    # Raised above the speed it was planned at, it runs no faster than planned.
+    again = PlannedMoveAction("p", move, speed=0.5)
+    for k in range(300):
+        command = again.tick(state(kinematics, home, 1.0), k * PERIOD)
+        velocity = np.array(command.velocity or [])
+        assert np.all(np.abs(velocity) <= np.abs(move.sample(k * PERIOD)[1]) + 1e-9)
