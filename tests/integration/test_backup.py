@@ -38,6 +38,11 @@ def openpendant(home: Path, *args: str) -> subprocess.CompletedProcess[str]:
     )
 
 
+def backed_up(home: Path, data_dir: Path, archive: Path) -> None:
+    made = openpendant(home, "backup", "--data-dir", str(data_dir), "--output", str(archive))
+    assert made.returncode == 0, made.stderr
+
+
 def users(data_dir: Path) -> list[str]:
     store = AuthStore(auth_path(data_dir))
     try:
@@ -124,12 +129,7 @@ def test_a_changed_backup_is_refused_and_nothing_is_replaced(tmp_path: Path) -> 
         db.execute("CREATE TABLE t (v)")
         db.execute("INSERT INTO t VALUES (1)")
     archive = tmp_path / "b.tar.gz"
-    assert (
-        openpendant(
-            tmp_path, "backup", "--data-dir", str(source), "--output", str(archive)
-        ).returncode
-        == 0
-    )
+    backed_up(tmp_path, source, archive)
     with tarfile.open(archive) as original:
         members = {m.name: original.extractfile(m).read() for m in original.getmembers()}  # type: ignore[union-attr]
     members["variables.sqlite"] = members["variables.sqlite"].replace(b"\x01", b"\x02", 1)
@@ -157,12 +157,7 @@ def test_a_data_directory_reached_through_a_link_is_restored_where_it_is(tmp_pat
     link = tmp_path / "openpendant"
     link.symlink_to(private)
     archive = tmp_path / "b.tar.gz"
-    assert (
-        openpendant(
-            tmp_path, "backup", "--data-dir", str(link), "--output", str(archive)
-        ).returncode
-        == 0
-    )
+    backed_up(tmp_path, link, archive)
     done = openpendant(tmp_path, "restore", str(archive), "--data-dir", str(link))
     assert done.returncode == 0, done.stderr
     assert link.is_symlink() and link.resolve() == private.resolve()
