@@ -350,8 +350,11 @@ class SimCore:
     def _check_limits(self) -> None:
         q = self.tracker.position
         t = self.tracker
-        outside = np.flatnonzero((q < t.lower - LIMIT_SLACK) | (q > t.upper + LIMIT_SLACK))
-        if outside.size and not self.error:
+        beyond = (q < t.lower - LIMIT_SLACK) | (q > t.upper + LIMIT_SLACK)
+        if not beyond.any():
+            return
+        outside = np.flatnonzero(beyond)
+        if not self.error:
             name = self.info.joints[int(outside[0])].name
             self.protective_stop(f"joint {name} passed its position limit")
 

@@ -84,6 +84,7 @@ class TrajectoryReference:
         if velocities is not None and accelerations is None:
             accelerations = knot_accelerations(times, velocities)
         self.accelerations = accelerations
+        self._last_segment: tuple[int, FloatArray | None] = (0, None)
 
     @classmethod
     def of(cls, trajectory: CheckedTrajectory) -> TrajectoryReference:
@@ -110,11 +111,44 @@ class TrajectoryReference:
         return position, velocity
 
     def sample_with_acceleration(self, t: float) -> tuple[FloatArray, FloatArray, FloatArray]:
-        """Position, velocity and acceleration of the reference at time t."""
+        """Position, velocity and acceleration of the reference at time t: `sample_many`'s
+        polynomial for one time, from the segment's coefficients (a driver asks every 2 ms,
+        mostly within the segment it asked last)."""
         if t >= self.duration:
             return self.end.copy(), np.zeros_like(self.end), np.zeros_like(self.end)
-        p, v, a, _ = self.sample_many(np.array([max(t, 0.0)]))
-        return p[0], v[0], a[0]
+        t = max(t, 0.0)
+        times = self.times
+        # One attribute, replaced whole: a reference read from two threads stays consistent.
+        k, coefficients = self._last_segment
+        if not times[k] <= t < times[k + 1] or coefficients is None:
+            k = min(max(int(np.searchsorted(times, t, side="right")) - 1, 0), len(times) - 2)
+            coefficients = self._segment_coefficients(k)
+            self._last_segment = (k, coefficients)
+        h = times[k + 1] - times[k]
+        s = (t - times[k]) / h
+        s2, s3 = s * s, s * s * s
+        powers = np.array(
+            [
+                [1.0, s, s2, s3, s2 * s2, s3 * s2],
+                [0.0, 1.0 / h, 2.0 * s / h, 3.0 * s2 / h, 4.0 * s3 / h, 5.0 * s2 * s2 / h],
+                [0.0, 0.0, 2.0 / h**2, 6.0 * s / h**2, 12.0 * s2 / h**2, 20.0 * s3 / h**2],
+            ]
+        )
+        p, v, a = powers @ coefficients
+        return p, v, a
+
+    def _segment_coefficients(self, k: int) -> FloatArray:
+        """Segment k's polynomial in s (rows: the coefficients of s⁰ … s⁵, one column per
+        joint)."""
+        h = self.times[k + 1] - self.times[k]
+        p0, p1 = self.positions[k], self.positions[k + 1]
+        if self.velocities is None or self.accelerations is None:
+            zero = np.zeros_like(p0)
+            return np.stack([p0, p1 - p0, zero, zero, zero, zero])
+        v, a = self.velocities, self.accelerations
+        terms = np.stack([p0, v[k] * h, a[k] * h * h, a[k + 1] * h * h, v[k + 1] * h, p1])
+        coefficients: FloatArray = _BASIS.T @ terms
+        return coefficients
 
     def sample_many(self, ts: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Positions, velocities, accelerations and jerks at the times `ts` (within the

@@ -32,6 +32,10 @@ class TimeScaling:
     ) -> None:
         """One cycle toward `target` (0 to 1), for a reference whose planned (unscaled)
         velocity and acceleration are these now."""
+        gap = target - self.rate
+        if abs(gap) < SETTLED and abs(self.rate_speed) < SETTLED:
+            self.rate, self.rate_speed = target, 0.0
+            return
         # Scaled, the reference accelerates by a·r² + v·r' and jerks by about v·r'': r' is
         # kept where every joint's acceleration stays within its limit, r'' where the jerk
         # added stays within a share of the jerk limit.
@@ -45,10 +49,6 @@ class TimeScaling:
             low = max(low, float(np.max(np.minimum(one, other))))
             high = min(high, float(np.min(np.maximum(one, other))))
             max_accel = min(max_accel, HEADROOM * float(np.min(self.max_jerk[moving] / np.abs(v))))
-        gap = target - self.rate
-        if abs(gap) < SETTLED and abs(self.rate_speed) < SETTLED:
-            self.rate, self.rate_speed = target, 0.0
-            return
         # The speed that still stops at the target with the acceleration allowed.
         wanted = math.copysign(math.sqrt(2.0 * max_accel * abs(gap)), gap)
         wanted = min(high, max(low, wanted)) if low <= high else 0.0

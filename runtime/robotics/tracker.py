@@ -275,10 +275,10 @@ class JointTracker:
         expected = self.position + 0.5 * dt * (self.velocity + velocity)
         jerk = (acceleration - self.acceleration) / dt
         smooth = (
-            np.all(np.abs(position - expected) <= FOLLOW_TOLERANCE)
-            and np.all(np.abs(velocity) <= self.max_velocity * limit_slack)
-            and np.all(np.abs(acceleration) <= self.max_acceleration * limit_slack)
-            and np.all(np.abs(jerk) <= self.max_jerk * jerk_slack)
+            (np.abs(position - expected) <= FOLLOW_TOLERANCE).all()
+            and (np.abs(velocity) <= self.max_velocity * limit_slack).all()
+            and (np.abs(acceleration) <= self.max_acceleration * limit_slack).all()
+            and (np.abs(jerk) <= self.max_jerk * jerk_slack).all()
         )
         if not smooth or self._cannot_stop_from(position, velocity, acceleration).any():
             return False

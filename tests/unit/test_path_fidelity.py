@@ -106,6 +106,35 @@ def test_the_planner_checks_its_trajectory_as_the_drivers_interpolate_it() -> No
     assert timed.reference().peak_ratio(Limits.of(planner.info.joints)) <= 1.0
 
 
+def test_a_driver_samples_the_reference_the_planner_checked() -> None:
+    """A driver samples one time per cycle (`sample_with_acceleration`, from the segment's
+    coefficients, kept between calls); the planner checks many at once (`sample_many`). Both
+    are the same interpolation: at times in order, backwards and at waypoints, with and
+    without the waypoints' velocities; at and past the end, the last waypoint at rest."""
+    _, _, _, _, timed = planned_line("ur5", [0.0, 0.6, 0.0])
+    hermite = timed.reference()
+    straight = TrajectoryReference(timed.times, timed.positions, None)
+    rng = np.random.default_rng(3)
+    times = np.concatenate(
+        [
+            np.arange(0.0, timed.duration, 0.002),
+            rng.uniform(0.0, timed.duration, 300),
+            timed.times[:-1],
+        ]
+    )
+    for reference in (hermite, straight):
+        for t in times:
+            p, v, a = reference.sample_with_acceleration(float(t))
+            many = reference.sample_many(np.array([t]))
+            assert np.allclose(p, many[0][0], rtol=0, atol=1e-12)
+            # Summed in another order: the last digits differ (accelerations of a few rad/s²).
+            assert np.allclose(v, many[1][0], rtol=0, atol=1e-10)
+            assert np.allclose(a, many[2][0], rtol=0, atol=1e-8)
+        assert np.array_equal(
+            reference.sample_with_acceleration(timed.duration)[0], timed.positions[-1]
+        )
+
+
 def test_the_benchmarks_moves_stay_on_their_paths_and_the_monitor_never_fires() -> None:
     """A share of the `path_fidelity` benchmark's moves on the Panda (7 joints): linear,
     blended and joint moves within their bounds, the path monitor quiet on all of them."""
