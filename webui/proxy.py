@@ -16,6 +16,7 @@ from starlette.websockets import WebSocketDisconnect
 from openpendant.runtime.interfaces.common import plain_text
 from openpendant.runtime.kit import deadline
 from openpendant.runtime.kit.app import error_response
+from openpendant.runtime.kit.client import CLIENT_TLS
 from openpendant.runtime.kit.internal import HEADER as INTERNAL_HEADER
 from openpendant.runtime.kit.internal import internal_headers
 from openpendant.runtime.kit.request_start import HEADER as REQUEST_START
@@ -123,6 +124,7 @@ class ServiceProxy:
         self.http = httpx.AsyncClient(
             timeout=httpx.Timeout(deadline.GATEWAY_TIMEOUT, connect=2.0),
             headers=internal_headers(LOOPBACK),
+            verify=CLIENT_TLS,
             # Idle connections are dropped well before the services close them (30 s).
             limits=httpx.Limits(keepalive_expiry=5.0),
         )

@@ -18,6 +18,7 @@ import httpx
 from openpendant.plugins.api import resolve
 from openpendant.plugins.registry import registry
 from openpendant.runtime.interfaces.endpoints import stream_commands
+from openpendant.runtime.kit.client import CLIENT_TLS
 from openpendant.runtime.kit.device_auth import DeviceAuth
 
 log = logging.getLogger(__name__)
@@ -84,7 +85,7 @@ async def halt_at(url: str, route: tuple[str, str], secret: str | None, device: 
     auth = DeviceAuth(secret, follow_restarts=True) if secret else None
     try:
         async with httpx.AsyncClient(
-            base_url=url, timeout=HALT_TIMEOUT, auth=auth, trust_env=False
+            base_url=url, timeout=HALT_TIMEOUT, auth=auth, trust_env=False, verify=CLIENT_TLS
         ) as http:
             answer = await http.request(method, path)
     except httpx.HTTPError as exc:

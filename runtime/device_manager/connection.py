@@ -37,6 +37,7 @@ from openpendant.runtime.device_manager.tools import send_tool_setup
 from openpendant.runtime.interfaces.endpoints import endpoints
 from openpendant.runtime.interfaces.robot import Robot
 from openpendant.runtime.interfaces.variables import DeviceRecord
+from openpendant.runtime.kit.client import CLIENT_TLS
 from openpendant.runtime.kit.device_auth import HEADER, DeviceAuth
 from openpendant.runtime.kit.discovery import clean_text
 from openpendant.runtime.kit.errors import OpenPendantError, Unavailable
@@ -332,7 +333,9 @@ class DeviceConnection:
         # Bound to the driver process that answers its first request (GET /info).
         auth = DeviceAuth(secret) if secret else None
         self._auth = auth
-        http = httpx.AsyncClient(base_url=url, timeout=CONNECT_TIMEOUT, auth=auth)
+        http = httpx.AsyncClient(
+            base_url=url, timeout=CONNECT_TIMEOUT, auth=auth, verify=CLIENT_TLS
+        )
         try:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT * 2):

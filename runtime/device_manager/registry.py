@@ -38,6 +38,7 @@ from openpendant.runtime.device_manager.models import (
 from openpendant.runtime.device_manager.tools import stored_tool, tool_variable
 from openpendant.runtime.interfaces.robot import RobotInfo, ToolSetup
 from openpendant.runtime.interfaces.variables import DeviceRecord
+from openpendant.runtime.kit.client import CLIENT_TLS
 from openpendant.runtime.kit.device_auth import (
     disproof,
     keep_secret,
@@ -347,7 +348,7 @@ class DeviceRegistry:
     async def _record_from_url(self, url: str, local_name: str) -> DeviceRecord:
         url = url.rstrip("/")
         try:
-            async with httpx.AsyncClient(base_url=url, timeout=2.0) as http:
+            async with httpx.AsyncClient(base_url=url, timeout=2.0, verify=CLIENT_TLS) as http:
                 info = await fetch_info(http, url)
             identity = info["identity"]
             if not isinstance(identity, dict):

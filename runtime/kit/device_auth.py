@@ -35,6 +35,7 @@ from pathlib import Path
 
 import httpx
 
+from openpendant.runtime.kit.client import CLIENT_TLS
 from openpendant.runtime.kit.constant_time import same_secret
 
 HEADER = "X-Device-Auth"
@@ -158,7 +159,9 @@ async def disproof(url: str, secret: str, timeout: float = 2.0) -> str | None:
     try:
         # No proxy from the environment: the address reached must be the device's own.
         async with (
-            httpx.AsyncClient(base_url=url, timeout=timeout, trust_env=False) as http,
+            httpx.AsyncClient(
+                base_url=url, timeout=timeout, trust_env=False, verify=CLIENT_TLS
+            ) as http,
             http.stream("GET", PROOF_PATH, params={"nonce": nonce}) as answer,
         ):
             if answer.status_code != 200:

@@ -15,6 +15,7 @@ import numpy as np
 from websockets.sync.client import ClientConnection, connect
 
 from openpendant.runtime.bench.harness.processes import Runtime, wait_for
+from openpendant.runtime.kit.client import CLIENT_TLS
 from openpendant.runtime.kit.device_auth import DeviceAuth, known_secret
 
 _presses = itertools.count(1)
@@ -144,7 +145,7 @@ class RobotView:
         # Signed as the runtime signs (the device and the runtime keep its secret).
         secret = known_secret(runtime.data_dir, device["uuid"])
         auth = DeviceAuth(secret, follow_restarts=True) if secret else None
-        self.http = httpx.Client(base_url=self.url, timeout=5, auth=auth)
+        self.http = httpx.Client(base_url=self.url, timeout=5, auth=auth, verify=CLIENT_TLS)
 
     def state(self) -> dict[str, Any]:
         return self.http.get("/state").json()  # type: ignore[no-any-return]
