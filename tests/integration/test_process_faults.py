@@ -22,6 +22,7 @@ from openpendant.runtime.bench.harness.jog import Cell, JogClient
 from openpendant.runtime.bench.harness.processes import Runtime, child_env, wait_for
 
 HALT_WITHIN = 0.2  # s from the kill to the halt at the driver (the bound)
+HEALTHY_AFTER = 0.5  # s up after which a restarted service counts as healthy (the least)
 FAR = [2.5, -1.0, 1.2, -1.5, -1.57, 1.0]
 FAR_DEGREES = [round(math.degrees(v), 6) for v in FAR]
 
@@ -29,8 +30,14 @@ FAR_DEGREES = [round(math.degrees(v), 6) for v in FAR]
 @pytest.fixture(scope="module")
 def cell(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Cell]:
     home = tmp_path_factory.mktemp("faults")
-    # Killed again and again, the program service is restarted at once each time.
-    env = child_env(home, OPENPENDANT_RESTART_HEALTHY_AFTER="1", OPENPENDANT_RESTART_BACKOFF="0.05")
+    # Killed again and again, the program service is restarted at once each time: the
+    # launcher doubles its wait after each exit of a process that was up for less than
+    # HEALTHY_AFTER (the fifty kills wait for that).
+    env = child_env(
+        home,
+        OPENPENDANT_RESTART_HEALTHY_AFTER=str(HEALTHY_AFTER),
+        OPENPENDANT_RESTART_BACKOFF="0.05",
+    )
     runtime = Runtime(home, env=env)
     runtime.wait_ready()
     try:
@@ -307,7 +314,13 @@ def test_a_killed_program_service_never_has_its_next_move_run(ready: Cell) -> No
     rng = random.Random(31)
     delays = []
     again: list[int] = []
+    up = 0.0
     for kill_no in range(KILLS):
+        # Up for longer than HEALTHY_AFTER when killed, or the launcher waits longer before
+        # each restart (0.05 s doubled to 10 s over a few quick kills: the test's lease
+        # lapsed in one run). Waited for before the run, so the kill still comes 0-400 ms
+        # after a move ended.
+        time.sleep(max(0.0, HEALTHY_AFTER + 0.1 - (time.monotonic() - up)))
         run_until_a_move_ends(ready, kill_no, again)
         delay = rng.uniform(0.0, 0.4)
         time.sleep(delay)
@@ -316,6 +329,7 @@ def test_a_killed_program_service_never_has_its_next_move_run(ready: Cell) -> No
         kill(ready, "program")
         halt = halt_since(ready, before)
         wait_for(lambda: healthy(ready), 30, what="the program service back")
+        up = time.monotonic()
         ready.robot.wait_stopped()
         after = [c for c in ready.robot.commands(halt["seq"]) if c["type"] in MOTION]
         assert after == [], f"kill {kill_no} after {delay:.3f} s: {after} after {halt}"
