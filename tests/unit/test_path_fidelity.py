@@ -130,9 +130,9 @@ def test_a_driver_samples_the_reference_the_planner_checked() -> None:
             # Summed in another order: the last digits differ (accelerations of a few rad/s²).
             assert np.allclose(v, many[1][0], rtol=0, atol=1e-10)
             assert np.allclose(a, many[2][0], rtol=0, atol=1e-8)
-        assert np.array_equal(
-            reference.sample_with_acceleration(timed.duration)[0], timed.positions[-1]
-        )
+        for t in (timed.duration, timed.duration + 1.0):
+            p, v, a = reference.sample_with_acceleration(t)
+            assert np.array_equal(p, timed.positions[-1]) and not v.any() and not a.any()
 
 
 def test_the_benchmarks_moves_stay_on_their_paths_and_the_monitor_never_fires() -> None:
