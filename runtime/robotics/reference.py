@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from openpendant.runtime.interfaces.limits import CheckedTrajectory, FloatArray
 from openpendant.runtime.interfaces.robot import JointLimits, TrajectoryState, TrajectoryStatus
@@ -145,10 +146,15 @@ class TrajectoryReference:
         if self.velocities is None or self.accelerations is None:
             zero = np.zeros_like(p0)
             return np.stack([p0, p1 - p0, zero, zero, zero, zero])
-        v, a = self.velocities, self.accelerations
-        terms = np.stack([p0, v[k] * h, a[k] * h * h, a[k + 1] * h * h, v[k + 1] * h, p1])
-        coefficients: FloatArray = _BASIS.T @ terms
+        coefficients: FloatArray = _BASIS.T @ self._terms(k, h)
         return coefficients
+
+    def _terms(self, k: int | npt.NDArray[np.intp], h: float | FloatArray) -> FloatArray:
+        """The Hermite terms of segment(s) k of length(s) h (the rows of `_BASIS`)."""
+        assert self.velocities is not None
+        assert self.accelerations is not None
+        p, v, a = self.positions, self.velocities, self.accelerations
+        return np.stack([p[k], v[k] * h, a[k] * h * h, a[k + 1] * h * h, v[k + 1] * h, p[k + 1]])
 
     def sample_many(self, ts: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Positions, velocities, accelerations and jerks at the times `ts` (within the
@@ -162,8 +168,7 @@ class TrajectoryReference:
             slope = (p1 - p0) / h
             zero = np.zeros_like(p0)
             return p0 + s * (p1 - p0), slope, zero, zero
-        v, a = self.velocities, self.accelerations
-        terms = np.stack([p0, v[k] * h, a[k] * h * h, a[k + 1] * h * h, v[k + 1] * h, p1])
+        terms = self._terms(k, h)
         powers = s[:, 0][None, :] ** np.arange(6)[:, None]  # (power, sample)
         results = []
         for order, basis in enumerate(_DERIVATIVES):
