@@ -1,11 +1,14 @@
 import gc
 import os
 import tempfile
+import time
+from collections.abc import Generator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
-from openpendant.runtime.bench.harness.processes import LOOPBACK_ENV
+from openpendant.runtime.bench.harness.processes import LOOPBACK_ENV, warnings_since
 from openpendant.runtime.bench.harness.zygote import ENV as ZYGOTE_ENV
 
 # Anything started from a test (directly or by the runtime) does discovery on loopback only.
@@ -58,6 +61,26 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     (runtime/kit/app.py), later collections skip it."""
     gc.collect()
     gc.freeze()
+
+
+STARTED = pytest.StashKey[float]()
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    item.stash[STARTED] = time.time()
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_makereport(item: pytest.Item) -> Generator[None, Any, None]:
+    """A failed test's report carries what the runtime's services warned of meanwhile (a
+    link gone stale, a session ended): CI keeps only the printed output, not the logs."""
+    outcome = yield
+    report = outcome.get_result()
+    if report.failed and STARTED in item.stash:
+        logged = warnings_since(item.stash[STARTED] - 1.0)
+        if logged:
+            report.sections.append(("service warnings during the test", "\n".join(logged)))
 
 
 def pytest_sessionfinish(session: pytest.Session) -> None:

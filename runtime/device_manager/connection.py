@@ -127,6 +127,7 @@ class DeviceConnection:
         self.last_state: str | None = None
         # One per session: a new session continues nothing of the old.
         self.generation = GENERATION_BASE
+        self.ended: SessionEnded | None = None  # why the last session ended
         self.freshness = Freshness()
         self._on_state = on_state
         self._on_status = on_status
@@ -244,14 +245,24 @@ class DeviceConnection:
         """A request to the driver on this generation's session: (status, JSON body). `text`:
         the body as JSON text, sent as it is (the driver checks it as any body)."""
         self._require(generation)
-        assert self._http is not None
+        http = self._http
+        assert http is not None
         if text is not None:
             sent: dict[str, Any] = {"content": text.encode(), "headers": JSON_TYPE}
         else:
             sent = {"json": body}
         try:
-            response = await self._http.request(method, path, timeout=CALL_TIMEOUT, **sent)
+            response = await http.request(method, path, timeout=CALL_TIMEOUT, **sent)
         except httpx.HTTPError as exc:
+            ended = self.ended
+            if self.generation == generation and self._http is not http and ended is not None:
+                # The session ended under the request (its client closed): say why.
+                status = "stale" if ended.stale else "disconnected"
+                raise Unavailable(
+                    f"the link to {self.name} ended during the request: {short(str(ended))}",
+                    code="link_stale" if ended.stale else "device_disconnected",
+                    words=link_words(self.name, status),
+                ) from exc
             raise Unavailable(
                 f"{self.name} did not answer: {type(exc).__name__}", code="device_disconnected"
             ) from exc
@@ -475,6 +486,7 @@ class DeviceConnection:
         ended = next(iter(done)).exception()
         if not isinstance(ended, SessionEnded):  # a bug: _run logs it and starts again
             raise ended or AssertionError("a session task returned")
+        self.ended = ended
         log.warning("%s: link %d ended: %s", self.name, self.generation, ended)
         return ended
 

@@ -47,6 +47,7 @@ class FakeDevice:
         self.app.websocket("/state/ws")(self.states)
         self.app.websocket("/command/ws")(self.command_stream)
         self.app.post("/halt")(self.halt)
+        self.app.post("/slow")(self.slow)
         self.sock = listening_socket("127.0.0.1", 0)
         self.url = f"http://127.0.0.1:{self.sock.getsockname()[1]}"
         self.server = uvicorn.Server(uvicorn.Config(self.app, log_config=None, lifespan="off"))
@@ -72,6 +73,10 @@ class FakeDevice:
             gone.cancel()
             self.open["state"] -= 1
             self.closed["state"] += 1
+
+    async def slow(self) -> dict[str, Any]:
+        await asyncio.sleep(2.0)
+        return {}
 
     async def halt(self, request: Request) -> Response:
         self.halts.append(request.headers.get(HEADER))
@@ -168,6 +173,24 @@ def test_a_silent_state_stream_makes_the_link_stale_and_the_next_one_a_new_gener
             with pytest.raises(OpenPendantError) as refused:
                 conn.send({"type": "jog_joint"}, first, lambda _: None)
             assert refused.value.code == "link_changed"
+
+    run(scenario)
+
+
+def test_a_request_cut_short_by_the_link_going_stale_says_so() -> None:
+    """Not "did not answer": the session's end under the request is why it failed."""
+
+    async def scenario() -> None:
+        async with FakeDevice() as device, connection(device.url) as (conn, _):
+            await until(lambda: conn.status == "connected")
+            request = asyncio.create_task(conn.call("POST", "/slow", {}, conn.generation))
+            await asyncio.sleep(0.05)
+            device.paused = True
+            with pytest.raises(OpenPendantError) as failed:
+                await request
+            assert failed.value.code == "link_stale"
+            assert "ended during the request" in failed.value.message
+            assert "no state" in failed.value.message
 
     run(scenario)
 

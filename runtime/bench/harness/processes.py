@@ -99,6 +99,12 @@ def wait_for(
     )
 
 
+# The processes tests have started (those stopped in the last minutes too): a failed
+# test's report shows their warnings (tests/conftest.py), CI's only account of a failure.
+STARTED: list[Proc] = []
+KEPT_AFTER_STOP = 600.0  # s
+
+
 class Proc:
     """A child process whose stdout lines are collected by a reader thread."""
 
@@ -124,6 +130,17 @@ class Proc:
         self._terminated = False
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
+        self.stopped_at: float | None = None
+        STARTED[:] = [
+            p
+            for p in STARTED
+            if p.stopped_at is None or p.stopped_at > time.time() - KEPT_AFTER_STOP
+        ]
+        STARTED.append(self)
+
+    def log_files(self) -> list[Path]:
+        """Where this process (and, for a runtime, each of its services) logs."""
+        return [self.log_path]
 
     def _read(self) -> None:
         assert self.popen.stdout is not None
@@ -165,6 +182,7 @@ class Proc:
         code = self.popen.wait()
         self._reader.join(timeout=2)
         self._log.close()
+        self.stopped_at = time.time()
         return code
 
     def terminate(self) -> None:
@@ -176,6 +194,30 @@ class Proc:
     def kill(self) -> None:
         self.popen.kill()
         self.popen.wait()
+
+
+def warnings_since(since: float, limit: int = 60) -> list[str]:
+    """Warning- and error-level log entries stamped at or after `since` (epoch seconds) of
+    the processes running since then, oldest first, the last `limit` of them."""
+    found: list[tuple[float, str]] = []
+    for proc in [p for p in STARTED if p.stopped_at is None or p.stopped_at >= since]:
+        for log in proc.log_files():
+            with contextlib.suppress(OSError):
+                for line in log.read_text(errors="replace").splitlines():
+                    with contextlib.suppress(ValueError):
+                        entry = json.loads(line)
+                        if not isinstance(entry, dict) or entry.get("level") not in (
+                            "warning",
+                            "error",
+                            "critical",
+                        ):
+                            continue
+                        ts = entry.get("ts")
+                        if isinstance(ts, int | float) and ts >= since:
+                            text = f"{entry.get('service', log.stem)}: {entry.get('msg')}"
+                            found.append((ts, f"{entry.get('time')} {text} {entry.get('exc', '')}"))
+    found.sort()
+    return [text.rstrip() for _, text in found[-limit:]]
 
 
 def stop_all(procs: Iterable[Proc], timeout: float = 10.0) -> None:
@@ -270,6 +312,9 @@ class Runtime(Proc):
     def ws_url(self, path: str) -> str:
         """A socket of the gateway (path below /api)."""
         return self.url.replace("http", "ws", 1) + "/api" + path
+
+    def log_files(self) -> list[Path]:
+        return [self.log_path, *sorted((self.data_dir / "logs").glob("*.log"))]
 
     def service_errors(self) -> list[str]:
         """Error-level entries in the service logs: a clean run has none."""
