@@ -265,7 +265,10 @@ MOTION = ("trajectory", "jog", "command_mode:trajectory", "command_mode:jog")
 STALLED = ("link_stale", "device_disconnected")
 
 
-def run_until_a_move_ends(cell: Cell, kill_no: int, again: list[int]) -> None:
+def run_until_a_move_ends(
+    cell: Cell, kill_no: int, again: list[int], not_before: float = 0.0
+) -> None:
+    """A run started, until one of its moves ends at `not_before` (monotonic) or later."""
     body = {"leases": {"robot": cell.token}, "robot": "robot"}
     asked = [0.0]
 
@@ -284,13 +287,20 @@ def run_until_a_move_ends(cell: Cell, kill_no: int, again: list[int]) -> None:
         assert started.status_code == 202, started.text
         found = wait_for(moving_or_ended, 10, 0.005, what=f"kill {kill_no}: a move or the end")
         if found == "moving":
-            wait_for(lambda: not cell.robot.state()["flags"]["trajectory_running"], 10, 0.005)
-            return
+            while True:  # the program moves to and fro: one move after another
+                wait_for(lambda: not running(cell), 10, 0.005, what=f"kill {kill_no}: a move's end")
+                if time.monotonic() >= not_before:
+                    return
+                wait_for(lambda: running(cell), 10, 0.005, what=f"kill {kill_no}: the next move")
         assert isinstance(found, dict)
         code = (found.get("error") or {}).get("code")
         assert code in STALLED, f"kill {kill_no}: the run ended before it moved: {found}"
         again.append(kill_no)
     raise AssertionError(f"kill {kill_no}: three runs ended on a stalled link before moving")
+
+
+def running(cell: Cell) -> bool:
+    return bool(cell.robot.state()["flags"]["trajectory_running"])
 
 
 def halt_since(cell: Cell, seq: int) -> dict[str, Any]:
@@ -318,10 +328,8 @@ def test_a_killed_program_service_never_has_its_next_move_run(ready: Cell) -> No
     for kill_no in range(KILLS):
         # Up for longer than HEALTHY_AFTER when killed, or the launcher waits longer before
         # each restart (0.05 s doubled to 10 s over a few quick kills: the test's lease
-        # lapsed in one run). Waited for before the run, so the kill still comes 0-400 ms
-        # after a move ended.
-        time.sleep(max(0.0, HEALTHY_AFTER + 0.1 - (time.monotonic() - up)))
-        run_until_a_move_ends(ready, kill_no, again)
+        # lapsed in one run): the kill follows the first move to end after that.
+        run_until_a_move_ends(ready, kill_no, again, not_before=up + HEALTHY_AFTER + 0.1)
         delay = rng.uniform(0.0, 0.4)
         time.sleep(delay)
         delays.append(delay)
