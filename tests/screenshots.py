@@ -9,11 +9,12 @@ waypoints, a program and an obstacle, and Debian's Chromium:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import shutil
 import tempfile
 from pathlib import Path
 
-from playwright.sync_api import Page, expect, sync_playwright
+from playwright.sync_api import Page, Playwright, expect, sync_playwright
 
 from openpendant.runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
 from openpendant.runtime.bench.harness.processes import Runtime, child_env
@@ -59,10 +60,18 @@ def settle(page: Page, panel: str) -> None:
 
 
 def shoot(
-    runtime: Runtime, out: Path, panels: list[str], devices: list[str], themes: list[str]
+    runtime: Runtime,
+    out: Path,
+    panels: list[str],
+    devices: list[str],
+    themes: list[str],
+    playwright: Playwright | None = None,
 ) -> list[Path]:
+    """Each panel on each device in each theme; with the caller's `playwright`, or one of
+    its own (a thread holds one at a time)."""
     made = []
-    with sync_playwright() as p:
+    with contextlib.ExitStack() as stack:
+        p = playwright or stack.enter_context(sync_playwright())
         for device in devices:
             viewport = DEVICES[device]
             for theme in themes:
@@ -104,7 +113,7 @@ def shoot(
     return made
 
 
-def main(argv: list[str] | None = None) -> list[Path]:
+def main(argv: list[str] | None = None, playwright: Playwright | None = None) -> list[Path]:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=OUT)
     parser.add_argument("--panels", nargs="+", choices=PANELS, default=list(PANELS))
@@ -117,7 +126,7 @@ def main(argv: list[str] | None = None) -> list[Path]:
     try:
         runtime.wait_ready()
         stage(runtime)
-        return shoot(runtime, args.out, args.panels, args.devices, args.themes)
+        return shoot(runtime, args.out, args.panels, args.devices, args.themes, playwright)
     finally:
         runtime.stop()
         shutil.rmtree(home, ignore_errors=True)

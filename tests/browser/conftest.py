@@ -31,10 +31,11 @@ BROWSER_LINK_TIMEOUT = 1.0  # seconds
 PHONE: ViewportSize = {"width": 390, "height": 844}
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="package")
 def playwright() -> Iterator[Playwright]:
-    # Module scope: Playwright's sync API keeps an event loop in this thread while it lives,
-    # which would break asyncio.run() in any test that runs after it.
+    # Package scope, not the session's: Playwright's sync API keeps an event loop in this
+    # thread while it lives, which would break asyncio.run() in any test after the browser
+    # tests (they run last: pyproject.toml's testpaths).
     if not Path(CHROMIUM).is_file():
         # Browser tests must fail, never skip, when they cannot run (.ci/run installs it).
         pytest.fail(f"{CHROMIUM} is missing: install Debian's chromium package")
@@ -42,10 +43,11 @@ def playwright() -> Iterator[Playwright]:
         yield p
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="package")
 def browser(playwright: Playwright) -> Iterator[Browser]:
-    """One Chromium per module; every test gets fresh contexts of its own (Playwright's
-    launch gives it a fresh temporary profile)."""
+    """One Chromium for the browser tests; every test gets fresh contexts of its own, which
+    share no cookies, storage or cache (Playwright's launch gives it a fresh temporary
+    profile)."""
     launched = playwright.chromium.launch(
         executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS
     )

@@ -1,5 +1,5 @@
-"""The script the docs' screenshots are made with (its own runtime and Chromium; not in
-the same module as the shared Playwright fixture, which holds the thread's event loop)."""
+"""The script the docs' screenshots are made with: its own runtime and Chromium, on the
+browser tests' Playwright (a thread holds one at a time)."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import struct
 from pathlib import Path
 
 import pytest
+from playwright.sync_api import Playwright
 
 from tests import screenshots
 from tests.browser.conftest import PHONE
@@ -21,9 +22,10 @@ def png_size(path: Path) -> tuple[int, int]:
     return width, height
 
 
-def test_the_screenshot_script_shoots_a_panel(tmp_path: Path) -> None:
+def test_the_screenshot_script_shoots_a_panel(tmp_path: Path, playwright: Playwright) -> None:
     made = screenshots.main(
-        ["--out", str(tmp_path), "--panels", "system", "--devices", "phone", "--themes", "light"]
+        ["--out", str(tmp_path), "--panels", "system", "--devices", "phone", "--themes", "light"],
+        playwright,
     )
     assert made == [tmp_path / "system-phone-light.png"]
     assert png_size(made[0]) == (PHONE["width"], PHONE["height"])
