@@ -261,6 +261,7 @@ class Runtime(Proc):
         self.verify: ssl.SSLContext = CLIENT_TLS
         self.started_in = 0.0
         self._tokens: dict[str, str] = {}
+        self._users: set[str] = set()  # made in its store by user()
 
     def wait_ready(self, timeout: float = 60.0) -> str:
         t0 = time.monotonic()
@@ -284,12 +285,15 @@ class Runtime(Proc):
     def user(self, role: str = "admin") -> tuple[str, str]:
         """A user of `role` (made in the runtime's user store, as an administrator would)."""
         name, password = f"{role}-user", f"{role}-password-0"
+        if name in self._users:
+            return name, password  # a store opened costs a password hash (its dummy)
         store = AuthStore(auth_path(self.data_dir))
         try:
             if name not in [u.name for u in store.users()]:
                 store.create_user(name, password, Role.named(role))
         finally:
             store.close()
+        self._users.add(name)
         return name, password
 
     def session_cookie(self, role: str = "admin") -> str:
