@@ -35,6 +35,11 @@ STREAM_MODES = (
     CommandMode.freedrive,
 )
 LIMIT_SLACK = 1e-6
+# A position stream is extrapolated for up to twice the spacing of its samples (one may be
+# late), that spacing taken as at most this: slower streams are held between samples.
+MAX_STREAM_PERIOD = 0.05  # s
+# Samples of a stream received closer together than this arrived in a burst.
+BURST = CYCLE / 2
 # How fast the servo pulls a pushed arm back onto its setpoint once the hand lets go.
 SERVO_TIME_CONSTANT = 0.05  # s
 
@@ -47,13 +52,20 @@ class StreamCommand:
     received: float
     deadline: float
     acceleration: FloatArray | None = None
+    horizon: float = CYCLE  # s after its receipt it is extrapolated for, at most
 
     def reference(self, now: float) -> tuple[FloatArray, FloatArray, FloatArray]:
         """Where a position stream will be at the end of this cycle, extrapolated from its
-        latest sample (which is already a little old)."""
+        latest sample (which is already a little old), for as long as the next sample is
+        not overdue. Then the point reached is held: a late stream brakes the arm, it is
+        not carried on past where its samples led."""
         assert self.position is not None
         a = np.zeros_like(self.velocity) if self.acceleration is None else self.acceleration
         h = now - self.received + CYCLE
+        if h > self.horizon:
+            h = self.horizon
+            held = self.position + self.velocity * h + 0.5 * a * h * h
+            return held, np.zeros_like(held), np.zeros_like(held)
         return self.position + self.velocity * h + 0.5 * a * h * h, self.velocity + a * h, a
 
 
@@ -209,17 +221,28 @@ class SimCore:
         self._require(mode)
         previous = self.command
         acceleration = None
+        horizon = CYCLE
         if position is not None and previous is not None and previous.position is not None:
             dt = now - previous.received
-            if 0 < dt <= 2 * timeout:
+            if BURST <= dt <= 2 * timeout:
                 if velocity is None:
                     velocity = (position - previous.position) / dt
                 acceleration = (velocity - previous.velocity) / dt
+                horizon = 2 * min(dt, MAX_STREAM_PERIOD)
+            elif 0 <= dt < BURST:
+                # Held up on the way and arrived together (a stalled sender or link): their
+                # spacing says nothing of the stream's, and a difference over it would be a
+                # huge acceleration, extrapolated far past where the stream was heading.
+                horizon = previous.horizon
+                if velocity is None:
+                    velocity = previous.velocity
         if velocity is None:
             if position is None:
                 raise RobotError("a stream command needs a velocity or a position")
             velocity = np.zeros_like(position)
-        self.command = StreamCommand(mode, velocity, position, now, now + timeout, acceleration)
+        self.command = StreamCommand(
+            mode, velocity, position, now, now + timeout, acceleration, horizon
+        )
 
     def prepare(self, trajectory: CheckedTrajectory) -> TrajectoryReference:
         """The reference the trajectory is followed by: as it is, or slowed along its path

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import asyncio
+import itertools
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -23,6 +25,7 @@ from openpendant.runtime.interfaces.robot import (
     TrajectoryWaypoint,
 )
 from openpendant.runtime.kit.errors import InvalidValue, RobotError
+from openpendant.runtime.robotics.joint_move import plan_joint_move
 from openpendant.runtime.robotics.kinematics import Kinematics
 from openpendant.runtime.robotics.robot_info import load_robot_info
 from openpendant.runtime.robotics.tracker import JointTracker
@@ -510,3 +513,79 @@ def test_a_faster_clock_runs_trajectories_only_and_on_the_same_path(ur5: RobotIn
     for k in range(10):
         robot.cycle(k * CYCLE)
     assert robot.core.sim_time == pytest.approx(10 * CYCLE)
+
+
+def planned_move_samples(ur5: RobotInfo, core: SimCore) -> tuple[Any, FloatArray, FloatArray]:
+    """A Move to's planned joint move, and its line's start and goal."""
+    start = core.tracker.position.copy()
+    goal = start + np.array([0.6, -0.3, 0.4, 0.2, -0.2, 0.5])
+    return plan_joint_move(Kinematics(ur5), ur5, start, goal, 1.0, None), start, goal
+
+
+def test_a_stream_held_up_and_delivered_at_once_never_carries_the_arm_past_its_goal(
+    ur5: RobotInfo,
+) -> None:
+    """A Move to's samples (every 10 ms) held up on their way for 30-60 ms near the move's
+    end, then delivered together. The driver took their spacing (0.2 ms) for the stream's,
+    extrapolated the acceleration that gave, and the arm went up to 0.34 rad past the goal,
+    off the path that was checked (a loaded machine: the path monitor halted it 6.4 mm off)."""
+    period, gap = 0.01, 0.0002
+    for stall_at in (0.55, 0.65, 0.7, 0.75):
+        for stall in (0.03, 0.06):
+            core = SimCore(ur5, Kinematics(ur5))
+            core.enable()
+            core.set_mode(CommandMode.position_command)
+            move, start, goal = planned_move_samples(ur5, core)
+            sent = np.arange(0.0, move.duration + 0.3, period)
+            arrivals: list[tuple[float, float]] = []  # (received, sent)
+            held: list[float] = []
+            for t in sent:
+                if stall_at <= t < stall_at + stall:
+                    held.append(t)
+                    continue
+                arrivals += [(t + k * gap, h) for k, h in enumerate([*held, t])]
+                held = []
+            length = float(np.linalg.norm(goal - start))
+            direction = (goal - start) / length
+            now, beyond = 0.0, 0.0
+            while now < sent[-1] + 0.3:
+                now += CYCLE
+                while arrivals and arrivals[0][0] <= now:
+                    received, t = arrivals.pop(0)
+                    p, v = move.sample(min(t, move.duration))
+                    if t >= move.duration:
+                        p, v = move.goal, np.zeros_like(move.goal)
+                    core.stream(CommandMode.position_command, v, p, 0.2, received)
+                core.step(now)
+                q = core.tracker.position
+                beyond = max(beyond, float((q - start) @ direction) - length)
+                assert off_the_line(q, start, goal) < 1e-9
+            # As on time (the tracker's own last 6e-5 rad of catching up with the goal).
+            assert beyond < 2e-4, (stall_at, stall, beyond)
+    assert_within_limits(core)
+
+
+def test_a_stream_that_stops_arriving_brakes_the_arm_within_two_of_its_periods(
+    ur5: RobotInfo, core: SimCore
+) -> None:
+    """Not carried on, still speeding up as its last samples did, until the stream's timeout
+    (200 ms here: the arm went from 2.4 to 3.2 rad/s along its line, 1 rad further)."""
+    period = 0.01
+    core.set_mode(CommandMode.position_command)
+    move, _, _ = planned_move_samples(ur5, core)
+    now, last, speeds = 0.0, 0.0, []
+    while now < 0.9:
+        now += CYCLE
+        if now < 0.4 and now - last >= period - 1e-9:
+            p, v = move.sample(now)
+            core.stream(CommandMode.position_command, v, p, 0.2, now)
+            last = now
+        core.step(now)
+        speeds.append((now, float(np.linalg.norm(core.tracker.velocity))))
+    at_last = next(s for t, s in speeds if t >= last - 1e-9)
+    after = [s for t, s in speeds if t > last]
+    # The jerk limit lets the acceleration die away over a few cycles, no more.
+    assert max(after) < at_last * 1.05, (max(after), at_last)
+    braking = [s for t, s in speeds if t > last + 2 * period + 4 * CYCLE]
+    assert all(b <= a + 1e-9 for a, b in itertools.pairwise(braking))
+    assert braking[-1] == 0.0
