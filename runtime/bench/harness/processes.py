@@ -45,7 +45,7 @@ LOOPBACK_ENV = {"OPENPENDANT_DISCOVERY__INTERFACES": '["127.0.0.1"]'}
 # starts the whole cell).
 ROBOT_ONLY_ENV = {"OPENPENDANT_DEVICES": json.dumps([default_devices()[0].model_dump()])}
 # Robots come up at the full speed override in tests and benchmarks (the site's default is
-# 25 %: every move and jog would take four times as long); test_first_speed.py
+# 10 %: every move and jog would take ten times as long); test_first_speed.py
 # and the browser's first hold run with the default.
 FULL_SPEED_ENV = {"OPENPENDANT_LINK__FIRST_SPEED_RATIO": "1.0"}
 # For tests that only need moves to finish: the simulated robots play trajectories 5x faster
