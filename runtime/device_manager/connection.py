@@ -18,7 +18,7 @@ import re
 import time
 from collections import OrderedDict
 from collections.abc import Awaitable, Callable
-from typing import Any
+from typing import Any, Literal
 
 import httpx
 import websockets
@@ -51,23 +51,16 @@ log = logging.getLogger(__name__)
 PROTECTIVE_STOP = re.compile(r'"protective_stop"\s*:\s*true')
 
 
-def has_session(kind: str) -> bool:
-    """Devices of this kind move: the link holds an ordered command session on them, which
-    the driver halts on when it closes or goes silent, and their states must stay fresh."""
+Capability = Literal["session", "tool", "frames"]
+
+
+def declares(kind: str, capability: Capability) -> bool:
+    """Whether the kind declares it (plugins/api.py `DeviceKind`): a `session` (devices
+    that move: an ordered command session the driver halts on when it closes or goes
+    silent, and states that must stay fresh), a `tool` setup (applied on every connect,
+    and a slow start), or `frames` (pictures the device manager relays)."""
     declared = registry().kinds.get(kind)
-    return declared is not None and declared.session
-
-
-def has_tool(kind: str) -> bool:
-    """Devices of this kind carry a tool setup, applied on every connect, and start slow."""
-    declared = registry().kinds.get(kind)
-    return declared is not None and declared.tool
-
-
-def has_frames(kind: str) -> bool:
-    """Devices of this kind stream pictures the device manager relays."""
-    declared = registry().kinds.get(kind)
-    return declared is not None and declared.frames
+    return declared is not None and bool(getattr(declared, capability))
 
 
 RETRY = (0.1, 0.25, 0.5)  # s between attempts; a returning device is met within 0.5 s
@@ -325,7 +318,8 @@ class DeviceConnection:
                 log.exception("%s: session failed", self.name)
                 ended = SessionEnded(f"internal error: {describe(exc)}")
             if ended is not None:  # it had connected: start again at once
-                self.held = unsettled(self.last_state) if has_session(self.record.kind) else ""
+                moves = declares(self.record.kind, "session")
+                self.held = unsettled(self.last_state) if moves else ""
                 self._set_status("stale" if ended.stale else "disconnected", str(ended))
                 attempt = 0
             if self._wake.is_set():  # moved, or stopping
@@ -351,15 +345,15 @@ class DeviceConnection:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT * 2):
                     info = await self._fetch_info(http, url)
-                    if has_tool(self.record.kind):
+                    if declares(self.record.kind, "tool"):
                         info = await self._apply_tool(http, info)
                     state_ws = await self._open(url, "/state/ws", None)
-                    if has_session(self.record.kind):
+                    if declares(self.record.kind, "session"):
                         command_ws = await self._open(url, "/command/ws", auth)
                         timeout = self.timing.driver_timeout
                         await command_ws.send(json.dumps({"type": "session", "timeout": timeout}))
                     first = await state_ws.recv()
-                    if has_tool(self.record.kind):
+                    if declares(self.record.kind, "tool"):
                         first = await self._start_slow(http, state_ws, first)
             except InvalidStatus as exc:
                 refused = exc.response.status_code == 401
@@ -517,7 +511,7 @@ class DeviceConnection:
         stamp = state_stamp(text)
         age = self.freshness.observe(stamp.seqno, stamp.ts)
         # Only a moving device's state changes every cycle; others repeat theirs at rest.
-        return age if has_session(self.record.kind) else 0.0
+        return age if declares(self.record.kind, "session") else 0.0
 
     def _state(self, text: str) -> None:
         self.last_state = text

@@ -11,7 +11,7 @@ from urllib.parse import urlencode
 import websockets
 from starlette.websockets import WebSocket
 
-from openpendant.runtime.device_manager.connection import has_frames
+from openpendant.runtime.device_manager.connection import declares
 from openpendant.runtime.device_manager.registry import DeviceRegistry
 from openpendant.runtime.interfaces.camera import Encoding
 from openpendant.runtime.kit.errors import Conflict, OpenPendantError, Unavailable
@@ -24,7 +24,7 @@ async def relay_frames(
     await ws.accept()
     try:
         conn = registry.connection(local_name)
-        if not has_frames(conn.record.kind):
+        if not declares(conn.record.kind, "frames"):
             raise Conflict(f"{local_name} is a {conn.record.kind}, not a camera", code="not_camera")
         query = urlencode({"encoding": encoding, "quality": min(max(quality, 1), 100)})
         try:

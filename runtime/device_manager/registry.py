@@ -18,10 +18,9 @@ from openpendant.plugins.registry import registry
 from openpendant.runtime.device_manager.announcements import MAX_ANNOUNCEMENTS, Announcements, mark
 from openpendant.runtime.device_manager.connection import (
     DeviceConnection,
+    declares,
     describe,
     fetch_info,
-    has_session,
-    has_tool,
     short,
 )
 from openpendant.runtime.device_manager.leases import LeaseBook
@@ -454,7 +453,7 @@ class DeviceRegistry:
         """A robot's new tool setup, by whoever controls it: applied to the robot (which
         halts), then stored. Should storing fail, the robot is given back its old setup."""
         conn = self._get(local_name)
-        if not has_tool(conn.record.kind):
+        if not declares(conn.record.kind, "tool"):
             raise InvalidValue(f"{local_name} is a {conn.record.kind}, which carries no tool")
         self.leases.check(local_name, token)
         old = conn.info
@@ -576,7 +575,7 @@ def state_age(conn: DeviceConnection) -> float | None:
     if conn.status != "connected":
         return None
     fresh = conn.freshness
-    age = fresh.age() if has_session(conn.record.kind) else fresh.silence()
+    age = fresh.age() if declares(conn.record.kind, "session") else fresh.silence()
     return round(age, 4) if math.isfinite(age) else None
 
 
