@@ -211,6 +211,7 @@ class TwistJog(RampedJog):
 # its clock's rate changes by at most this per second, so the change adds at most the
 # move's own speed times this to its accelerations (a step from 100 % to 10 % takes 0.9 s).
 RATE_CHANGE = 1.0
+LATE_TICK = 0.03  # s of the plan's time a tick advances at most (three of jog's periods)
 
 
 class PlannedMoveAction(Action):
@@ -241,7 +242,9 @@ class PlannedMoveAction(Action):
     def tick(self, state: RobotState, now: float) -> PositionCommand:
         if self.monitor is not None:
             self.monitor.check(np.array(state.joint_position))
-        dt = 0.0 if self.last is None else max(0.0, now - self.last)
+        # A late tick (the service held up) does not jump the stream ahead by the time it
+        # lost: the plan's clock runs late instead, so no sample leaps towards the goal.
+        dt = 0.0 if self.last is None else min(max(0.0, now - self.last), LATE_TICK)
         self.last = now
         wanted = min(1.0, override(1.0, state) / self.speed) if self.speed > 0 else 1.0
         change = RATE_CHANGE * dt

@@ -21,6 +21,7 @@ from openpendant.runtime.interfaces.robot import (
     RobotState,
 )
 from openpendant.runtime.jog.actions import (
+    LATE_TICK,
     RATE_CHANGE,
     JointVelocityJog,
     PlannedMoveAction,
@@ -165,3 +166,22 @@ def test_an_override_lowered_during_a_held_move_to_slows_it_on_its_path(model: s
         command = again.tick(state(kinematics, home, 1.0), k * PERIOD)
         velocity = np.array(command.velocity or [])
         assert np.all(np.abs(velocity) <= np.abs(move.sample(k * PERIOD)[1]) + 1e-9)
+
+
+def test_a_late_tick_does_not_leap_a_move_to_ahead() -> None:
+    """The jog service held up for 150 ms (a loaded machine): the next sample of the Move to
+    is at most LATE_TICK further along its plan, not 150 ms further (0.35 rad of a UR5's
+    fast move sent to the robot at once)."""
+    info = load_robot_info("ur5")
+    kinematics = Kinematics(info)
+    home = np.array(info.home, dtype=float)
+    move = plan_joint_move(kinematics, info, home, home + 0.6, 1.0, None)
+    action = PlannedMoveAction("p", move, speed=1.0)
+    t = 0.0
+    for _ in range(30):
+        action.tick(state(kinematics, home, 1.0), t)
+        t += PERIOD
+    before = action.progress
+    action.tick(state(kinematics, home, 1.0), t + 0.15)
+    assert action.progress - before == pytest.approx(LATE_TICK)
+    assert LATE_TICK < 0.15
