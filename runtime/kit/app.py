@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import gc
 import logging
 import os
@@ -19,6 +20,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from openpendant.runtime import __version__
 from openpendant.runtime.kit.deadline import DeadlineMiddleware
 from openpendant.runtime.kit.errors import OpenPendantError
+from openpendant.runtime.kit.loop_watch import LoopWatch
 from openpendant.runtime.kit.metrics import serve_metrics
 
 log = logging.getLogger(__name__)
@@ -114,13 +116,17 @@ def create_app(
 
     @asynccontextmanager
     async def _lifespan(app: FastAPI) -> AsyncIterator[None]:
-        if lifespan is None:
-            _freeze_startup_objects()
-            yield
-            return
-        async with lifespan(app):
-            _freeze_startup_objects()
-            yield
+        watch = asyncio.create_task(LoopWatch().run(), name="loop watch")
+        try:
+            if lifespan is None:
+                _freeze_startup_objects()
+                yield
+                return
+            async with lifespan(app):
+                _freeze_startup_objects()
+                yield
+        finally:
+            watch.cancel()
 
     app = FastAPI(title=f"OpenPendant {service}", version=__version__, lifespan=_lifespan)
     install_error_handlers(app)
