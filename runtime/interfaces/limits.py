@@ -14,6 +14,7 @@ from openpendant.runtime.kit.errors import RobotError
 from openpendant.runtime.kit.words import words
 
 FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
 
 # A trajectory's first waypoint may sit at t=0 only if it is where the robot already is.
 START_TOLERANCE = 1e-3
@@ -99,12 +100,17 @@ class JointLimitChecker:
             )
 
     def trajectory(self, trajectory: JointTrajectory, start: FloatArray) -> CheckedTrajectory:
+        """Checked all at once (a driver checks on its event loop: one waypoint at a time, a
+        trajectory of a thousand held the simulated robot's loop, and its states, 130 ms);
+        the first waypoint that fails is refused as the one-vector checks say."""
         points = trajectory.waypoints
         times = np.array([0.0] + [w.time_from_start for w in points])
-        positions = np.vstack(
-            [start]
-            + [self.positions(w.position, f"waypoint {k} position") for k, w in enumerate(points)]
-        )
+        given = self._rows([w.position for w in points], "waypoint {} position")
+        for k in _first_rows(
+            (given < self.lower - LIMIT_EPSILON) | (given > self.upper + LIMIT_EPSILON)
+        ):
+            self.positions(points[k].position, f"waypoint {k} position")
+        positions = np.vstack([start, given])
         if points[0].time_from_start == 0.0:
             if np.max(np.abs(positions[1] - start)) > START_TOLERANCE:
                 raise RobotError(
@@ -116,19 +122,18 @@ class JointLimitChecker:
         if np.any(np.diff(times) <= 0):
             raise RobotError("waypoint times must strictly increase", code="bad_trajectory")
         segment_speed = np.diff(positions, axis=0) / np.diff(times)[:, None]
-        for k, v in enumerate(segment_speed):
-            self._check_speed(v, f"segment {k} speed")
+        for k in _first_rows(self._over(segment_speed, self.max_velocity)):
+            self._check_speed(segment_speed[k], f"segment {k} speed")
         velocities = None
         if any(w.velocity is not None for w in points):
             if not all(w.velocity is not None for w in points):
                 raise RobotError(
                     "give a velocity for every waypoint or for none", code="bad_trajectory"
                 )
-            given = [
-                self.velocities(w.velocity or [], f"waypoint {k} velocity")
-                for k, w in enumerate(points)
-            ]
-            velocities = np.vstack([np.zeros_like(start)] * (len(times) - len(given)) + given)
+            rows = self._rows([w.velocity or [] for w in points], "waypoint {} velocity")
+            for k in _first_rows(self._over(rows, self.max_velocity)):
+                self.velocities(rows[k], f"waypoint {k} velocity")
+            velocities = np.vstack([np.zeros((len(times) - len(rows), len(start))), rows])
         accelerations = None
         if any(w.acceleration is not None for w in points):
             if velocities is None or not all(w.acceleration is not None for w in points):
@@ -136,12 +141,32 @@ class JointLimitChecker:
                     "give an acceleration for every waypoint or for none, and velocities with them",
                     code="bad_trajectory",
                 )
-            given = [
-                self.accelerations(w.acceleration or [], f"waypoint {k} acceleration")
-                for k, w in enumerate(points)
-            ]
-            accelerations = np.vstack([np.zeros_like(start)] * (len(times) - len(given)) + given)
+            rows = self._rows([w.acceleration or [] for w in points], "waypoint {} acceleration")
+            for k in _first_rows(self._over(rows, self.max_acceleration)):
+                self.accelerations(rows[k], f"waypoint {k} acceleration")
+            accelerations = np.vstack([np.zeros((len(times) - len(rows), len(start))), rows])
         return CheckedTrajectory(times, positions, velocities, accelerations)
+
+    def _rows(self, rows: list[Sequence[float]], what: str) -> FloatArray:
+        """One vector per row; the first of the wrong length or not finite is refused as
+        `vector` refuses it (`what` formatted with its index)."""
+        for k, row in enumerate(rows):
+            if len(row) != len(self.names):
+                self.vector(row, what.format(k))
+        array = np.asarray(rows, dtype=float).reshape(len(rows), len(self.names))
+        for k in _first_rows(~np.isfinite(array)):
+            self.vector(rows[k], what.format(k))
+        return array
+
+    @staticmethod
+    def _over(values: FloatArray, limits: FloatArray) -> BoolArray:
+        return np.abs(values) > limits * (1 + 1e-6) + LIMIT_EPSILON
 
     def _joint(self, index: int) -> str:
         return f"{index + 1} ({self.names[index]})"
+
+
+def _first_rows(bad: BoolArray) -> list[int]:
+    """The index of the first row with any True in it (none if there is none)."""
+    rows = np.flatnonzero(bad.any(axis=1))
+    return [int(rows[0])] if rows.size else []

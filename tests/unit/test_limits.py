@@ -70,3 +70,55 @@ def test_trajectory_too_fast_or_out_of_order_is_refused(checker: JointLimitCheck
     near = list(start + 0.01)
     with pytest.raises(RobotError, match="strictly increase"):
         checker.trajectory(traj((1.0, near), (1.0, near)), start)
+
+
+@pytest.mark.parametrize(
+    ("spoil", "message"),
+    [
+        ("position", r"waypoint 3 position 3\.0000 rad of joint 1 \(panda_joint1\)"),
+        ("length", r"waypoint 3 position has 6 values"),
+        ("velocity", r"waypoint 3 velocity 9\.0000 rad/s of joint 3 \(panda_joint3\)"),
+        ("acceleration", r"waypoint 3 acceleration 99\.0000 rad/s² of joint 7"),
+        ("jump", r"segment 3 speed"),
+    ],
+)
+def test_a_long_trajectory_is_refused_at_its_first_bad_waypoint(
+    checker: JointLimitChecker, spoil: str, message: str
+) -> None:
+    """Checked all at once (a thousand waypoints, one by one, held a driver's loop 130 ms),
+    still named by the first waypoint that fails."""
+    start = np.array(HOME)
+    points = []
+    for k in range(1000):
+        q = (start + 0.0001 * k).tolist()
+        v, a = [0.025] * 7, [0.0] * 7
+        if k in (3, 7):  # the first bad one is named, not a later one
+            if spoil == "position":
+                q[0] = 3.0
+            elif spoil == "length":
+                q = q[:6]
+            elif spoil == "velocity":
+                v[2] = 9.0
+            elif spoil == "acceleration":
+                a[6] = 99.0
+            elif spoil == "jump":
+                q[0] += 0.5
+        points.append(
+            TrajectoryWaypoint(
+                time_from_start=(k + 1) * 0.004, position=q, velocity=v, acceleration=a
+            )
+        )
+    with pytest.raises(RobotError, match=message):
+        checker.trajectory(JointTrajectory(waypoints=points), start)
+    clean = [
+        TrajectoryWaypoint(
+            time_from_start=(k + 1) * 0.004,
+            position=(start + 0.0001 * k).tolist(),
+            velocity=[0.025] * 7,
+            acceleration=[0.0] * 7,
+        )
+        for k in range(1000)
+    ]
+    checked = checker.trajectory(JointTrajectory(waypoints=clean), start)
+    assert checked.positions.shape == (1001, 7) and checked.velocities is not None
+    assert np.allclose(checked.velocities[1:], 0.025) and np.allclose(checked.velocities[0], 0)
