@@ -4,6 +4,10 @@ from __future__ import annotations
 
 from typing import Any, TypeVar, overload
 
+# httpx's async transport imports anyio's asyncio backend at its first request: 137 ms with
+# a service's event loop held (seen in jog). Imported here, before the launcher forks its
+# services, it is loaded once and shared.
+import anyio._backends._asyncio  # noqa: F401
 import httpx
 from pydantic import BaseModel
 

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import ast
 import os
+import subprocess
+import sys
 from pathlib import Path
 
 import openpendant
@@ -51,3 +53,14 @@ def test_every_client_of_the_product_shares_a_context() -> None:
                 found[str(relative)] = lines
     assert read > 300
     assert found == {}
+
+
+def test_the_async_backend_is_loaded_with_the_client_not_at_its_first_request() -> None:
+    """Loaded at a service's first request it held the event loop 137 ms (jog's deadman is
+    100 ms); loaded with the kit, the launcher has it before it forks the services."""
+    check = (
+        "import sys\nimport openpendant.runtime.kit.client\n"
+        "assert 'anyio._backends._asyncio' in sys.modules\n"
+    )
+    done = subprocess.run([sys.executable, "-c", check], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
