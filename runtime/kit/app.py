@@ -96,6 +96,23 @@ def _freeze_startup_objects() -> None:
     gc.freeze()
 
 
+def _build_routes(app: FastAPI) -> None:
+    """FastAPI (0.165) builds the routes of an included router at the first request that
+    reaches it, pydantic's schemas and all: 100-170 ms with the event loop held (the loop
+    watch saw it in the device manager, whose robot links go stale after 200 ms). Built
+    here, at start-up, before anything is served. A FastAPI that builds them eagerly has
+    nothing to build."""
+    pending: list[Any] = list(app.router.routes)
+    while pending:
+        route = pending.pop()
+        build = getattr(route, "effective_candidates", None)
+        if callable(build):
+            pending.extend(build())
+        low = getattr(route, "effective_low_priority_routes", None)
+        if callable(low):
+            low()
+
+
 def plugin_failures() -> list[dict[str, str]]:
     """What of the plugins this process could not load (the System panel shows them)."""
     from openpendant.plugins.registry import registry
@@ -119,10 +136,12 @@ def create_app(
         watch = asyncio.create_task(LoopWatch().run(), name="loop watch")
         try:
             if lifespan is None:
+                _build_routes(app)
                 _freeze_startup_objects()
                 yield
                 return
             async with lifespan(app):
+                _build_routes(app)
                 _freeze_startup_objects()
                 yield
         finally:
