@@ -41,6 +41,7 @@ class FakeDevice:
         self.halts: list[str | None] = []  # halts by HTTP, outside a session: their signature
         self.paused = False
         self.delay = 0.0  # s added to every state's age
+        self.slow_asked = 0
         self.seqno = 0
         self.app = FastAPI()
         self.app.get("/info")(self.info)
@@ -75,7 +76,8 @@ class FakeDevice:
             self.closed["state"] += 1
 
     async def slow(self) -> dict[str, Any]:
-        await asyncio.sleep(2.0)
+        self.slow_asked += 1
+        await asyncio.sleep(3.0)
         return {}
 
     async def halt(self, request: Request) -> Response:
@@ -118,14 +120,14 @@ async def until(check: Callable[[], bool], timeout: float = 3.0) -> None:
 
 @contextlib.asynccontextmanager
 async def connection(
-    url: str, secret: str | None = None
+    url: str, secret: str | None = None, timing: LinkSettings = TIMING
 ) -> AsyncIterator[tuple[DeviceConnection, list[str]]]:
     statuses: list[str] = []
     conn = DeviceConnection(
         record(url),
         lambda *_: None,
         lambda c: statuses.append(c.status),
-        TIMING,
+        timing,
         secret=lambda: secret,
     )
     conn.start()
@@ -181,10 +183,13 @@ def test_a_request_cut_short_by_the_link_going_stale_says_so() -> None:
     """Not "did not answer": the session's end under the request is why it failed."""
 
     async def scenario() -> None:
-        async with FakeDevice() as device, connection(device.url) as (conn, _):
+        # Stale after 0.5 s here, not 0.1: on a loaded machine the link must not go stale
+        # before the request is under way.
+        timing = LinkSettings(stale_after=0.5, driver_timeout=1.0)
+        async with FakeDevice() as device, connection(device.url, timing=timing) as (conn, _):
             await until(lambda: conn.status == "connected")
             request = asyncio.create_task(conn.call("POST", "/slow", {}, conn.generation))
-            await asyncio.sleep(0.05)
+            await until(lambda: device.slow_asked == 1)
             device.paused = True
             with pytest.raises(OpenPendantError) as failed:
                 await request
