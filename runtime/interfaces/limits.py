@@ -61,9 +61,7 @@ class JointLimitChecker:
 
     def positions(self, values: Sequence[float], what: str = "position") -> FloatArray:
         q = self.vector(values, what)
-        outside = np.flatnonzero(
-            (q < self.lower - LIMIT_EPSILON) | (q > self.upper + LIMIT_EPSILON)
-        )
+        outside = np.flatnonzero(self._outside(q))
         if outside.size:
             i = int(outside[0])
             raise RobotError(
@@ -90,7 +88,7 @@ class JointLimitChecker:
     def _check_within(
         self, values: FloatArray, limits: FloatArray, what: str, unit: str, code: str
     ) -> None:
-        over = np.flatnonzero(np.abs(values) > limits * (1 + 1e-6) + LIMIT_EPSILON)
+        over = np.flatnonzero(self._over(values, limits))
         if over.size:
             i = int(over[0])
             raise RobotError(
@@ -106,9 +104,7 @@ class JointLimitChecker:
         points = trajectory.waypoints
         times = np.array([0.0] + [w.time_from_start for w in points])
         given = self._rows([w.position for w in points], "waypoint {} position")
-        for k in _first_rows(
-            (given < self.lower - LIMIT_EPSILON) | (given > self.upper + LIMIT_EPSILON)
-        ):
+        for k in _first_rows(self._outside(given)):
             self.positions(points[k].position, f"waypoint {k} position")
         positions = np.vstack([start, given])
         if points[0].time_from_start == 0.0:
@@ -157,6 +153,9 @@ class JointLimitChecker:
         for k in _first_rows(~np.isfinite(array)):
             self.vector(rows[k], what.format(k))
         return array
+
+    def _outside(self, positions: FloatArray) -> BoolArray:
+        return (positions < self.lower - LIMIT_EPSILON) | (positions > self.upper + LIMIT_EPSILON)
 
     @staticmethod
     def _over(values: FloatArray, limits: FloatArray) -> BoolArray:

@@ -44,7 +44,7 @@ class LoopWatch:
         self.beat = time.monotonic()  # the loop's last wake-up
         self.seen = ""  # the loop thread's stack during the worst hold-up not yet logged
         self._caught = ""  # ... during the current one
-        self._ident = threading.get_ident()
+        self._ident = 0  # the loop's thread, once it runs
 
     async def run(self) -> None:
         loop = asyncio.get_running_loop()

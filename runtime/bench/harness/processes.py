@@ -196,26 +196,27 @@ class Proc:
         self.popen.wait()
 
 
+def log_entries(log: Path, levels: tuple[str, ...]) -> Iterator[dict[str, Any]]:
+    """The JSON log entries of a process's log at one of `levels` (other lines skipped)."""
+    with contextlib.suppress(OSError):
+        for line in log.read_text(errors="replace").splitlines():
+            with contextlib.suppress(ValueError):
+                entry = json.loads(line)
+                if isinstance(entry, dict) and entry.get("level") in levels:
+                    yield entry
+
+
 def warnings_since(since: float, limit: int = 60) -> list[str]:
     """Warning- and error-level log entries stamped at or after `since` (epoch seconds) of
     the processes running since then, oldest first, the last `limit` of them."""
     found: list[tuple[float, str]] = []
     for proc in [p for p in STARTED if p.stopped_at is None or p.stopped_at >= since]:
         for log in proc.log_files():
-            with contextlib.suppress(OSError):
-                for line in log.read_text(errors="replace").splitlines():
-                    with contextlib.suppress(ValueError):
-                        entry = json.loads(line)
-                        if not isinstance(entry, dict) or entry.get("level") not in (
-                            "warning",
-                            "error",
-                            "critical",
-                        ):
-                            continue
-                        ts = entry.get("ts")
-                        if isinstance(ts, int | float) and ts >= since:
-                            text = f"{entry.get('service', log.stem)}: {entry.get('msg')}"
-                            found.append((ts, f"{entry.get('time')} {text} {entry.get('exc', '')}"))
+            for entry in log_entries(log, ("warning", "error", "critical")):
+                ts = entry.get("ts")
+                if isinstance(ts, int | float) and ts >= since:
+                    text = f"{entry.get('service', log.stem)}: {entry.get('msg')}"
+                    found.append((ts, f"{entry.get('time')} {text} {entry.get('exc', '')}"))
     found.sort()
     return [text.rstrip() for _, text in found[-limit:]]
 
@@ -322,14 +323,11 @@ class Runtime(Proc):
 
     def service_errors(self) -> list[str]:
         """Error-level entries in the service logs: a clean run has none."""
-        found = []
-        for log in sorted((self.data_dir / "logs").glob("*.log")):
-            for line in log.read_text(errors="replace").splitlines():
-                with contextlib.suppress(ValueError):
-                    entry = json.loads(line)
-                    if isinstance(entry, dict) and entry.get("level") in ("error", "critical"):
-                        found.append(f"{log.name}: {entry.get('msg')} {entry.get('exc', '')}")
-        return found
+        return [
+            f"{log.name}: {entry.get('msg')} {entry.get('exc', '')}"
+            for log in sorted((self.data_dir / "logs").glob("*.log"))
+            for entry in log_entries(log, ("error", "critical"))
+        ]
 
     def own_device(self, spec: DeviceSpec | None = None) -> dict[str, Any]:
         """One of the devices this runtime started (by default its simulated UR5), once
