@@ -54,17 +54,24 @@ def test_no_child_is_forked_while_the_watchdog_probes(tmp_path: Path) -> None:
         try:
             assert probing.wait(10)
             forked: list[Forked] = []
-            forking = threading.Thread(
-                target=lambda: forked.append(
+            ended: list[int] = []
+
+            def fork_and_wait() -> None:
+                # Waited for by the thread that forked it: a child's parent-death signal
+                # follows that thread, which must outlive it (it ended first, under load,
+                # and the child was killed: -15).
+                forked.append(
                     fork_child("child", lambda argv: 0, [], {}, tmp_path / "child.log", ())
                 )
-            )
+                ended.append(forked[0].wait(10))
+
+            forking = threading.Thread(target=fork_and_wait)
             forking.start()
             forking.join(0.5)
             assert forking.is_alive() and not forked, "forked in the middle of a probe"
             release.set()
-            forking.join(10)
-            assert forked and forked[0].wait(10) == 0
+            forking.join(20)
+            assert forked and ended == [0]
         finally:
             release.set()
             watchdog.stop()
