@@ -8,12 +8,14 @@ import asyncio
 import contextlib
 import ipaddress
 import logging
-import os
 import signal
 import socket
 import ssl
+import subprocess
+import sys
 import threading
-from collections.abc import AsyncIterator, Iterator
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import httpx
@@ -21,10 +23,9 @@ import pytest
 from cryptography import x509
 from cryptography.hazmat.primitives import serialization
 from cryptography.hazmat.primitives.asymmetric import ec
-from fastapi import FastAPI, WebSocket, WebSocketDisconnect
 from fastapi.testclient import TestClient
 from pydantic import ValidationError
-from websockets.sync.client import connect
+from websockets.asyncio.client import connect as ws_connect
 
 from openpendant.runtime.auth.roles import Role
 from openpendant.runtime.auth.setup import auth_path
@@ -32,11 +33,14 @@ from openpendant.runtime.auth.store import AuthStore
 from openpendant.runtime.bench.harness.processes import wait_for
 from openpendant.runtime.kit import tls
 from openpendant.runtime.kit.https_redirect import HttpsRedirect
-from openpendant.runtime.kit.serve import Listener, listening_socket, run_listeners
+from openpendant.runtime.kit.serve import listening_socket
 from openpendant.runtime.kit.settings import RuntimeSettings
 from openpendant.runtime.kit.web_guard import WebPolicy
 from openpendant.runtime.launcher.doctor import https
 from openpendant.runtime.launcher.run import sessions_follow_transport
+from tests.support.two_listeners import NO_CONTEXT_EXIT
+
+REPOSITORY = Path(__file__).resolve().parents[2]
 
 
 def settings(data_dir: Path, **tls_options: object) -> RuntimeSettings:
@@ -273,6 +277,32 @@ def test_an_https_ui_accepts_only_its_https_origin() -> None:
     assert "wss://127.0.0.1:*" in policy.content_security_policy(host)
 
 
+@dataclass
+class TwoListeners:
+    process: subprocess.Popen[bytes]
+    plain_port: int
+    secure_port: int
+
+
+@contextlib.contextmanager
+def two_listeners(mode: str, files: tls.TlsFiles, journal: Path) -> Iterator[TwoListeners]:
+    """tests/support/two_listeners.py in a process of its own, on two sockets made here."""
+    plain, secure = listening_socket("127.0.0.1", 0), listening_socket("127.0.0.1", 0)
+    argv = [sys.executable, "-m", "tests.support.two_listeners", mode]
+    argv += [str(plain.fileno()), str(secure.fileno()), str(files.cert), str(files.key)]
+    process = subprocess.Popen(
+        [*argv, str(journal)], pass_fds=(plain.fileno(), secure.fileno()), cwd=REPOSITORY
+    )
+    try:
+        yield TwoListeners(process, plain.getsockname()[1], secure.getsockname()[1])
+    finally:
+        plain.close()
+        secure.close()
+        if process.poll() is None:
+            process.kill()
+        process.wait()
+
+
 def test_a_second_listener_over_tls_serves_once_the_first_has_started_and_closes_first(
     tmp_path: Path,
 ) -> None:
@@ -281,96 +311,40 @@ def test_a_second_listener_over_tls_serves_once_the_first_has_started_and_closes
     (a held jog's socket halts its robot then) before the app shuts down."""
     files = tls.prepare(settings(tmp_path))
     assert files is not None and files.ca is not None
-    plain, secure = listening_socket("127.0.0.1", 0), listening_socket("127.0.0.1", 0)
     journal = tmp_path / "journal"
-
-    def note(line: str) -> None:
-        with journal.open("a") as out:
-            out.write(line + "\n")
-
-    @contextlib.asynccontextmanager
-    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        app.state.ready = "yes"
-        yield
-        note("app shut down")
-
-    app = FastAPI(lifespan=lifespan)
-
-    @app.get("/ready")
-    async def ready() -> dict[str, str]:
-        return {"ready": app.state.ready}
-
-    @app.websocket("/held")
-    async def held(socket: WebSocket) -> None:
-        await socket.accept()
-        try:
-            while True:
-                await socket.receive_text()
-        except WebSocketDisconnect:
-            pass
-        finally:
-            await asyncio.sleep(0.5)  # a halt on the way out takes its time
-            note("socket closed")
-
-    pid = os.fork()
-    if pid == 0:
-        code = 1
-        try:
-            run_listeners(Listener(app, [plain]), Listener(app, [secure], files.server_context))
-            code = 0
-        finally:
-            os._exit(code)
-    try:
-        context = ssl.create_default_context(cafile=str(files.ca))
-        url = f"https://127.0.0.1:{secure.getsockname()[1]}/ready"
+    context = ssl.create_default_context(cafile=str(files.ca))
+    with two_listeners("held", files, journal) as served:
+        url = f"https://127.0.0.1:{served.secure_port}/ready"
         with httpx.Client(verify=context, timeout=5) as client:
-            answer = wait_for(lambda: client.get(url), 5, what="the TLS listener")
+            answer = wait_for(lambda: client.get(url), 30, what="the TLS listener")
         assert answer.json() == {"ready": "yes"}
         with httpx.Client(timeout=5) as client:
-            inside = f"http://127.0.0.1:{plain.getsockname()[1]}/ready"
+            inside = f"http://127.0.0.1:{served.plain_port}/ready"
             answer = wait_for(lambda: client.get(inside), 5)
         assert answer.json() == {"ready": "yes"}
-        held_url = f"wss://127.0.0.1:{secure.getsockname()[1]}/held"
-        with connect(held_url, ssl=context, open_timeout=5) as holding:
-            holding.send("holding")
-            os.kill(pid, signal.SIGTERM)
-            _, status = os.waitpid(pid, 0)
-    finally:
-        with contextlib.suppress(ProcessLookupError, ChildProcessError):
-            os.kill(pid, signal.SIGKILL)
-            os.waitpid(pid, 0)
+
+        async def hold_then_stop() -> int:
+            held_url = f"wss://127.0.0.1:{served.secure_port}/held"
+            async with ws_connect(held_url, ssl=context, open_timeout=5) as holding:
+                await holding.send("holding")
+                served.process.send_signal(signal.SIGTERM)
+                return await asyncio.to_thread(served.process.wait, 15)
+
+        code = asyncio.run(hold_then_stop())
     # uvicorn ends the process with the signal it handled, once both servers are done.
-    assert os.waitstatus_to_exitcode(status) in (0, -signal.SIGTERM)
+    assert code in (0, -signal.SIGTERM)
     assert journal.read_text().splitlines() == ["socket closed", "app shut down"]
 
 
 def test_a_second_listener_that_cannot_start_stops_the_first_in_order(tmp_path: Path) -> None:
     """Its TLS context failing (a certificate gone): the process ends with an error (the
     launcher restarts it), after the app's own shutdown, not cancelled half-way."""
+    files = tls.prepare(settings(tmp_path))
+    assert files is not None
     journal = tmp_path / "journal"
-
-    @contextlib.asynccontextmanager
-    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
-        yield
-        journal.write_text("app shut down")
-
-    def no_context() -> ssl.SSLContext:
-        raise ssl.SSLError("no certificate")
-
-    app = FastAPI(lifespan=lifespan)
-    plain, secure = listening_socket("127.0.0.1", 0), listening_socket("127.0.0.1", 0)
-    pid = os.fork()
-    if pid == 0:
-        code = 0
-        try:
-            run_listeners(Listener(app, [plain]), Listener(app, [secure], no_context))
-        except ssl.SSLError:
-            code = 3
-        finally:
-            os._exit(code)
-    _, status = os.waitpid(pid, 0)
-    assert os.waitstatus_to_exitcode(status) == 3
-    assert journal.read_text() == "app shut down"
+    with two_listeners("no_context", files, journal) as served:
+        assert served.process.wait(30) == NO_CONTEXT_EXIT
+    assert journal.read_text() == "app shut down\n"
 
 
 def test_the_doctor_says_what_https_needs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
