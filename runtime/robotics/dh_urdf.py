@@ -67,13 +67,13 @@ def _rpy(rotation: np.ndarray) -> tuple[float, float, float]:
     )
 
 
-def _origin(transform: np.ndarray) -> str:
+def origin_element(transform: np.ndarray) -> str:
     xyz = " ".join(f"{v:.9g}" for v in transform[:3, 3])
     rpy = " ".join(f"{v:.12g}" for v in _rpy(transform[:3, :3]))
     return f'<origin xyz="{xyz}" rpy="{rpy}"/>'
 
 
-def _body(points: list[np.ndarray], radius: float, end_sphere: bool) -> list[str]:
+def body_elements(points: list[np.ndarray], radius: float, end_sphere: bool) -> list[str]:
     """Shapes along a polyline: a sphere on each corner, a cylinder along each segment."""
     corners = [points[0]]
     for p in points[1:]:
@@ -102,7 +102,7 @@ def _body(points: list[np.ndarray], radius: float, end_sphere: bool) -> list[str
         for tag in ("visual", "collision"):
             material = '<material name="cover"/>' if tag == "visual" else ""
             elements.append(
-                f"<{tag}>{_origin(placed)}<geometry>{geometry}</geometry>{material}</{tag}>"
+                f"<{tag}>{origin_element(placed)}<geometry>{geometry}</geometry>{material}</{tag}>"
             )
     return elements
 
@@ -133,24 +133,24 @@ def dh_urdf(
     first = arm.links[0]
     foot = [np.array([0.0, 0, 0]), np.array([0.0, 0, max(first.d, 0.0)])]
     lines.append(f"<link name={quoteattr(base_link)}>")
-    lines += _body(foot, arm.base_radius, end_sphere=False)
+    lines += body_elements(foot, arm.base_radius, end_sphere=False)
     lines.append("</link>")
     parent, placement = base_link, np.eye(4)
     for index, (link, (lower, upper, velocity)) in enumerate(zip(arm.links, limits, strict=True)):
         last = index == len(arm.links) - 1
         lines.append(
-            f'<joint name={quoteattr(link.joint)} type="revolute">{_origin(placement)}'
+            f'<joint name={quoteattr(link.joint)} type="revolute">{origin_element(placement)}'
             f"<parent link={quoteattr(parent)}/><child link={quoteattr(link.link)}/>"
             f'<axis xyz="0 0 1"/>'
             f'<limit lower="{lower:.12g}" upper="{upper:.12g}" velocity="{velocity:.12g}"'
             ' effort="0"/></joint>'
         )
         lines.append(f"<link name={quoteattr(link.link)}>")
-        lines += _body(_link_points(link), link.radius, end_sphere=not last)
+        lines += body_elements(_link_points(link), link.radius, end_sphere=not last)
         lines.append("</link>")
         parent, placement = link.link, dh_transform(link.d, link.a, link.alpha)
     lines.append(
-        f'<joint name="flange" type="fixed">{_origin(placement)}'
+        f'<joint name="flange" type="fixed">{origin_element(placement)}'
         f"<parent link={quoteattr(parent)}/><child link={quoteattr(flange_link)}/></joint>"
     )
     lines.append(f"<link name={quoteattr(flange_link)}/>")
