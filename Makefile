@@ -31,7 +31,7 @@ $(PY_STAMP): pyproject.toml
 	# Byte-compiled at install (not --no-compile): where PYTHONDONTWRITEBYTECODE is set, as on
 	# this project's machines, nothing is compiled later, and every process would compile every
 	# module it imports, every time (the suite ran 4 minutes longer).
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install --quiet -e '.[dev,rr]'
 	touch $@
 
 $(NPM_STAMP): $(UI)/package.json $(UI)/package-lock.json

@@ -166,6 +166,7 @@ LAYERS = {
     "openpendant.device_drivers": CLIENTS,
     "openpendant.sandbox": CLIENTS,
     "openpendant.blockly_blocks": CLIENTS,
+    "openpendant.plugins.robotraconteur": CLIENTS,  # drivers, in a plugin of the core's
     # Above everything: the gateway, the launcher and command, the built-ins' registrations
     # (plugins: nothing imports them) and the example plugin.
     "openpendant.webui": TOP,
@@ -404,3 +405,22 @@ def test_the_device_manager_and_links_ask_a_kind_what_it_can_do_not_its_name(
         'if conn.record.kind != "camera":\n    pass\nif "robot" == view.kind:\n    pass\n'
     )
     assert kind_name_checks(probe) == [1, 3]
+
+
+RR_PLUGIN = "openpendant.plugins.robotraconteur"
+RR_MODULES = ("RobotRaconteur", "RobotRaconteurCompanion", "robotraconteur_abstract_robot")
+
+
+def test_robot_raconteur_is_imported_only_by_its_plugin() -> None:
+    """It is an optional extra (`openpendant[rr]`): the core runs without it installed."""
+    found = [
+        f"{module}:{line} imports {name}"
+        for module, path in every_module()
+        if not module.startswith(RR_PLUGIN)
+        for line, name in imports(path, module)
+        if name.split(".")[0] in RR_MODULES
+    ]
+    assert found == []
+    # And the plugin's declaration imports none of it: loading the plugins needs no RR.
+    declaration = ROOT / "openpendant" / "plugins" / "robotraconteur" / "__init__.py"
+    assert [n for _, n in imports(declaration, RR_PLUGIN) if n.split(".")[0] in RR_MODULES] == []

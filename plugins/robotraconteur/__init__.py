@@ -1,0 +1,20 @@
+"""Robot Raconteur, the middleware of PyRI and its drivers, as an OpenPendant plugin (the
+`rr` extra: `pip install openpendant[rr]`). Nothing here imports RR until one of its drivers
+runs."""
+
+from openpendant.plugins.api import Driver, Plugin
+
+PLUGIN = Plugin(
+    name="robotraconteur",
+    description="Robot Raconteur standard robots (com.robotraconteur.robotics.robot)",
+    drivers=(
+        Driver(
+            "rr-robot",
+            "robot",
+            "openpendant.plugins.robotraconteur.entry:create",
+            options="openpendant.plugins.robotraconteur.entry:RRRobotOptions",
+            description="a Robot Raconteur standard robot, by its URL (rr+tcp://…)",
+            realtime=True,
+        ),
+    ),
+)

@@ -1,0 +1,240 @@
+"""The rr-robot driver (plugins/robotraconteur) against an RR standard robot written on
+`robotraconteur-abstract-robot` (tests/support/rr_sim_arm.py), over rr+tcp on loopback with
+RR's discovery off (so nothing is sent beyond this machine's loopback): its info read from
+the robot, its state, a jog that stops when its commands stop, a trajectory streamed on its
+planned path, a halt, the E-stop a fault until reset, and the robot gone a fault from which
+nothing resumes."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from openpendant.plugins.robotraconteur.entry import RRRobotOptions, create
+from openpendant.plugins.robotraconteur.robot_driver import RRRobotDriver
+from openpendant.runtime.bench.harness.processes import free_port
+from openpendant.runtime.interfaces.robot import (
+    CommandMode,
+    CommandModeRequest,
+    JogJointCommand,
+    JointTrajectory,
+    TrajectoryState,
+    TrajectoryWaypoint,
+)
+from openpendant.runtime.kit.errors import RobotError
+from openpendant.runtime.robotics.kinematics import Kinematics
+
+REPOSITORY = Path(__file__).resolve().parents[2]
+
+
+def until(check: Callable[[], object], timeout: float = 10.0, what: str = "condition") -> None:
+    deadline = time.monotonic() + timeout
+    while not check():
+        assert time.monotonic() < deadline, f"{what}: not within {timeout} s"
+        time.sleep(0.01)
+
+
+class Arm:
+    """The simulated RR arm's process."""
+
+    def __init__(self) -> None:
+        self.port = free_port()
+        self.url = f"rr+tcp://127.0.0.1:{self.port}?service=robot"
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "tests.support.rr_sim_arm", str(self.port)],
+            cwd=REPOSITORY,
+            stdout=subprocess.PIPE,
+            text=True,
+            env={**os.environ, "ROBOTRACONTEUR_TCP_SERVER_REUSEADDR": "1"},
+        )
+        assert self.proc.stdout is not None
+        line = self.proc.stdout.readline()
+        assert line.strip() == "READY", f"the RR arm did not start: {line!r}"
+
+    def estop(self, pressed: bool) -> None:
+        self.proc.send_signal(signal.SIGUSR1 if pressed else signal.SIGUSR2)
+
+    def kill(self) -> None:
+        self.proc.kill()
+        self.proc.wait()
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(10)
+            except subprocess.TimeoutExpired:
+                self.kill()
+
+
+class Driven:
+    """The driver made as its host makes it, on its own loop in this thread."""
+
+    def __init__(self, arm: Arm) -> None:
+        self.loop = asyncio.new_event_loop()
+        driver = create("arm", "rr-arm-1", RRRobotOptions(url=arm.url))
+        assert isinstance(driver, RRRobotDriver)
+        self.driver = driver
+        self.run(driver.start())
+
+    def run(self, work: Any) -> Any:
+        return self.loop.run_until_complete(work)
+
+    def q(self) -> np.ndarray:
+        return np.array(self.driver.state().joint_position)
+
+    def ready(self) -> None:
+        self.run(self.driver.enable())
+        until(lambda: self.driver.state().flags.ready, what="ready")
+
+    def close(self) -> None:
+        self.run(self.driver.shutdown())
+        self.loop.close()
+
+
+@pytest.fixture
+def arm() -> Iterator[Arm]:
+    arm = Arm()
+    yield arm
+    arm.stop()
+
+
+@pytest.fixture
+def driven(arm: Arm) -> Iterator[Driven]:
+    driven = Driven(arm)
+    yield driven
+    driven.close()
+
+
+def test_its_info_and_state_are_read_from_the_robot(driven: Driven) -> None:
+    d = driven.driver
+    assert d.info.model == "SimArm_UR5" and d.info.manufacturer == "OpenPendant"
+    assert d.info.joint_names[0] == "shoulder_pan_joint" and d.info.flange_link == "tool0"
+    assert d.info.joints[2].lower == pytest.approx(-np.pi)
+    state = d.state()
+    assert state.joint_position == pytest.approx([0.0, -1.2, 1.4, -1.8, -1.57, 0.0], abs=1e-9)
+    assert not state.flags.error and not state.flags.communication_failure
+    # The TCP from the URDF made of the robot's chain: a UR5's at this pose (RR's own
+    # kinematics give the same, tests/unit/test_chain_urdf.py).
+    assert np.allclose(state.tcp_pose.position, [-0.63545, -0.10922, 0.32785], atol=1e-4)
+    seqno = state.seqno
+    until(lambda: d.state().seqno > seqno + 10, 2, "states at the robot's rate")
+
+
+def test_a_jog_moves_while_commanded_and_stops_when_its_commands_stop(driven: Driven) -> None:
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+    start = driven.q()
+    for _ in range(10):
+        driven.run(d.jog_joint(JogJointCommand(velocity=[0.3, 0, 0, 0, 0, 0], timeout=0.2)))
+        time.sleep(0.05)
+    until(lambda: driven.q()[0] - start[0] > 0.05, 3, "jogging")
+    until(lambda: abs(d.state().joint_velocity[0]) < 1e-9, 2, "stopped after the last command")
+    stopped = driven.q()
+    time.sleep(0.3)
+    assert np.abs(driven.q() - stopped).max() < 1e-9  # nothing more
+    assert stopped[0] - start[0] < 0.3 * (10 * 0.05 + 0.2) + 0.02
+    assert np.abs(stopped[1:] - start[1:]).max() < 1e-9
+
+
+def test_a_trajectory_runs_on_its_planned_path_and_a_halt_stops_the_next(driven: Driven) -> None:
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory)))
+    start = driven.q()
+    offsets = np.array([0.4, -0.3, 0.3, 0.2, 0.3, -0.4])
+    times = np.linspace(0.2, 2.0, 10)
+    waypoints = [
+        TrajectoryWaypoint(time_from_start=float(t), position=(start + offsets * t / 2.0).tolist())
+        for t in times
+    ]
+    accepted = driven.run(d.execute_trajectory(JointTrajectory(waypoints=waypoints)))
+    seen: list[np.ndarray] = []
+    deadline = time.monotonic() + 10
+    while driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.running:
+        seen.append(driven.q())
+        assert time.monotonic() < deadline
+        time.sleep(0.005)
+    assert driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.finished
+    assert np.abs(driven.q() - (start + offsets)).max() < 1e-3
+    # Every position the robot reported lies within 1 mm (at the TCP) of the plan.
+    kinematics = Kinematics(d.info)
+    planned = np.array(
+        [kinematics.tcp_pose(start + offsets * s).position for s in np.linspace(0, 1, 2001)]
+    )
+    gaps = [
+        np.linalg.norm(planned - np.array(kinematics.tcp_pose(q).position), axis=1).min()
+        for q in seen
+    ]
+    assert len(seen) > 50 and max(gaps) < 1e-3, max(gaps)
+
+    back = [TrajectoryWaypoint(time_from_start=2.0, position=start.tolist())]
+    accepted = driven.run(d.execute_trajectory(JointTrajectory(waypoints=back)))
+    until(lambda: abs(d.state().joint_velocity[0]) > 0.05, 5, "moving back")
+    driven.run(d.halt())
+    assert driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.aborted
+    until(lambda: np.abs(d.state().joint_velocity).max() < 1e-9, 2, "halted")
+    halted = driven.q()
+    time.sleep(0.3)
+    assert np.abs(driven.q() - halted).max() < 1e-9
+    assert np.abs(halted - start).max() > 0.1  # it stopped well short of the way back
+
+
+def test_the_estop_is_a_fault_until_released_and_reset(arm: Arm, driven: Driven) -> None:
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+    driven.run(d.jog_joint(JogJointCommand(velocity=[0.3, 0, 0, 0, 0, 0], timeout=1.0)))
+    arm.estop(True)
+    until(lambda: d.state().flags.estop, 5, "the E-stop seen")
+    state = d.state()
+    assert state.flags.error and not state.flags.ready and "E-stop" in state.error_message
+    with pytest.raises(RobotError, match="E-stop"):
+        driven.run(d.jog_joint(JogJointCommand(velocity=[0.3, 0, 0, 0, 0, 0], timeout=1.0)))
+    with pytest.raises(RobotError, match="E-stop"):
+        driven.run(d.reset_errors())
+    arm.estop(False)
+    until(lambda: not d.state().flags.estop, 5, "the E-stop released")
+    assert d.state().flags.error  # until reset: nothing resumes by itself
+    held = driven.q()
+    time.sleep(0.3)
+    assert np.abs(driven.q() - held).max() < 1e-9
+    driven.run(d.reset_errors())
+    driven.ready()
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+
+    def jogged_again() -> bool:  # held: a command every 50 ms
+        driven.run(d.jog_joint(JogJointCommand(velocity=[0.3, 0, 0, 0, 0, 0], timeout=0.2)))
+        time.sleep(0.05)
+        return bool(driven.q()[0] - held[0] > 0.01)
+
+    until(jogged_again, 3, "jogging again")
+
+
+def test_the_robot_gone_mid_move_is_a_fault_and_nothing_resumes(arm: Arm, driven: Driven) -> None:
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory)))
+    start = driven.q()
+    goal = start + np.array([1.0, 0, 0, 0, 0, 0])
+    move = [TrajectoryWaypoint(time_from_start=3.0, position=goal.tolist())]
+    accepted = driven.run(d.execute_trajectory(JointTrajectory(waypoints=move)))
+    until(lambda: driven.q()[0] - start[0] > 0.05, 5, "moving")
+    arm.kill()
+    until(lambda: d.state().flags.communication_failure, 3, "the loss seen")
+    state = d.state()
+    assert state.flags.error and "connection" in state.error_message
+    assert driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.failed
+    with pytest.raises(RobotError):
+        driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory)))
