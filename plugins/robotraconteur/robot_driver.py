@@ -50,6 +50,7 @@ LATE_TICK = 0.03  # s of a trajectory's clock one cycle may advance, however lat
 AT_END = 1e-3  # rad from a trajectory's end at which it has arrived
 ESTOP = "E-stop: release it, then reset errors and enable"
 ROBOT_ERROR = "the robot reports an error: reset errors to go on"
+STOP_TIMEOUT = 0.05  # s: how long a lapsed jog's stop (a zero velocity) is held
 ENABLED_WITHIN = 2.0  # s for the robot to say it is enabled once asked
 Stream = tuple[CommandMode, FloatArray | None, FloatArray | None, float]
 
@@ -241,10 +242,17 @@ class RRRobotDriver(RobotDriver):
     def _stream(self, link: RRLink, mode: CommandMode, stream: Stream | None) -> None:
         if stream is None or stream[0] is not mode or time.monotonic() > stream[3]:
             with self.lock:
-                self.stream = None
-            if self._rr_mode is not CommandMode.halt:
-                link.set_mode(CommandMode.halt)  # the stream lapsed: the robot stops now
-                self._rr_mode = CommandMode.halt
+                if self.stream is stream:
+                    self.stream = None
+            if self._sent_stream is not None:
+                # The stream lapsed: stop now, once, in the same mode (RR's own timeout on a
+                # jog would stop it too; a position stream holds where it was sent last).
+                zero = np.zeros(self.info.dof)
+                if mode is CommandMode.jog:
+                    link.jog(zero, STOP_TIMEOUT)
+                elif mode is CommandMode.velocity_command:
+                    link.velocity(zero)
+                self._sent_stream = None
             return
         _, velocity, position, deadline = stream
         if mode is CommandMode.jog:

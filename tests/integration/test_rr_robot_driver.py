@@ -144,6 +144,9 @@ def test_a_jog_moves_while_commanded_and_stops_when_its_commands_stop(driven: Dr
     stopped = driven.q()
     time.sleep(0.3)
     assert np.abs(driven.q() - stopped).max() < 1e-9  # nothing more
+    # Still in RR's jog mode, stopped by a jog of its own (not a change of modes per cycle).
+    assert d.link is not None and d.reading is not None
+    assert d.reading.command_mode == d.link.modes["jog"]
     assert stopped[0] - start[0] < 0.3 * (10 * 0.05 + 0.2) + 0.02
     assert np.abs(stopped[1:] - start[1:]).max() < 1e-9
 
