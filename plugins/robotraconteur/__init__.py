@@ -6,7 +6,7 @@ from openpendant.plugins.api import Driver, Plugin
 
 PLUGIN = Plugin(
     name="robotraconteur",
-    description="Robot Raconteur standard robots (com.robotraconteur.robotics.robot)",
+    description="Robot Raconteur standard robots and cameras",
     drivers=(
         Driver(
             "rr-robot",
@@ -15,6 +15,13 @@ PLUGIN = Plugin(
             options="openpendant.plugins.robotraconteur.entry:RRRobotOptions",
             description="a Robot Raconteur standard robot, by its URL (rr+tcp://…)",
             realtime=True,
+        ),
+        Driver(
+            "rr-camera",
+            "camera",
+            "openpendant.plugins.robotraconteur.entry:create_camera",
+            options="openpendant.plugins.robotraconteur.entry:RRCameraOptions",
+            description="a Robot Raconteur standard camera, by its URL (rr+tcp://…)",
         ),
     ),
 )

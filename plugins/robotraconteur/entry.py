@@ -1,5 +1,7 @@
-"""An RR standard robot as the driver host starts it
-(`openpendant driver rr-robot --url rr+tcp://HOST:PORT?service=robot`)."""
+"""RR standard robots and cameras as the driver host starts them
+(`openpendant driver rr-robot --url 'rr+tcp://HOST:PORT?service=robot'`, `driver rr-camera
+--url 'rr+tcp://HOST:PORT?service=camera'`). RR is imported only when such a driver runs
+(the `rr` extra)."""
 
 from __future__ import annotations
 
@@ -11,6 +13,13 @@ from openpendant.runtime.interfaces.device import DeviceIdentity
 from openpendant.runtime.kit.errors import InvalidValue
 
 PASSWORD_ENV = "OPENPENDANT_RR_PASSWORD"
+URL_PATTERN = r"^(rr\+tcp|rrs\+tcp|rr\+ws|rrs\+ws)://"
+
+
+def without_rr(exc: ModuleNotFoundError) -> InvalidValue:
+    return InvalidValue(
+        f"this driver needs Robot Raconteur ({exc.name} is missing): pip install 'openpendant[rr]'"
+    )
 
 
 class RRRobotOptions(BaseModel):
@@ -19,7 +28,7 @@ class RRRobotOptions(BaseModel):
     url: str = Field(
         default="",
         max_length=2000,
-        pattern=r"^(rr\+tcp|rrs\+tcp|rr\+ws|rrs\+ws)://",
+        pattern=URL_PATTERN,
         description="the robot's RR URL, e.g. rr+tcp://10.0.0.5:52511?service=robot",
     )
     user: str | None = Field(
@@ -34,7 +43,6 @@ class RRRobotOptions(BaseModel):
 def create(name: str, uuid: str, options: RRRobotOptions) -> object:
     if not options.url:
         raise InvalidValue("--url is the robot's RR URL (rr+tcp://HOST:PORT?service=robot)")
-    # RR is imported only here, when such a driver runs (the `rr` extra).
     try:
         from openpendant.plugins.robotraconteur.node import Node
         from openpendant.plugins.robotraconteur.robot_driver import RRRobotDriver
@@ -63,4 +71,64 @@ def create(name: str, uuid: str, options: RRRobotOptions) -> object:
         user=options.user,
         password=password,
         period=1.0 / options.rate_hz,
+    )
+
+
+class RRCameraOptions(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    url: str = Field(
+        default="",
+        max_length=2000,
+        pattern=URL_PATTERN,
+        description="the camera's RR URL, e.g. rr+tcp://10.0.0.6:59823?service=camera",
+    )
+    fps: float = Field(default=10.0, gt=0, le=60, description="frames a second asked for")
+    reconnect: float = Field(
+        default=1.0, gt=0.05, le=60, description="seconds between attempts to reach a lost camera"
+    )
+
+    def default_name(self) -> str:
+        return "camera"
+
+
+def create_camera(name: str, uuid: str, options: RRCameraOptions) -> object:
+    if not options.url:
+        raise InvalidValue("--url is the camera's RR URL (rr+tcp://HOST:PORT?service=camera)")
+    try:
+        from RobotRaconteurCompanion.Util.ImageUtil import ImageUtil
+
+        from openpendant.plugins.robotraconteur.camera_driver import (
+            RRCamera,
+            intrinsics_of,
+            pixels_of,
+        )
+        from openpendant.plugins.robotraconteur.node import Node
+    except ModuleNotFoundError as exc:
+        raise without_rr(exc) from exc
+    from openpendant.runtime.interfaces.camera import CameraInfo
+
+    node = Node()
+    try:
+        client = node.connect(options.url)
+        camera_info = client.camera_info
+        first = pixels_of(ImageUtil(node.node, client).image_to_array(client.capture_frame()))
+        device = camera_info.device_info
+        model = str(getattr(getattr(device, "model", None), "name", "") or "") or str(
+            getattr(getattr(device, "device", None), "name", "") or "RR camera"
+        )
+        height, width = first.shape[:2]
+        info = CameraInfo(
+            model=model[:64],
+            width=width,
+            height=height,
+            fps=options.fps,
+            intrinsics=intrinsics_of(camera_info),
+        )
+    except Exception as exc:
+        node.close()
+        raise InvalidValue(f"cannot read the camera at {options.url}: {exc}") from exc
+    identity = DeviceIdentity(uuid=uuid, kind="camera", model=info.model, name=name)
+    return RRCamera(
+        identity, info, options.url, node=node, client=client, reconnect=options.reconnect
     )
