@@ -169,10 +169,13 @@ class RRCamera(CameraDriver):
             images = ImageUtil(self.node.node, client)
             try:
                 while not self._stop.is_set():
-                    began = time.monotonic()
+                    began, asked = time.monotonic(), time.time()
                     pixels = pixels_of(images.image_to_array(client.capture_frame()))
                     with self.changed:
-                        self.latest, self.latest_at = pixels, time.time()
+                        # Taken no earlier than it was asked for: a frame asked for before a
+                        # capture request was, though it came after, may show the world
+                        # from before that request.
+                        self.latest, self.latest_at = pixels, asked
                         self.frames += 1
                         self.changed.notify_all()
                     self._stop.wait(max(0.0, period - (time.monotonic() - began)))

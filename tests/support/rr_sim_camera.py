@@ -1,19 +1,29 @@
 """A Robot Raconteur standard camera (`com.robotraconteur.imaging.Camera`) for the RR tests:
-`python -m tests.support.rr_sim_camera PORT` serves it on 127.0.0.1:PORT as service
+`python -m tests.support.rr_sim_camera PORT [board]` serves it on 127.0.0.1:PORT as service
 `camera` and prints `READY`. Each `capture_frame` is `picture(n)` for the n-th frame
-(colour, BGR, 320x240), and its `camera_info` carries a calibration (`CALIBRATION`)."""
+(colour, BGR, 320x240), and its `camera_info` carries a calibration (`CALIBRATION`).
+
+With `board`: the simulated camera's picture instead (device_drivers/sim_camera: 1280x800,
+grey, a ChArUco board of 50 mm squares where `setf_param("board", pose as JSON)` puts it),
+and no calibration; `getf_param("truth")` says, as JSON, the camera model it renders with."""
 
 from __future__ import annotations
 
+import asyncio
+import json
 import signal
 import sys
 import threading
 from typing import Any
 
 import numpy as np
+import RobotRaconteur as RR
 from RobotRaconteurCompanion.Util.ImageUtil import ImageUtil
 from RobotRaconteurCompanion.Util.InfoFileLoader import InfoFileLoader
+from scipy.spatial.transform import Rotation
 
+from openpendant.device_drivers.sim_camera.driver import SimCamera as RenderedCamera
+from openpendant.device_drivers.sim_camera.entry import SimCameraOptions, create
 from openpendant.plugins.robotraconteur.node import Node
 
 WIDTH, HEIGHT = 320, 240
@@ -78,12 +88,61 @@ class SimCamera:
         return self._images.array_to_image(picture(number), "bgr888")
 
 
-def main(port: int) -> None:
+class BoardCamera(SimCamera):
+    """The simulated camera's renders of its ChArUco board, wherever the test puts it."""
+
+    def __init__(self, node: Any, info: Any) -> None:
+        super().__init__(node, info)
+        options = SimCameraOptions(noise=1.0, fps=20, square=0.05, marker=0.037)
+        rendered = create("rr-board-camera", "rr-board-camera", options)
+        assert isinstance(rendered, RenderedCamera)
+        asyncio.run(rendered.start())  # the ray table, before the first frame
+        self.rendered = rendered
+
+    def capture_frame(self) -> Any:
+        return self._images.array_to_image(self.rendered._render(None), "mono8")
+
+    def setf_param(self, name: str, value: Any) -> None:
+        if name != "board":
+            raise RR.InvalidArgumentException(f"no parameter {name!r}")
+        pose = json.loads(value.data)
+        if pose is None:
+            self.rendered.put_board(None)
+            return
+        matrix = np.eye(4)
+        matrix[:3, :3] = Rotation.from_quat(pose["orientation"]).as_matrix()
+        matrix[:3, 3] = pose["position"]
+        self.rendered.put_board(matrix)
+
+    def getf_param(self, name: str) -> Any:
+        if name != "truth":
+            raise RR.InvalidArgumentException(f"no parameter {name!r}")
+        camera = self.rendered.camera
+        pose = camera.pose
+        truth = {
+            "width": camera.width,
+            "height": camera.height,
+            "fx": camera.fx,
+            "fy": camera.fy,
+            "cx": camera.cx,
+            "cy": camera.cy,
+            "distortion": camera.coefficients.tolist(),
+            "pose": {
+                "position": pose[:3, 3].tolist(),
+                "orientation": Rotation.from_matrix(pose[:3, :3]).as_quat().tolist(),
+            },
+        }
+        return RR.VarValue(json.dumps(truth), "string")
+
+
+def main(port: int, board: bool) -> None:
     node = Node("openpendant_rr_sim_camera", serve_port=port, localhost_only=True)
+    described = {"device_info": INFO["device_info"]} if board else INFO
     info, _ = InfoFileLoader(node.node).LoadInfoFileFromDict(
-        INFO, "com.robotraconteur.imaging.camerainfo.CameraInfo", "device"
+        described, "com.robotraconteur.imaging.camerainfo.CameraInfo", "device"
     )
-    node.node.RegisterService("camera", CAMERA_TYPE, SimCamera(node.node, info))
+    camera = BoardCamera(node.node, info) if board else SimCamera(node.node, info)
+    node.node.RegisterService("camera", CAMERA_TYPE, camera)
     done = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: done.set())
     print("READY", flush=True)
@@ -92,4 +151,4 @@ def main(port: int) -> None:
 
 
 if __name__ == "__main__":
-    main(int(sys.argv[1]))
+    main(int(sys.argv[1]), sys.argv[2:] == ["board"])
