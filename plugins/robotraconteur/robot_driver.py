@@ -95,7 +95,10 @@ class RRRobotDriver(RobotDriver):
         self.motion_limits = Limits.of(info.joints)
         self.scaling = TimeScaling(self.motion_limits.acceleration, self.motion_limits.jerk)
         self.seqno = 0
-        self._rr_mode: CommandMode | None = None
+        # The RR command mode this driver last set. Taken as halt on connecting: the robot's
+        # mode is left alone (another RR client may be driving it) until this driver is
+        # enabled and commands it.
+        self._rr_mode = CommandMode.halt
         self._running = threading.Event()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
@@ -166,7 +169,7 @@ class RRRobotDriver(RobotDriver):
                 )
             return
         with self.lock:
-            self.link, self.reading, self._rr_mode = link, link.read(), None
+            self.link, self.reading, self._rr_mode = link, link.read(), CommandMode.halt
             if self._ever_connected:
                 self.error_message = "the connection was lost and is back: reset errors to go on"
             else:
