@@ -8,6 +8,7 @@ that stops answering is a fault, said in the state; the reader connects again ev
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import logging
 import threading
 import time
@@ -182,6 +183,8 @@ class RRCamera(CameraDriver):
             except Exception as exc:
                 self._lost(f"{type(exc).__name__}: {exc}")
                 self.client = None
+                with contextlib.suppress(Exception):  # the old connection, if it is still open
+                    self.node.node.DisconnectService(client)
                 self._stop.wait(self.reconnect)
 
     def _lost(self, why: str) -> None:

@@ -49,9 +49,7 @@ def create(name: str, uuid: str, options: RRRobotOptions) -> object:
         from openpendant.plugins.robotraconteur.robot_info import robot_info_of
         from openpendant.plugins.robotraconteur.robot_link import RRLink
     except ModuleNotFoundError as exc:
-        raise InvalidValue(
-            f"rr-robot needs Robot Raconteur ({exc.name} is missing): pip install 'openpendant[rr]'"
-        ) from exc
+        raise without_rr(exc) from exc
 
     password = os.environ.get(PASSWORD_ENV)
     node = Node()

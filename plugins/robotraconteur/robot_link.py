@@ -147,9 +147,6 @@ class RRLink:
     def reset_errors(self) -> None:
         self.client.reset_errors()
 
-    def speed_ratio(self, ratio: float) -> None:
-        self.client.speed_ratio = float(ratio)
-
     def close(self) -> None:
         for wire in (
             getattr(self, "_position_wire", None),

@@ -412,7 +412,13 @@ def test_a_ur_says_what_enable_and_reset_do_on_it(
     the arm on; after a protective stop the card and the button say Reset error unlocks it;
     the controller's reduced mode is shown while it lasts."""
     emulator = emulator_control.start(UR_HOST)
-    driver = DriverProc(runtime.home, "ur-rtde", "ur", "--address", UR_HOST, "--model", "ur5e")
+    # The RTDE watchdog at 2 Hz, not the product's 10: as the browser tests' deadman and link
+    # timeouts (conftest.py), widened here for a software-rendered Chromium sharing two cores
+    # with the runtime (once the driver's kick came over 100 ms late and the controller
+    # stopped its program, as it should); test_ur_driver.py proves the 10 Hz default.
+    driver = DriverProc(
+        runtime.home, "ur-rtde", "ur", "--address", UR_HOST, "--model", "ur5e", "--watchdog-hz", "2"
+    )
     try:
         url = driver.wait_ready()
         added = runtime.api("POST", "/devices", json={"url": url, "local_name": "ur"})
