@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import asyncio
 import concurrent.futures
+import contextlib
 import itertools
 import logging
 import queue
@@ -25,7 +26,7 @@ from collections.abc import Callable
 import numpy as np
 
 from openpendant.plugins.robotraconteur.node import Node
-from openpendant.plugins.robotraconteur.robot_link import LINK_ERRORS, Reading, RRLink
+from openpendant.plugins.robotraconteur.robot_link import LINK_ERRORS, RR_MODES, Reading, RRLink
 from openpendant.runtime.interfaces.device import DeviceIdentity
 from openpendant.runtime.interfaces.limits import CheckedTrajectory, FloatArray
 from openpendant.runtime.interfaces.robot import (
@@ -52,6 +53,7 @@ ESTOP = "E-stop: release it, then reset errors and enable"
 ROBOT_ERROR = "the robot reports an error: reset errors to go on"
 STOP_TIMEOUT = 0.05  # s: how long a lapsed jog's stop (a zero velocity) is held
 ENABLED_WITHIN = 2.0  # s for the robot to say it is enabled once asked
+MODE_SETTLES = 3  # the robot's states after a mode is set before it must show it
 Stream = tuple[CommandMode, FloatArray | None, FloatArray | None, float]
 
 
@@ -99,6 +101,7 @@ class RRRobotDriver(RobotDriver):
         # mode is left alone (another RR client may be driving it) until this driver is
         # enabled and commands it.
         self._rr_mode = CommandMode.halt
+        self._mode_set_at = 0  # the robot's seqno when this driver last set its mode
         self._running = threading.Event()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
@@ -115,6 +118,10 @@ class RRRobotDriver(RobotDriver):
 
     async def shutdown(self) -> None:
         await self.halt()
+        with contextlib.suppress(Exception):  # the robot gone, or not answering
+            await asyncio.wait_for(
+                self._in_control_thread(lambda link: link.set_mode(CommandMode.halt)), 3.0
+            )
         self._running.clear()
         if self._thread is not None:
             await asyncio.to_thread(self._thread.join, 3.0)
@@ -171,6 +178,7 @@ class RRRobotDriver(RobotDriver):
         with self.lock:
             self.link, self.reading, self._rr_mode = link, link.read(), CommandMode.halt
             if self._ever_connected:
+                self.error = True
                 self.error_message = "the connection was lost and is back: reset errors to go on"
             else:
                 self.error, self.error_message = False, ""
@@ -217,7 +225,6 @@ class RRRobotDriver(RobotDriver):
         if time.monotonic() - reading.received > STALE_AFTER:
             raise LinkStale(f"no new state for {STALE_AFTER * 1000:.0f} ms")
         with self.lock:
-            self.reading = reading
             self.seqno += 1
             if link.has(reading, "estop"):
                 # Also over a fault the robot's stop caused first (a command it then refused).
@@ -227,15 +234,29 @@ class RRRobotDriver(RobotDriver):
                 self._fault("the robot lost its own controller (communication failure)")
             elif link.has(reading, "error") and not self.error:
                 self._fault(ROBOT_ERROR)
-            elif link.has(reading, "enabled"):
-                self._enabled_seen = self.enabled
-            elif self.enabled and self._enabled_seen and not self.error:
-                self._fault("the robot was disabled on its own side")
+            elif not link.has(reading, "enabled"):
+                if self.enabled and self._enabled_seen and not self.error:
+                    self._fault("the robot was disabled on its own side")
+            elif self.enabled and not self._enabled_seen:
+                # Enabled once the robot says it is enabled and ready (it may take a state or
+                # two after being asked).
+                self._enabled_seen = link.has(reading, "ready")
+            elif self.enabled and not self.error and not link.has(reading, "ready"):
+                # Its drives, its controller: whatever it was doing stays stopped.
+                self._fault("the robot is no longer ready (it stopped on its own side)")
+            elif self._left_mode(link, reading) and not self.error:
+                self._fault("the robot left the command mode it was put in (another client?)")
+            previous = self.reading
+            if previous is not None and previous.operational_mode is not reading.operational_mode:
+                log.info("operational mode: %s", reading.operational_mode.value)
+                if self.mode is not CommandMode.halt:
+                    self._halt_now(f"operational mode changed to {reading.operational_mode.value}")
+            self.reading = reading
             mode = self.mode if self._ready(link, reading) else CommandMode.halt
             stream, trajectory = self.stream, self.trajectory
         if mode is not self._rr_mode:
             link.set_mode(mode)
-            self._rr_mode = mode
+            self._rr_mode, self._mode_set_at = mode, reading.seqno
             self._sent_stream = None
         if mode is CommandMode.trajectory and trajectory is not None:
             self._advance(link, trajectory, reading)
@@ -257,6 +278,9 @@ class RRRobotDriver(RobotDriver):
                     link.velocity(zero)
                 self._sent_stream = None
             return
+        with self.lock:
+            if self.stream is not stream or self.mode is not mode:
+                return  # halted or replaced since this cycle read it
         _, velocity, position, deadline = stream
         if mode is CommandMode.jog:
             if stream is not self._sent_stream and velocity is not None:
@@ -270,21 +294,30 @@ class RRRobotDriver(RobotDriver):
 
     def _advance(self, link: RRLink, running: RunningTrajectory, reading: Reading) -> None:
         now = time.monotonic()
-        if self._streamed_at is None:
-            position = running.reference.sample(0.0)[0]
-        else:
-            step = min(now - self._streamed_at, LATE_TICK)
-            with self.lock:
+        with self.lock:
+            if self.trajectory is not running or self.mode is not CommandMode.trajectory:
+                return  # halted or replaced since this cycle read it
+            if self._streamed_at is None:
+                position = running.reference.sample(0.0)[0]
+            else:
+                step = min(now - self._streamed_at, LATE_TICK)
                 position, _, _ = running.advance(self.scaling, self.speed_ratio, step)
-        self._streamed_at = now
+            self._streamed_at = now
         link.position(position)
         if running.at_end and np.abs(np.array(reading.q) - running.reference.end).max() < AT_END:
             with self.lock:
                 self._end(TrajectoryState.finished)
 
+    def _left_mode(self, link: RRLink, reading: Reading) -> bool:
+        """The robot no longer in the mode this driver put it in, a few states after."""
+        if self._rr_mode is CommandMode.halt or reading.seqno <= self._mode_set_at + MODE_SETTLES:
+            return False
+        return reading.command_mode != link.modes[RR_MODES[self._rr_mode]]
+
     def _ready(self, link: RRLink, reading: Reading) -> bool:
         return (
             self.enabled
+            and self._enabled_seen
             and not self.error
             and link.has(reading, "enabled")
             and link.has(reading, "ready")
@@ -308,7 +341,7 @@ class RRRobotDriver(RobotDriver):
         reading, link = self.reading, self.link
         connected = link is not None and reading is not None
         return RobotFlags(
-            enabled=self.enabled,
+            enabled=self.enabled and self._enabled_seen,
             ready=bool(connected and link and reading and self._ready(link, reading)),
             error=self.error,
             estop=bool(link and reading and link.has(reading, "estop")),
@@ -368,6 +401,8 @@ class RRRobotDriver(RobotDriver):
 
     async def _enable(self) -> None:
         def enable(link: RRLink) -> None:
+            with self.lock:
+                self._halt_now("enabling")
             link.enable()
             self._rr_mode = CommandMode.halt
             with self.lock:
@@ -383,6 +418,7 @@ class RRRobotDriver(RobotDriver):
             if time.monotonic() > deadline:
                 with self.lock:
                     self.enabled = False
+                    self._halt_now("the robot did not enable")
                 raise RobotError(
                     f"the robot did not say it was enabled within {ENABLED_WITHIN:g} s",
                     code="not_enabled",
@@ -400,9 +436,14 @@ class RRRobotDriver(RobotDriver):
             reading, link = self.reading, self.link
         if link is not None and reading is not None and link.has(reading, "estop"):
             raise RobotError("release the E-stop before resetting errors", code="estop")
-        await self._in_control_thread(RRLink.reset_errors)
-        with self.lock:
-            self.error, self.error_message = False, ""
+
+        def reset(link: RRLink) -> None:
+            link.reset_errors()
+            with self.lock:
+                if self.link is link:  # not a link lost meanwhile
+                    self.error, self.error_message = False, ""
+
+        await self._in_control_thread(reset)
 
     def _halt_now(self, reason: str) -> None:
         self.stream = None

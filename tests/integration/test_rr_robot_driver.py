@@ -19,8 +19,10 @@ from typing import Any
 
 import numpy as np
 import pytest
+import RobotRaconteur as RR
 
 from openpendant.plugins.robotraconteur.entry import RRRobotOptions, create
+from openpendant.plugins.robotraconteur.node import Node
 from openpendant.plugins.robotraconteur.robot_driver import RRRobotDriver
 from openpendant.runtime.bench.harness.processes import free_port
 from openpendant.runtime.interfaces.robot import (
@@ -63,6 +65,15 @@ class Arm:
 
     def estop(self, pressed: bool) -> None:
         self.proc.send_signal(signal.SIGUSR1 if pressed else signal.SIGUSR2)
+
+    def set(self, name: str, value: Any) -> None:
+        """One of the arm's test parameters (rr_sim_arm.py), over RR as any client would."""
+        node = Node()
+        try:
+            kind = "string" if isinstance(value, str) else "int32"
+            node.connect(self.url).setf_param(name, RR.VarValue(value, kind))
+        finally:
+            node.close()
 
     def kill(self) -> None:
         self.proc.kill()
@@ -248,3 +259,46 @@ def test_the_robot_gone_mid_move_is_a_fault_and_nothing_resumes(arm: Arm, driven
     assert driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.failed
     with pytest.raises(RobotError):
         driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory)))
+
+
+def moving_on_a_long_move(driven: Driven) -> tuple[str, np.ndarray]:
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory)))
+    start = driven.q()
+    goal = start + np.array([1.0, 0, 0, 0, 0, 0])
+    move = [TrajectoryWaypoint(time_from_start=3.0, position=goal.tolist())]
+    accepted = driven.run(d.execute_trajectory(JointTrajectory(waypoints=move)))
+    until(lambda: driven.q()[0] - start[0] > 0.05, 5, "moving")
+    return accepted.id, start
+
+
+def test_the_robot_no_longer_ready_is_a_fault_and_nothing_resumes(arm: Arm, driven: Driven) -> None:
+    """Its drives lose power while it stays enabled: the move fails, and when they are back
+    nothing moves until errors are reset and it is enabled again."""
+    d = driven.driver
+    move, _ = moving_on_a_long_move(driven)
+    arm.set("drives", 0)
+    until(lambda: d.state().flags.error, 3, "the fault")
+    assert "no longer ready" in d.state().error_message
+    assert driven.run(d.trajectory_status(move)).state is TrajectoryState.failed
+    arm.set("drives", 1)
+    held = driven.q()
+    time.sleep(0.5)
+    assert np.abs(driven.q() - held).max() < 1e-9
+    assert d.state().flags.error and not d.state().flags.ready
+
+
+def test_an_operational_mode_change_halts_a_move(arm: Arm, driven: Driven) -> None:
+    """The key switch turned mid-move (a cobot's mode to automatic): halted, as the UR
+    driver halts; the new mode shown; nothing resumes."""
+    d = driven.driver
+    move, _ = moving_on_a_long_move(driven)
+    arm.set("operational_mode", "auto")
+    until(lambda: d.state().operational_mode.value == "auto", 3, "the new mode")
+    assert driven.run(d.trajectory_status(move)).state is TrajectoryState.aborted
+    until(lambda: halted_in_rr(d) and np.abs(d.state().joint_velocity).max() < 1e-9, 2, "halt")
+    held = driven.q()
+    time.sleep(0.5)
+    assert np.abs(driven.q() - held).max() < 1e-9
+    assert d.state().command_mode is CommandMode.halt

@@ -58,12 +58,15 @@ class SimArm(AbstractRobot):  # type: ignore[misc]
         self._last: float | None = None
         self._estop_pressed = False
         self._powered = True
+        self._drives_on = True  # off: enabled, but not ready (its drives lost their power)
+        self._mode_name = "cobot"  # its operational mode, as a key switch would set it
+        self._base_set_operational_mode = False
 
     def _run_timestep(self, now: float) -> None:
         dt = PERIOD if self._last is None else max(0.0, now - self._last)
         self._last = now
         with self._lock:
-            if self._estop_pressed or not self._powered:
+            if self._estop_pressed or not self._powered or not self._drives_on:
                 self._target = self._velocity_target = None
             if self._target is not None:
                 reach = self._speed_limit * dt
@@ -86,7 +89,8 @@ class SimArm(AbstractRobot):  # type: ignore[misc]
             self._estop_source = 1 if self._estop_pressed else 0
             self._error = False
             self._enabled = self._powered and not self._estop_pressed
-            self._ready = self._enabled
+            self._ready = self._enabled and self._drives_on
+            self._operational_mode = self._robot_operational_mode[self._mode_name]
         super()._run_timestep(now)
 
     def _send_robot_command(self, now: float, position: Any, velocity: Any) -> None:
@@ -154,6 +158,17 @@ class SimArm(AbstractRobot):  # type: ignore[misc]
     @property
     def current_errors(self) -> list[Any]:
         return []
+
+    def setf_param(self, name: str, value: Any) -> None:
+        """The test's hands on the arm: `drives` (0: off, 1: on) and `operational_mode` (a
+        name of RR's RobotOperationalMode, as a key switch sets it)."""
+        with self._lock:
+            if name == "drives":
+                self._drives_on = bool(value.data[0])
+            elif name == "operational_mode":
+                self._mode_name = str(value.data)
+            else:
+                raise RR.InvalidArgumentException(f"no parameter {name!r}")
 
     def press_estop(self, pressed: bool) -> None:
         with self._lock:
