@@ -212,8 +212,10 @@ class SimRobot(RobotDriver):
             return self.core.pause_trajectory(paused)
 
     async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str:
+        prepared_since = self.interruptions
         reference = await asyncio.to_thread(self.core.prepare, trajectory)  # not under the lock
         with self.lock:
+            self._refuse_if_interrupted(prepared_since)
             return self.core.start_trajectory(trajectory, reference)
 
     async def _set_tool_setup(self, info: RobotInfo) -> None:

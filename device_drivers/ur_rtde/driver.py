@@ -488,10 +488,12 @@ class URDriver(RobotDriver):
     async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str:
         # Slowed along its path where it would pass a joint's limits, never cut short. CPU
         # work on a long trajectory: not under the lock the servo thread takes every 8 ms.
+        prepared_since = self.interruptions
         reference = await asyncio.to_thread(
             TrajectoryReference.of(trajectory).within, self.motion_limits
         )
         with self.lock:
+            self._refuse_if_interrupted(prepared_since)
             if self.trajectory is not None:
                 raise RobotError("a trajectory is already running", code="busy")
             trajectory_id = f"traj-{next(self._ids)}"

@@ -486,10 +486,12 @@ class RRRobotDriver(RobotDriver):
             self.stream = (CommandMode.position_command, None, position, time.monotonic() + timeout)
 
     async def _execute_trajectory(self, trajectory: CheckedTrajectory) -> str:
+        prepared_since = self.interruptions
         reference = await asyncio.to_thread(
             TrajectoryReference.of(trajectory).within, self.motion_limits
         )
         with self.lock:
+            self._refuse_if_interrupted(prepared_since)
             if self.trajectory is not None:
                 raise RobotError("a trajectory is already running", code="busy")
             trajectory_id = f"traj-{next(self._ids)}"

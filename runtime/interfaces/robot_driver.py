@@ -48,6 +48,9 @@ class RobotDriver(DeviceDriver, Robot):
         super().__init__(identity)
         self.info = info
         self.limits = JointLimitChecker(info)
+        # Counts what interrupts motion (a halt, a stop, a change of power or mode): a
+        # trajectory being prepared when one comes is not started (`_refuse_if_interrupted`).
+        self.interruptions = 0
 
     def describe(self) -> RobotDescription:
         return RobotDescription(identity=self.identity, info=self.info)
@@ -71,20 +74,24 @@ class RobotDriver(DeviceDriver, Robot):
     # Commands that are always allowed ------------------------------------------------------
 
     async def halt(self) -> None:
+        self.interruptions += 1
         await self._halt()
 
     async def stop(self) -> None:
         await self.halt()
 
     async def protective_stop(self, request: ProtectiveStopRequest) -> RobotState:
+        self.interruptions += 1
         await self._protective_stop(request.reason)
         return self.state()
 
     async def disable(self) -> RobotState:
+        self.interruptions += 1
         await self._disable()
         return self.state()
 
     async def reset_errors(self) -> RobotState:
+        self.interruptions += 1
         await self._reset_errors()
         return self.state()
 
@@ -100,6 +107,7 @@ class RobotDriver(DeviceDriver, Robot):
                 code="robot_fault",
                 words=words("robot.reset_first"),
             )
+        self.interruptions += 1
         await self._enable()
         return self.state()
 
@@ -114,6 +122,7 @@ class RobotDriver(DeviceDriver, Robot):
             self._require_freedrive()
         if request.mode is not CommandMode.halt:
             self._require_ready()
+        self.interruptions += 1
         await self._set_command_mode(request.mode)
         return self.state()
 
@@ -199,6 +208,16 @@ class RobotDriver(DeviceDriver, Robot):
         return await self._pause_trajectory(False)
 
     # Checks ---------------------------------------------------------------------------------
+
+    def _refuse_if_interrupted(self, prepared_since: int) -> None:
+        """For a trajectory prepared while the caller waited (off the driver's lock): a STOP
+        and a new trajectory mode meanwhile must not let the stopped move start after all."""
+        if self.interruptions != prepared_since:
+            raise RobotError(
+                "the robot was halted, or its power or mode changed, while the trajectory was "
+                "prepared: it was not started",
+                code="interrupted",
+            )
 
     def _require_no_estop(self) -> None:
         if self.status().flags.estop:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import itertools
 import math
+import threading
 from typing import Any
 
 import numpy as np
@@ -589,3 +590,39 @@ def test_a_stream_that_stops_arriving_brakes_the_arm_within_two_of_its_periods(
     braking = [s for t, s in speeds if t > last + 2 * period + 4 * CYCLE]
     assert all(b <= a + 1e-9 for a, b in itertools.pairwise(braking))
     assert braking[-1] == 0.0
+
+
+def test_a_trajectory_stopped_while_it_was_prepared_never_starts(
+    ur5: RobotInfo, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """STOP, then the trajectory mode set again, while the driver prepared a trajectory off
+    its lock: that trajectory is refused, not started after the STOP."""
+    robot = SimRobot(DeviceIdentity(uuid="u-1", kind="robot", model="ur5", name="t"), ur5)
+    with robot.lock:
+        robot.core.enable()
+        robot.core.set_mode(CommandMode.trajectory)
+    preparing = threading.Event()
+    release = threading.Event()
+    prepare = robot.core.prepare
+
+    def held_prepare(trajectory: Any) -> Any:
+        preparing.set()
+        release.wait(5)
+        return prepare(trajectory)
+
+    monkeypatch.setattr(robot.core, "prepare", held_prepare)
+    goal = [v + 0.3 for v in ur5.home]
+    move = JointTrajectory(waypoints=[TrajectoryWaypoint(time_from_start=2.0, position=goal)])
+
+    async def scenario() -> None:
+        started = asyncio.create_task(robot.execute_trajectory(move))
+        await asyncio.to_thread(preparing.wait, 5)
+        await robot.halt()
+        await robot.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory))
+        release.set()
+        with pytest.raises(RobotError) as refused:
+            await started
+        assert refused.value.code == "interrupted"
+
+    asyncio.run(scenario())
+    assert robot.core.trajectory is None  # nothing runs
