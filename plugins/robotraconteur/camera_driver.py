@@ -19,16 +19,8 @@ import numpy as np
 from RobotRaconteurCompanion.Util.ImageUtil import ImageUtil
 
 from openpendant.plugins.robotraconteur.node import Node
-from openpendant.runtime.imaging.encoding import encoded_frame
-from openpendant.runtime.interfaces.camera import (
-    CameraDriver,
-    CameraInfo,
-    CameraState,
-    CaptureRequest,
-    Frame,
-    Image,
-    Intrinsics,
-)
+from openpendant.runtime.drivers.latest_frame import LatestFrameCamera
+from openpendant.runtime.interfaces.camera import CameraInfo, Intrinsics
 from openpendant.runtime.interfaces.device import DeviceIdentity
 from openpendant.runtime.kit.errors import DeviceError
 
@@ -77,7 +69,7 @@ def pixels_of(array: np.ndarray) -> np.ndarray:
     return array
 
 
-class RRCamera(CameraDriver):
+class RRCamera(LatestFrameCamera):
     def __init__(
         self,
         identity: DeviceIdentity,
@@ -88,15 +80,13 @@ class RRCamera(CameraDriver):
         client: Any,
         reconnect: float = 1.0,
     ) -> None:
-        super().__init__(identity, info)
+        super().__init__(identity, info, url)
         self.url, self.node, self.reconnect = url, node, reconnect
         self.client: Any = client
-        self.changed = threading.Condition()
-        self.latest: np.ndarray | None = None
-        self.latest_at = 0.0
-        self.frames = 0
-        self.connected = client is not None
-        self.error = "" if client is not None else "not connected yet"
+        if client is not None:
+            self._answering()
+        else:
+            self.error = "not connected yet"
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
@@ -113,44 +103,6 @@ class RRCamera(CameraDriver):
             await asyncio.to_thread(self._thread.join, 5.0)
         self.node.close()
 
-    def state(self) -> CameraState:
-        with self.changed:
-            return CameraState(
-                seqno=self.frames,
-                ts=time.time(),
-                connected=self.connected,
-                frames=self.frames,
-                last_frame=self.latest_at or None,
-                error=self.error,
-            )
-
-    async def capture(self, request: CaptureRequest) -> Image:
-        return (await self.frame(request)).image()
-
-    async def frame(self, request: CaptureRequest) -> Frame:
-        asked = time.time()
-        pixels, taken, number = await asyncio.to_thread(self._frame_after, asked)
-        return encoded_frame(pixels, request, number, taken)
-
-    def _frame_after(self, asked: float) -> tuple[np.ndarray, float, int]:
-        timeout = max(3.0 / self.info.fps, 2.0)
-        deadline = time.monotonic() + timeout
-        with self.changed:
-            while self.latest is None or self.latest_at < asked:
-                if not self.connected:
-                    raise DeviceError(
-                        f"the camera is not answering: {self.error}", code="camera_lost", status=503
-                    )
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    raise DeviceError(
-                        f"no frame from the camera within {timeout:.1f} s",
-                        code="camera_timeout",
-                        status=504,
-                    )
-                self.changed.wait(left)
-            return self.latest, self.latest_at, self.frames
-
     # The reader -------------------------------------------------------------------------------
 
     def _read(self) -> None:
@@ -164,21 +116,17 @@ class RRCamera(CameraDriver):
                     self._lost(f"cannot reach the camera at {self.url}: {exc}")
                     self._stop.wait(self.reconnect)
                     continue
-                with self.changed:
-                    self.connected, self.error = True, ""
+                self._answering()
                 log.info("camera %s connected", self.url)
             images = ImageUtil(self.node.node, client)
             try:
                 while not self._stop.is_set():
                     began, asked = time.monotonic(), time.time()
                     pixels = pixels_of(images.image_to_array(client.capture_frame()))
-                    with self.changed:
-                        # Taken no earlier than it was asked for: a frame asked for before a
-                        # capture request was, though it came after, may show the world
-                        # from before that request.
-                        self.latest, self.latest_at = pixels, asked
-                        self.frames += 1
-                        self.changed.notify_all()
+                    # Taken no earlier than it was asked for: a frame asked for before a
+                    # capture request was, though it came after, may show the world from
+                    # before that request.
+                    self._keep(pixels, asked)
                     self._stop.wait(max(0.0, period - (time.monotonic() - began)))
             except Exception as exc:
                 self._lost(f"{type(exc).__name__}: {exc}")
@@ -186,10 +134,3 @@ class RRCamera(CameraDriver):
                 with contextlib.suppress(Exception):  # the old connection, if it is still open
                     self.node.node.DisconnectService(client)
                 self._stop.wait(self.reconnect)
-
-    def _lost(self, why: str) -> None:
-        with self.changed:
-            if self.connected or self.error != why:
-                log.warning("camera %s: %s", self.url, why)
-            self.connected, self.error = False, why
-            self.changed.notify_all()

@@ -13,7 +13,7 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -24,7 +24,7 @@ import RobotRaconteur as RR
 from openpendant.plugins.robotraconteur.entry import RRRobotOptions, create
 from openpendant.plugins.robotraconteur.node import Node
 from openpendant.plugins.robotraconteur.robot_driver import RRRobotDriver
-from openpendant.runtime.bench.harness.processes import free_port
+from openpendant.runtime.bench.harness.processes import free_port, wait_for
 from openpendant.runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
@@ -37,13 +37,6 @@ from openpendant.runtime.kit.errors import RobotError
 from openpendant.runtime.robotics.kinematics import Kinematics
 
 REPOSITORY = Path(__file__).resolve().parents[2]
-
-
-def until(check: Callable[[], object], timeout: float = 10.0, what: str = "condition") -> None:
-    deadline = time.monotonic() + timeout
-    while not check():
-        assert time.monotonic() < deadline, f"{what}: not within {timeout} s"
-        time.sleep(0.01)
 
 
 class Arm:
@@ -106,7 +99,7 @@ class Driven:
 
     def ready(self) -> None:
         self.run(self.driver.enable())
-        until(lambda: self.driver.state().flags.ready, what="ready")
+        wait_for(lambda: self.driver.state().flags.ready, 10, what="ready")
 
     def close(self) -> None:
         self.run(self.driver.shutdown())
@@ -116,6 +109,10 @@ class Driven:
 def halted_in_rr(driver: RRRobotDriver) -> bool:
     link, reading = driver.link, driver.reading
     return link is not None and reading is not None and reading.command_mode == link.modes["halt"]
+
+
+def halted_at_rest(driver: RRRobotDriver) -> bool:
+    return halted_in_rr(driver) and bool(np.abs(driver.state().joint_velocity).max() < 1e-9)
 
 
 @pytest.fixture
@@ -144,7 +141,7 @@ def test_its_info_and_state_are_read_from_the_robot(driven: Driven) -> None:
     # kinematics give the same, tests/unit/test_chain_urdf.py).
     assert np.allclose(state.tcp_pose.position, [-0.63545, -0.10922, 0.32785], atol=1e-4)
     seqno = state.seqno
-    until(lambda: d.state().seqno > seqno + 10, 2, "states at the robot's rate")
+    wait_for(lambda: d.state().seqno > seqno + 10, 2, what="states at the robot's rate")
 
 
 def test_a_jog_moves_while_commanded_and_stops_when_its_commands_stop(driven: Driven) -> None:
@@ -155,8 +152,10 @@ def test_a_jog_moves_while_commanded_and_stops_when_its_commands_stop(driven: Dr
     for _ in range(10):
         driven.run(d.jog_joint(JogJointCommand(velocity=[0.3, 0, 0, 0, 0, 0], timeout=0.2)))
         time.sleep(0.05)
-    until(lambda: driven.q()[0] - start[0] > 0.05, 3, "jogging")
-    until(lambda: abs(d.state().joint_velocity[0]) < 1e-9, 2, "stopped after the last command")
+    wait_for(lambda: driven.q()[0] - start[0] > 0.05, 3, what="jogging")
+    wait_for(
+        lambda: abs(d.state().joint_velocity[0]) < 1e-9, 2, what="stopped after the last command"
+    )
     stopped = driven.q()
     time.sleep(0.3)
     assert np.abs(driven.q() - stopped).max() < 1e-9  # nothing more
@@ -200,12 +199,14 @@ def test_a_trajectory_runs_on_its_planned_path_and_a_halt_stops_the_next(driven:
 
     back = [TrajectoryWaypoint(time_from_start=2.0, position=start.tolist())]
     accepted = driven.run(d.execute_trajectory(JointTrajectory(waypoints=back)))
-    until(lambda: abs(d.state().joint_velocity[0]) > 0.05, 5, "moving back")
+    wait_for(lambda: abs(d.state().joint_velocity[0]) > 0.05, 5, what="moving back")
     driven.run(d.halt())
     assert driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.aborted
     # The robot in RR's halt mode, at rest (its last setpoint, on the path, is valid for
     # ten more of its states: it may still reach it).
-    until(lambda: halted_in_rr(d) and np.abs(d.state().joint_velocity).max() < 1e-9, 2, "halt")
+    wait_for(
+        lambda: halted_in_rr(d) and np.abs(d.state().joint_velocity).max() < 1e-9, 2, what="halt"
+    )
     halted = driven.q()
     time.sleep(0.3)
     assert np.abs(driven.q() - halted).max() < 1e-9
@@ -218,7 +219,7 @@ def test_the_estop_is_a_fault_until_released_and_reset(arm: Arm, driven: Driven)
     driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
     driven.run(d.jog_joint(JogJointCommand(velocity=[0.3, 0, 0, 0, 0, 0], timeout=1.0)))
     arm.estop(True)
-    until(lambda: d.state().flags.estop, 5, "the E-stop seen")
+    wait_for(lambda: d.state().flags.estop, 5, what="the E-stop seen")
     state = d.state()
     assert state.flags.error and not state.flags.ready and "E-stop" in state.error_message
     with pytest.raises(RobotError, match="E-stop"):
@@ -226,7 +227,7 @@ def test_the_estop_is_a_fault_until_released_and_reset(arm: Arm, driven: Driven)
     with pytest.raises(RobotError, match="E-stop"):
         driven.run(d.reset_errors())
     arm.estop(False)
-    until(lambda: not d.state().flags.estop, 5, "the E-stop released")
+    wait_for(lambda: not d.state().flags.estop, 5, what="the E-stop released")
     assert d.state().flags.error  # until reset: nothing resumes by itself
     held = driven.q()
     time.sleep(0.3)
@@ -240,25 +241,7 @@ def test_the_estop_is_a_fault_until_released_and_reset(arm: Arm, driven: Driven)
         time.sleep(0.05)
         return bool(driven.q()[0] - held[0] > 0.01)
 
-    until(jogged_again, 3, "jogging again")
-
-
-def test_the_robot_gone_mid_move_is_a_fault_and_nothing_resumes(arm: Arm, driven: Driven) -> None:
-    driven.ready()
-    d = driven.driver
-    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory)))
-    start = driven.q()
-    goal = start + np.array([1.0, 0, 0, 0, 0, 0])
-    move = [TrajectoryWaypoint(time_from_start=3.0, position=goal.tolist())]
-    accepted = driven.run(d.execute_trajectory(JointTrajectory(waypoints=move)))
-    until(lambda: driven.q()[0] - start[0] > 0.05, 5, "moving")
-    arm.kill()
-    until(lambda: d.state().flags.communication_failure, 3, "the loss seen")
-    state = d.state()
-    assert state.flags.error and "connection" in state.error_message
-    assert driven.run(d.trajectory_status(accepted.id)).state is TrajectoryState.failed
-    with pytest.raises(RobotError):
-        driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory)))
+    wait_for(jogged_again, 3, what="jogging again")
 
 
 def moving_on_a_long_move(driven: Driven) -> tuple[str, np.ndarray]:
@@ -269,8 +252,20 @@ def moving_on_a_long_move(driven: Driven) -> tuple[str, np.ndarray]:
     goal = start + np.array([1.0, 0, 0, 0, 0, 0])
     move = [TrajectoryWaypoint(time_from_start=3.0, position=goal.tolist())]
     accepted = driven.run(d.execute_trajectory(JointTrajectory(waypoints=move)))
-    until(lambda: driven.q()[0] - start[0] > 0.05, 5, "moving")
+    wait_for(lambda: driven.q()[0] - start[0] > 0.05, 5, what="moving")
     return accepted.id, start
+
+
+def test_the_robot_gone_mid_move_is_a_fault_and_nothing_resumes(arm: Arm, driven: Driven) -> None:
+    d = driven.driver
+    move, _ = moving_on_a_long_move(driven)
+    arm.kill()
+    wait_for(lambda: d.state().flags.communication_failure, 3, what="the loss seen")
+    state = d.state()
+    assert state.flags.error and "connection" in state.error_message
+    assert driven.run(d.trajectory_status(move)).state is TrajectoryState.failed
+    with pytest.raises(RobotError):
+        driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory)))
 
 
 def test_the_robot_no_longer_ready_is_a_fault_and_nothing_resumes(arm: Arm, driven: Driven) -> None:
@@ -279,7 +274,7 @@ def test_the_robot_no_longer_ready_is_a_fault_and_nothing_resumes(arm: Arm, driv
     d = driven.driver
     move, _ = moving_on_a_long_move(driven)
     arm.set("drives", 0)
-    until(lambda: d.state().flags.error, 3, "the fault")
+    wait_for(lambda: d.state().flags.error, 3, what="the fault")
     assert "no longer ready" in d.state().error_message
     assert driven.run(d.trajectory_status(move)).state is TrajectoryState.failed
     arm.set("drives", 1)
@@ -295,9 +290,11 @@ def test_an_operational_mode_change_halts_a_move(arm: Arm, driven: Driven) -> No
     d = driven.driver
     move, _ = moving_on_a_long_move(driven)
     arm.set("operational_mode", "auto")
-    until(lambda: d.state().operational_mode.value == "auto", 3, "the new mode")
+    wait_for(lambda: d.state().operational_mode.value == "auto", 3, what="the new mode")
     assert driven.run(d.trajectory_status(move)).state is TrajectoryState.aborted
-    until(lambda: halted_in_rr(d) and np.abs(d.state().joint_velocity).max() < 1e-9, 2, "halt")
+    wait_for(
+        lambda: halted_in_rr(d) and np.abs(d.state().joint_velocity).max() < 1e-9, 2, what="halt"
+    )
     held = driven.q()
     time.sleep(0.5)
     assert np.abs(driven.q() - held).max() < 1e-9
