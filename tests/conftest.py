@@ -46,12 +46,16 @@ TIMED_UNITS = frozenset(
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """The other unit tests run alongside the rest (tests/suite.py)."""
+    """The other unit tests run alongside the rest, and so do the browser tests, niced
+    (tests/suite.py)."""
     unit = Path(__file__).parent / "unit"
+    browser = Path(__file__).parent / "browser"
     for item in items:
         path = Path(item.path)
         if unit in path.parents and path.name not in TIMED_UNITS:
             item.add_marker(pytest.mark.concurrent)
+        elif browser in path.parents:
+            item.add_marker(pytest.mark.niced)
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:

@@ -25,7 +25,6 @@ from playwright.sync_api import Browser, Page, Playwright, expect
 from openpendant.runtime.auth.roles import Role
 from openpendant.runtime.auth.setup import auth_path
 from openpendant.runtime.auth.store import AuthStore
-from openpendant.runtime.bench.harness.browser import CHROMIUM, CHROMIUM_ARGS
 from openpendant.runtime.bench.harness.processes import Runtime, SimRobotProc, free_port, wait_for
 from openpendant.runtime.kit.tls import (
     CA_CERT,
@@ -41,6 +40,7 @@ from tests.browser.conftest import (
     PageErrors,
     add_robot,
     browser_env,
+    launch,
     open_context,
     robot_at_rest,
     robot_joints,
@@ -71,9 +71,7 @@ def runtime(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Runtime]:
 def browser(playwright: Playwright, runtime: Runtime) -> Iterator[Browser]:
     """Chromium trusting this runtime's certificate authority, and nothing else new."""
     pin = f"--ignore-certificate-errors-spki-list={authority(runtime).spki_pin()}"
-    launched = playwright.chromium.launch(
-        executable_path=CHROMIUM, headless=True, args=[*CHROMIUM_ARGS, pin]
-    )
+    launched = launch(playwright, pin)
     yield launched
     launched.close()
 
