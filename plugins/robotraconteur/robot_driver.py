@@ -51,6 +51,7 @@ LATE_TICK = 0.03  # s of a trajectory's clock one cycle may advance, however lat
 AT_END = 1e-3  # rad from a trajectory's end at which it has arrived
 ESTOP = "E-stop: release it, then reset errors and enable"
 ROBOT_ERROR = "the robot reports an error: reset errors to go on"
+FATAL_ERROR = "the robot reports a fatal error: restart it, then reset errors"
 STOP_TIMEOUT = 0.05  # s: how long a lapsed jog's stop (a zero velocity) is held
 ENABLED_WITHIN = 2.0  # s for the robot to say it is enabled once asked
 MODE_SETTLES = 3  # the robot's states after a mode is set before it must show it
@@ -90,6 +91,7 @@ class RRRobotDriver(RobotDriver):
         self.speed_ratio = 1.0
         self.stream: Stream | None = None
         self._sent_stream: Stream | None = None
+        self._sent_ratio = 1.0  # the speed ratio of the jog sent last
         self.trajectory: RunningTrajectory | None = None
         self._streamed_at: float | None = None
         self._finished: dict[str, TrajectoryStatus] = {}
@@ -194,8 +196,10 @@ class RRRobotDriver(RobotDriver):
         except Exception:
             reading = None
         with self.lock:
-            if reading is not None and link.has(reading, "estop"):
+            if reading is not None and link.estop(reading):
                 self._fault(ESTOP)
+            elif reading is not None and link.has(reading, "fatal_error"):
+                self._fault(FATAL_ERROR)
             elif reading is not None and link.has(reading, "error"):
                 self._fault(ROBOT_ERROR)
             else:
@@ -226,12 +230,15 @@ class RRRobotDriver(RobotDriver):
             raise LinkStale(f"no new state for {STALE_AFTER * 1000:.0f} ms")
         with self.lock:
             self.seqno += 1
-            if link.has(reading, "estop"):
+            if link.estop(reading):
                 # Also over a fault the robot's stop caused first (a command it then refused).
                 if not self.error or self.error_message != ESTOP:
                     self._fault(ESTOP)
             elif link.has(reading, "communication_failure") and not self.error:
                 self._fault("the robot lost its own controller (communication failure)")
+            elif link.has(reading, "fatal_error"):
+                if not self.error or self.error_message != FATAL_ERROR:
+                    self._fault(FATAL_ERROR)
             elif link.has(reading, "error") and not self.error:
                 self._fault(ROBOT_ERROR)
             elif not link.has(reading, "enabled"):
@@ -255,7 +262,7 @@ class RRRobotDriver(RobotDriver):
             mode = self.mode if self._ready(link, reading) else CommandMode.halt
             stream, trajectory = self.stream, self.trajectory
         if mode is not self._rr_mode:
-            link.set_mode(mode)
+            link.set_mode(mode, through_halt=self._rr_mode is not CommandMode.halt)
             self._rr_mode, self._mode_set_at = mode, reading.seqno
             self._sent_stream = None
         if mode is CommandMode.trajectory and trajectory is not None:
@@ -283,9 +290,13 @@ class RRRobotDriver(RobotDriver):
                 return  # halted or replaced since this cycle read it
         _, velocity, position, deadline = stream
         if mode is CommandMode.jog:
-            if stream is not self._sent_stream and velocity is not None:
-                # RR's jog holds the velocity for the command's own time, no longer.
-                link.jog(velocity * self.speed_ratio, max(deadline - time.monotonic(), 0.01))
+            ratio = self.speed_ratio
+            changed = stream is not self._sent_stream or ratio != self._sent_ratio
+            if velocity is not None and changed:
+                # RR's jog holds the velocity for the command's own time, no longer; sent
+                # again when the speed override changes while it is held.
+                link.jog(velocity * ratio, max(deadline - time.monotonic(), 0.01))
+                self._sent_ratio = ratio
         elif position is not None:
             link.position(position)
         elif velocity is not None:
@@ -321,7 +332,8 @@ class RRRobotDriver(RobotDriver):
             and not self.error
             and link.has(reading, "enabled")
             and link.has(reading, "ready")
-            and not link.has(reading, "estop")
+            and not link.estop(reading)
+            and not link.has(reading, "fatal_error")
         )
 
     def _end(self, state: TrajectoryState, message: str = "") -> None:
@@ -344,7 +356,7 @@ class RRRobotDriver(RobotDriver):
             enabled=self.enabled and self._enabled_seen,
             ready=bool(connected and link and reading and self._ready(link, reading)),
             error=self.error,
-            estop=bool(link and reading and link.has(reading, "estop")),
+            estop=bool(link and reading and link.estop(reading)),
             homed=True,
             communication_failure=not connected,
             trajectory_running=self.trajectory is not None,
@@ -434,8 +446,10 @@ class RRRobotDriver(RobotDriver):
     async def _reset_errors(self) -> None:
         with self.lock:
             reading, link = self.reading, self.link
-        if link is not None and reading is not None and link.has(reading, "estop"):
+        if link is not None and reading is not None and link.estop(reading):
             raise RobotError("release the E-stop before resetting errors", code="estop")
+        if link is not None and reading is not None and link.has(reading, "fatal_error"):
+            raise RobotError(FATAL_ERROR, code="robot_error")
 
         def reset(link: RRLink) -> None:
             link.reset_errors()

@@ -38,6 +38,18 @@ RR_MODES = {
 }
 
 
+# RR's robot state flags that say an E-stop stopped it (all but `estop_released`).
+ESTOP_FLAGS = (
+    "estop",
+    *(f"estop_button{n}" for n in range(1, 5)),
+    *(f"estop_guard{n}" for n in range(1, 5)),
+    "estop_software",
+    "estop_fault",
+    "estop_internal",
+    "estop_other",
+)
+
+
 # What a link that has gone raises (anything else is the robot refusing a command).
 LINK_ERRORS = (
     RR.ConnectionException,
@@ -104,13 +116,21 @@ class RRLink:
         bit = self.flag_bits.get(flag, 0)
         return bit != 0 and reading.flags & bit == bit
 
-    def set_mode(self, mode: CommandMode) -> None:
-        """RR's modes change only through halt."""
+    def estop(self, reading: Reading) -> bool:
+        """Stopped by an E-stop, however the robot names it (`estop`, or only its source)."""
+        return any(self.has(reading, flag) for flag in ESTOP_FLAGS)
+
+    def set_mode(self, mode: CommandMode, through_halt: bool = False) -> None:
+        """RR's modes change only through halt; `through_halt` halts even where the robot is
+        already in the mode wanted (our trajectory and position modes are both RR's
+        position_command: one does not go on as the other)."""
         wanted = self.modes[RR_MODES[mode]]
-        if int(self.client.command_mode) == wanted:
-            return
         halt = self.modes["halt"]
-        self.client.command_mode = halt
+        current = int(self.client.command_mode)
+        if current == wanted and (wanted == halt or not through_halt):
+            return
+        if current != halt:
+            self.client.command_mode = halt
         if wanted != halt:
             self.client.command_mode = wanted
 

@@ -30,6 +30,7 @@ from openpendant.runtime.interfaces.robot import (
     CommandModeRequest,
     JogJointCommand,
     JointTrajectory,
+    SpeedRatioRequest,
     TrajectoryState,
     TrajectoryWaypoint,
 )
@@ -164,6 +165,48 @@ def test_a_jog_moves_while_commanded_and_stops_when_its_commands_stop(driven: Dr
     assert d.reading.command_mode == d.link.modes["jog"]
     assert stopped[0] - start[0] < 0.3 * (10 * 0.05 + 0.2) + 0.02
     assert np.abs(stopped[1:] - start[1:]).max() < 1e-9
+
+
+def test_a_held_jog_follows_the_speed_override_at_once(driven: Driven) -> None:
+    """One jog command, held for its 1 s: the override changed meanwhile reaches the robot
+    without waiting for the next command."""
+    driven.ready()
+    d = driven.driver
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+    driven.run(d.jog_joint(JogJointCommand(velocity=[0.3, 0, 0, 0, 0, 0], timeout=1.0)))
+    wait_for(lambda: abs(d.state().joint_velocity[0] - 0.3) < 0.01, 0.4, what="jogging at 0.3")
+    driven.run(d.set_speed_ratio(SpeedRatioRequest(ratio=0.25)))
+    wait_for(
+        lambda: abs(d.state().joint_velocity[0] - 0.075) < 0.005, 0.3, what="slowed to a quarter"
+    )
+    driven.run(d.halt())
+    wait_for(lambda: halted_at_rest(d), 2, what="halted")
+
+
+def test_an_estop_named_by_its_source_and_a_fatal_error_are_faults_until_cleared(
+    arm: Arm, driven: Driven
+) -> None:
+    """A robot whose states name only the E-stop's source (a guard), then one that reports a
+    fatal error: each a fault while jogging, reset refused while it lasts, nothing resumes."""
+    d = driven.driver
+    assert d.link is not None
+    for flag, said in (("estop_guard1", "E-stop"), ("fatal_error", "fatal error")):
+        driven.ready()
+        driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.jog)))
+        driven.run(d.jog_joint(JogJointCommand(velocity=[0.3, 0, 0, 0, 0, 0], timeout=1.0)))
+        arm.set("flags", d.link.flag_bits[flag])
+        wait_for(lambda: d.state().flags.error, 3, what=f"{flag}: the fault")
+        state = d.state()
+        assert said in state.error_message and not state.flags.ready, state
+        assert state.flags.estop is (flag == "estop_guard1")
+        with pytest.raises(RobotError, match=said):
+            driven.run(d.reset_errors())
+        arm.set("flags", 0)
+        wait_for(lambda: not d.state().flags.estop, 3, what=f"{flag}: cleared")
+        held = driven.q()
+        time.sleep(0.3)
+        assert np.abs(driven.q() - held).max() < 1e-9 and d.state().flags.error
+        driven.run(d.reset_errors())
 
 
 def test_a_trajectory_runs_on_its_planned_path_and_a_halt_stops_the_next(driven: Driven) -> None:

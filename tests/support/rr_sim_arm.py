@@ -61,12 +61,15 @@ class SimArm(AbstractRobot):  # type: ignore[misc]
         self._drives_on = True  # off: enabled, but not ready (its drives lost their power)
         self._mode_name = "cobot"  # its operational mode, as a key switch would set it
         self._base_set_operational_mode = False
+        self._extra_flags = (
+            0  # state flags of RR's the test sets (a fatal error, an E-stop's source)
+        )
 
     def _run_timestep(self, now: float) -> None:
         dt = PERIOD if self._last is None else max(0.0, now - self._last)
         self._last = now
         with self._lock:
-            if self._estop_pressed or not self._powered or not self._drives_on:
+            if self._estop_pressed or not self._powered or not self._drives_on or self._extra_flags:
                 self._target = self._velocity_target = None
             if self._target is not None:
                 reach = self._speed_limit * dt
@@ -92,6 +95,10 @@ class SimArm(AbstractRobot):  # type: ignore[misc]
             self._ready = self._enabled and self._drives_on
             self._operational_mode = self._robot_operational_mode[self._mode_name]
         super()._run_timestep(now)
+
+    def _fill_state_flags(self, now: float) -> int:
+        flags: int = super()._fill_state_flags(now)
+        return flags | self._extra_flags
 
     def _send_robot_command(self, now: float, position: Any, velocity: Any) -> None:
         with self._lock:
@@ -160,11 +167,15 @@ class SimArm(AbstractRobot):  # type: ignore[misc]
         return []
 
     def setf_param(self, name: str, value: Any) -> None:
-        """The test's hands on the arm: `drives` (0: off, 1: on) and `operational_mode` (a
-        name of RR's RobotOperationalMode, as a key switch sets it)."""
+        """The test's hands on the arm: `drives` (0: off, 1: on), `operational_mode` (a
+        name of RR's RobotOperationalMode, as a key switch sets it) and `flags` (RR's
+        RobotStateFlags bits its states carry besides its own; the arm stands still while
+        any is set, as a robot with a fatal error or an E-stop would)."""
         with self._lock:
             if name == "drives":
                 self._drives_on = bool(value.data[0])
+            elif name == "flags":
+                self._extra_flags = int(value.data[0])
             elif name == "operational_mode":
                 self._mode_name = str(value.data)
             else:
