@@ -6,7 +6,7 @@ from openpendant.plugins.api import Driver, Plugin
 
 PLUGIN = Plugin(
     name="robotraconteur",
-    description="Robot Raconteur standard robots and cameras",
+    description="Robot Raconteur standard robots, cameras and tools",
     drivers=(
         Driver(
             "rr-robot",
@@ -22,6 +22,13 @@ PLUGIN = Plugin(
             "openpendant.plugins.robotraconteur.entry:create_camera",
             options="openpendant.plugins.robotraconteur.entry:RRCameraOptions",
             description="a Robot Raconteur standard camera, by its URL (rr+tcp://…)",
+        ),
+        Driver(
+            "rr-tool",
+            "gripper",
+            "openpendant.plugins.robotraconteur.entry:create_tool",
+            options="openpendant.plugins.robotraconteur.entry:RRToolOptions",
+            description="a Robot Raconteur standard tool (a gripper), by its URL (rr+tcp://…)",
         ),
     ),
 )

@@ -1,7 +1,8 @@
-"""RR standard robots and cameras as the driver host starts them
+"""RR standard robots, cameras and tools as the driver host starts them
 (`openpendant driver rr-robot --url 'rr+tcp://HOST:PORT?service=robot'`, `driver rr-camera
---url 'rr+tcp://HOST:PORT?service=camera'`). RR is imported only when such a driver runs
-(the `rr` extra)."""
+--url 'rr+tcp://HOST:PORT?service=camera'`, `driver rr-tool --url
+'rr+tcp://HOST:PORT?service=tool'`). RR is imported only when such a driver runs (the `rr`
+extra)."""
 
 from __future__ import annotations
 
@@ -130,3 +131,49 @@ def create_camera(name: str, uuid: str, options: RRCameraOptions) -> object:
     return RRCamera(
         identity, info, options.url, node=node, client=client, reconnect=options.reconnect
     )
+
+
+class RRToolOptions(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    url: str = Field(
+        default="",
+        max_length=2000,
+        pattern=URL_PATTERN,
+        description="the tool's RR URL, e.g. rr+tcp://10.0.0.7:52522?service=tool",
+    )
+    reconnect: float = Field(
+        default=1.0, gt=0.05, le=60, description="seconds between attempts to reach a lost tool"
+    )
+
+    def default_name(self) -> str:
+        return "gripper"
+
+
+def create_tool(name: str, uuid: str, options: RRToolOptions) -> object:
+    if not options.url:
+        raise InvalidValue("--url is the tool's RR URL (rr+tcp://HOST:PORT?service=tool)")
+    try:
+        from openpendant.plugins.robotraconteur.node import Node
+        from openpendant.plugins.robotraconteur.tool_driver import RRTool, tool_range_of
+    except ModuleNotFoundError as exc:
+        raise without_rr(exc) from exc
+    from openpendant.runtime.interfaces.gripper import GripperInfo
+
+    node = Node()
+    try:
+        client = node.connect(options.url)
+        tool_info = client.tool_info
+        tool_range = tool_range_of(tool_info)
+        device = tool_info.device_info
+        model = str(getattr(getattr(device, "model", None), "name", "") or "") or "RR tool"
+        capabilities = ["object_detection"]
+        if tool_range.can("continuous_command"):
+            capabilities.insert(0, "position")
+        info = GripperInfo(model=model[:64], stroke=tool_range.stroke, capabilities=capabilities)
+    except Exception as exc:
+        node.close()
+        raise InvalidValue(f"cannot read the tool at {options.url}: {exc}") from exc
+    identity = DeviceIdentity(uuid=uuid, kind="gripper", model=info.model, name=name)
+    url, reconnect = options.url, options.reconnect
+    return RRTool(identity, info, tool_range, url, node=node, client=client, reconnect=reconnect)
