@@ -54,7 +54,7 @@ ROBOT_ERROR = "the robot reports an error: reset errors to go on"
 FATAL_ERROR = "the robot reports a fatal error: restart it, then reset errors"
 STOP_TIMEOUT = 0.05  # s: how long a lapsed jog's stop (a zero velocity) is held
 ENABLED_WITHIN = 2.0  # s for the robot to say it is enabled once asked
-MODE_SETTLES = 3  # the robot's states after a mode is set before it must show it
+MODE_WITHIN = 1.0  # s for the robot's states to show a mode this driver set
 Stream = tuple[CommandMode, FloatArray | None, FloatArray | None, float]
 
 
@@ -103,7 +103,8 @@ class RRRobotDriver(RobotDriver):
         # mode is left alone (another RR client may be driving it) until this driver is
         # enabled and commands it.
         self._rr_mode = CommandMode.halt
-        self._mode_set_at = 0  # the robot's seqno when this driver last set its mode
+        self._mode_set_at = 0.0  # monotonic, when this driver last set the robot's mode
+        self._mode_shown = True  # a state has shown that mode since
         self._running = threading.Event()
         self._wake = threading.Event()
         self._thread: threading.Thread | None = None
@@ -251,8 +252,8 @@ class RRRobotDriver(RobotDriver):
             elif self.enabled and not self.error and not link.has(reading, "ready"):
                 # Its drives, its controller: whatever it was doing stays stopped.
                 self._fault("the robot is no longer ready (it stopped on its own side)")
-            elif self._left_mode(link, reading) and not self.error:
-                self._fault("the robot left the command mode it was put in (another client?)")
+            elif (left := self._left_mode(link, reading)) and not self.error:
+                self._fault(left)
             previous = self.reading
             if previous is not None and previous.operational_mode is not reading.operational_mode:
                 log.info("operational mode: %s", reading.operational_mode.value)
@@ -263,7 +264,9 @@ class RRRobotDriver(RobotDriver):
             stream, trajectory = self.stream, self.trajectory
         if mode is not self._rr_mode:
             link.set_mode(mode, through_halt=self._rr_mode is not CommandMode.halt)
-            self._rr_mode, self._mode_set_at = mode, reading.seqno
+            with self.lock:
+                self._rr_mode, self._mode_set_at = mode, time.monotonic()
+                self._mode_shown = False
             self._sent_stream = None
         if mode is CommandMode.trajectory and trajectory is not None:
             self._advance(link, trajectory, reading)
@@ -319,11 +322,20 @@ class RRRobotDriver(RobotDriver):
             with self.lock:
                 self._end(TrajectoryState.finished)
 
-    def _left_mode(self, link: RRLink, reading: Reading) -> bool:
-        """The robot no longer in the mode this driver put it in, a few states after."""
-        if self._rr_mode is CommandMode.halt or reading.seqno <= self._mode_set_at + MODE_SETTLES:
-            return False
-        return reading.command_mode != link.modes[RR_MODES[self._rr_mode]]
+    def _left_mode(self, link: RRLink, reading: Reading) -> str:
+        """Why the robot is not in the mode this driver put it in, or "". States sent before
+        it took the mode may arrive after the call that set it: only once a state has shown
+        the mode does a state without it mean the robot left it."""
+        if self._rr_mode is CommandMode.halt:
+            return ""
+        if reading.command_mode == link.modes[RR_MODES[self._rr_mode]]:
+            self._mode_shown = True
+            return ""
+        if self._mode_shown:
+            return "the robot left the command mode it was put in (another client?)"
+        if time.monotonic() - self._mode_set_at > MODE_WITHIN:
+            return f"the robot did not show the command mode it was put in within {MODE_WITHIN:g} s"
+        return ""
 
     def _ready(self, link: RRLink, reading: Reading) -> bool:
         return (

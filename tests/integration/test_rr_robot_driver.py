@@ -30,6 +30,7 @@ from openpendant.runtime.interfaces.robot import (
     CommandModeRequest,
     JogJointCommand,
     JointTrajectory,
+    PositionCommand,
     SpeedRatioRequest,
     TrajectoryState,
     TrajectoryWaypoint,
@@ -66,6 +67,14 @@ class Arm:
         try:
             kind = "string" if isinstance(value, str) else "int32"
             node.connect(self.url).setf_param(name, RR.VarValue(value, kind))
+        finally:
+            node.close()
+
+    def modes_set(self) -> list[int]:
+        """The command modes clients set on the arm, in order (RR's numbers)."""
+        node = Node()
+        try:
+            return [int(m) for m in node.connect(self.url).getf_param("modes_set").data]
         finally:
             node.close()
 
@@ -254,6 +263,22 @@ def test_a_trajectory_runs_on_its_planned_path_and_a_halt_stops_the_next(driven:
     time.sleep(0.3)
     assert np.abs(driven.q() - halted).max() < 1e-9
     assert np.abs(halted - start).max() > 0.1  # it stopped well short of the way back
+
+
+def test_from_a_trajectory_to_position_commands_the_robot_passes_through_halt(
+    arm: Arm, driven: Driven
+) -> None:
+    """Both are RR's position_command mode: one does not go on as the other."""
+    driven.ready()
+    d = driven.driver
+    assert d.link is not None
+    position, halt = d.link.modes["position_command"], d.link.modes["halt"]
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.trajectory)))
+    wait_for(lambda: arm.modes_set()[-1:] == [position], 3, what="in RR's position mode")
+    driven.run(d.set_command_mode(CommandModeRequest(mode=CommandMode.position_command)))
+    driven.run(d.position_command(PositionCommand(position=driven.q().tolist())))
+    wait_for(lambda: arm.modes_set()[-3:] == [position, halt, position], 3, what="through halt")
+    assert not d.state().flags.error, d.state().error_message
 
 
 def test_the_estop_is_a_fault_until_released_and_reset(arm: Arm, driven: Driven) -> None:

@@ -61,9 +61,8 @@ class SimArm(AbstractRobot):  # type: ignore[misc]
         self._drives_on = True  # off: enabled, but not ready (its drives lost their power)
         self._mode_name = "cobot"  # its operational mode, as a key switch would set it
         self._base_set_operational_mode = False
-        self._extra_flags = (
-            0  # state flags of RR's the test sets (a fatal error, an E-stop's source)
-        )
+        self._extra_flags = 0  # RR state flags the test sets (a fatal error, an E-stop's source)
+        self._modes_set: list[int] = []  # every command mode a client set, in order
 
     def _run_timestep(self, now: float) -> None:
         dt = PERIOD if self._last is None else max(0.0, now - self._last)
@@ -157,6 +156,23 @@ class SimArm(AbstractRobot):  # type: ignore[misc]
     @property
     def operational_mode(self) -> Any:
         return self._operational_mode
+
+    @property
+    def command_mode(self) -> Any:
+        return AbstractRobot.command_mode.fget(self)
+
+    @command_mode.setter
+    def command_mode(self, value: Any) -> None:
+        AbstractRobot.command_mode.fset(self, value)
+        with self._lock:
+            self._modes_set.append(int(value))
+
+    def getf_param(self, name: str) -> Any:
+        """`modes_set`: the command modes clients set, in order (RR's numbers)."""
+        if name != "modes_set":
+            raise RR.InvalidArgumentException(f"no parameter {name!r}")
+        with self._lock:
+            return RR.VarValue(np.array(self._modes_set, dtype=np.int32), "int32[]")
 
     @property
     def controller_state(self) -> Any:
