@@ -89,7 +89,7 @@ def main(extra: list[str]) -> int:
                     "2",
                     "--dist",
                     "loadfile",
-                    # Its own temporary directories and no shared cache: the two sessions
+                    # Its own temporary directories and no shared cache: the sessions
                     # must not clean up or overwrite each other's.
                     f"--basetemp={scratch}/tmp",
                     "-p",
