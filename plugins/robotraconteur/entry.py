@@ -7,6 +7,7 @@ extra)."""
 from __future__ import annotations
 
 import os
+from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -21,6 +22,15 @@ def without_rr(exc: ModuleNotFoundError) -> InvalidValue:
     return InvalidValue(
         f"this driver needs Robot Raconteur ({exc.name} is missing): pip install 'openpendant[rr]'"
     )
+
+
+def model_name(device_info: Any, otherwise: str) -> str:
+    """A device's model as its RR device info names it (else the device's own name)."""
+    for part in ("model", "device"):
+        name = getattr(getattr(device_info, part, None), "name", None)
+        if name:
+            return str(name)
+    return otherwise
 
 
 class RRRobotOptions(BaseModel):
@@ -112,10 +122,7 @@ def create_camera(name: str, uuid: str, options: RRCameraOptions) -> object:
         client = node.connect(options.url)
         camera_info = client.camera_info
         first = pixels_of(ImageUtil(node.node, client).image_to_array(client.capture_frame()))
-        device = camera_info.device_info
-        model = str(getattr(getattr(device, "model", None), "name", "") or "") or str(
-            getattr(getattr(device, "device", None), "name", "") or "RR camera"
-        )
+        model = model_name(camera_info.device_info, "RR camera")
         height, width = first.shape[:2]
         info = CameraInfo(
             model=model[:64],
@@ -165,8 +172,7 @@ def create_tool(name: str, uuid: str, options: RRToolOptions) -> object:
         client = node.connect(options.url)
         tool_info = client.tool_info
         tool_range = tool_range_of(tool_info)
-        device = tool_info.device_info
-        model = str(getattr(getattr(device, "model", None), "name", "") or "") or "RR tool"
+        model = model_name(tool_info.device_info, "RR tool")
         capabilities = ["object_detection"]
         if tool_range.can("continuous_command"):
             capabilities.insert(0, "position")

@@ -8,11 +8,7 @@ camera's truth."""
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -25,32 +21,21 @@ from openpendant.plugins.robotraconteur.node import Node
 from openpendant.runtime.bench.harness.processes import (
     DriverProc,
     Runtime,
-    free_port,
     stop_all,
     wait_for,
 )
 from openpendant.runtime.bench.harness.views import board_views, in_world
 from tests.browser.conftest import browser_env
 from tests.browser.test_vision_panel import BOARD_SIZE, open_panel, set_number
-
-REPOSITORY = Path(__file__).resolve().parents[2]
+from tests.support.rr_service import RRService
 
 
 class Served:
     """The RR camera's process, and an RR client of the test's own to move its board."""
 
     def __init__(self) -> None:
-        port = free_port()
-        self.url = f"rr+tcp://127.0.0.1:{port}?service=camera"
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "tests.support.rr_sim_camera", str(port), "board"],
-            cwd=REPOSITORY,
-            stdout=subprocess.PIPE,
-            text=True,
-            env={**os.environ, "ROBOTRACONTEUR_TCP_SERVER_REUSEADDR": "1"},
-        )
-        assert self.proc.stdout is not None
-        assert self.proc.stdout.readline().strip() == "READY"
+        self.service = RRService("rr_sim_camera", "camera", "board")
+        self.url = self.service.url
         self.node = Node()
         self.client = self.node.connect(self.url)
         self.truth: dict[str, Any] = json.loads(self.client.getf_param("truth").data)
@@ -64,8 +49,7 @@ class Served:
 
     def stop(self) -> None:
         self.node.close()
-        self.proc.terminate()
-        self.proc.wait(10)
+        self.service.stop()
 
 
 @pytest.fixture(scope="module")

@@ -8,12 +8,8 @@ from __future__ import annotations
 
 import asyncio
 import base64
-import os
-import subprocess
-import sys
 import time
 from collections.abc import Iterator
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -21,44 +17,28 @@ import pytest
 
 from openpendant.plugins.robotraconteur.camera_driver import RRCamera
 from openpendant.plugins.robotraconteur.entry import RRCameraOptions, create_camera
-from openpendant.runtime.bench.harness.processes import free_port, wait_for
+from openpendant.runtime.bench.harness.processes import wait_for
 from openpendant.runtime.interfaces.camera import CaptureRequest, Image
 from openpendant.runtime.kit.errors import DeviceError
+from tests.support.rr_service import RRService
 from tests.support.rr_sim_camera import CALIBRATION, HEIGHT, WIDTH, picture
 
-REPOSITORY = Path(__file__).resolve().parents[2]
 # No real-time margins here (seconds-long waits): beside the real-time tests, at nice 19.
 pytestmark = pytest.mark.concurrent
 
 
-class RRCameraProcess:
-    def __init__(self, port: int) -> None:
-        self.port = port
-        self.url = f"rr+tcp://127.0.0.1:{port}?service=camera"
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "tests.support.rr_sim_camera", str(port)],
-            cwd=REPOSITORY,
-            stdout=subprocess.PIPE,
-            text=True,
-            env={**os.environ, "ROBOTRACONTEUR_TCP_SERVER_REUSEADDR": "1"},
-        )
-        assert self.proc.stdout is not None
-        line = self.proc.stdout.readline()
-        assert line.strip() == "READY", f"the RR camera did not start: {line!r}"
-
-    def kill(self) -> None:
-        self.proc.kill()
-        self.proc.wait()
+class RRCameraProcess(RRService):
+    def __init__(self, port: int | None = None) -> None:
+        super().__init__("rr_sim_camera", "camera", port=port)
 
 
 @pytest.fixture
 def camera_process() -> Iterator[list[RRCameraProcess]]:
     """The camera (a list: a test may start it again on its port)."""
-    started = [RRCameraProcess(free_port())]
+    started = [RRCameraProcess()]
     yield started
     for each in started:
-        if each.proc.poll() is None:
-            each.kill()
+        each.kill()
 
 
 def decoded(image: Image) -> np.ndarray:

@@ -8,23 +8,17 @@ nothing resumes."""
 from __future__ import annotations
 
 import asyncio
-import os
 import signal
-import subprocess
-import sys
 import time
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
-import RobotRaconteur as RR
 
 from openpendant.plugins.robotraconteur.entry import RRRobotOptions, create
-from openpendant.plugins.robotraconteur.node import Node
 from openpendant.plugins.robotraconteur.robot_driver import RRRobotDriver
-from openpendant.runtime.bench.harness.processes import free_port, wait_for
+from openpendant.runtime.bench.harness.processes import wait_for
 from openpendant.runtime.interfaces.robot import (
     CommandMode,
     CommandModeRequest,
@@ -37,58 +31,25 @@ from openpendant.runtime.interfaces.robot import (
 )
 from openpendant.runtime.kit.errors import RobotError
 from openpendant.runtime.robotics.kinematics import Kinematics
+from tests.support.rr_service import RRService
 
-REPOSITORY = Path(__file__).resolve().parents[2]
 
-
-class Arm:
+class Arm(RRService):
     """The simulated RR arm's process."""
 
     def __init__(self) -> None:
-        self.port = free_port()
-        self.url = f"rr+tcp://127.0.0.1:{self.port}?service=robot"
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "tests.support.rr_sim_arm", str(self.port)],
-            cwd=REPOSITORY,
-            stdout=subprocess.PIPE,
-            text=True,
-            env={**os.environ, "ROBOTRACONTEUR_TCP_SERVER_REUSEADDR": "1"},
-        )
-        assert self.proc.stdout is not None
-        line = self.proc.stdout.readline()
-        assert line.strip() == "READY", f"the RR arm did not start: {line!r}"
+        super().__init__("rr_sim_arm", "robot")
 
     def estop(self, pressed: bool) -> None:
         self.proc.send_signal(signal.SIGUSR1 if pressed else signal.SIGUSR2)
 
-    def set(self, name: str, value: Any) -> None:
-        """One of the arm's test parameters (rr_sim_arm.py), over RR as any client would."""
-        node = Node()
-        try:
-            kind = "string" if isinstance(value, str) else "int32"
-            node.connect(self.url).setf_param(name, RR.VarValue(value, kind))
-        finally:
-            node.close()
+    def set(self, name: str, value: Any, kind: str = "") -> None:
+        """One of the arm's test parameters (rr_sim_arm.py)."""
+        super().set(name, value, kind or ("string" if isinstance(value, str) else "int32"))
 
     def modes_set(self) -> list[int]:
         """The command modes clients set on the arm, in order (RR's numbers)."""
-        node = Node()
-        try:
-            return [int(m) for m in node.connect(self.url).getf_param("modes_set").data]
-        finally:
-            node.close()
-
-    def kill(self) -> None:
-        self.proc.kill()
-        self.proc.wait()
-
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                self.kill()
+        return [int(m) for m in self.get("modes_set")]
 
 
 class Driven:

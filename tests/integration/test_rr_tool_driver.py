@@ -7,56 +7,30 @@ again, and the tool gone a fault said in the state and by every command until it
 from __future__ import annotations
 
 import asyncio
-import os
-import subprocess
-import sys
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import pytest
-import RobotRaconteur as RR
 
 from openpendant.plugins.robotraconteur.entry import RRToolOptions, create_tool
-from openpendant.plugins.robotraconteur.node import Node
 from openpendant.plugins.robotraconteur.tool_driver import RRTool, ToolFault
-from openpendant.runtime.bench.harness.processes import free_port, wait_for
+from openpendant.runtime.bench.harness.processes import wait_for
 from openpendant.runtime.interfaces.gripper import GripperMotion
 from openpendant.runtime.kit.errors import DeviceError, InvalidValue
+from tests.support.rr_service import RRService
 from tests.support.rr_sim_tool import STROKE
 
-REPOSITORY = Path(__file__).resolve().parents[2]
 # No real-time margins here (seconds-long waits): beside the real-time tests, at nice 19.
 pytestmark = pytest.mark.concurrent
 MM = 1e-3
 
 
-class ToolProcess:
-    def __init__(self, port: int) -> None:
-        self.url = f"rr+tcp://127.0.0.1:{port}?service=tool"
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "tests.support.rr_sim_tool", str(port)],
-            cwd=REPOSITORY,
-            stdout=subprocess.PIPE,
-            text=True,
-            env={**os.environ, "ROBOTRACONTEUR_TCP_SERVER_REUSEADDR": "1"},
-        )
-        assert self.proc.stdout is not None
-        line = self.proc.stdout.readline()
-        assert line.strip() == "READY", f"the RR tool did not start: {line!r}"
+class ToolProcess(RRService):
+    def __init__(self, port: int | None = None) -> None:
+        super().__init__("rr_sim_tool", "tool", port=port)
 
-    def set(self, name: str, value: float) -> None:
-        """One of the tool's test parameters, over RR as any client would."""
-        node = Node()
-        try:
-            node.connect(self.url).setf_param(name, RR.VarValue([value], "double[]"))
-        finally:
-            node.close()
-
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.kill()
-            self.proc.wait()
+    def set(self, name: str, value: Any, kind: str = "double[]") -> None:
+        super().set(name, [value], kind)
 
 
 class Driven:
@@ -81,11 +55,10 @@ class Driven:
 @pytest.fixture
 def tool() -> Iterator[list[ToolProcess]]:
     """The tool (a list: a test may start it again on its port)."""
-    port = free_port()
-    started = [ToolProcess(port)]
+    started = [ToolProcess()]
     yield started
     for each in started:
-        each.stop()
+        each.kill()
 
 
 @pytest.fixture
@@ -155,8 +128,8 @@ def test_the_tools_error_is_a_fault_until_activated_again(
 def test_the_tool_gone_is_a_fault_until_it_is_back(tool: list[ToolProcess], driven: Driven) -> None:
     d = driven.driver
     driven.run(d.activate())
-    port = int(tool[0].url.split(":")[2].split("?")[0])
-    tool[0].stop()
+    port = tool[0].port
+    tool[0].kill()
     wait_for(lambda: not d.state().connected, 5, what="the loss seen")
     assert "tool" in d.state().fault
     with pytest.raises(DeviceError):
